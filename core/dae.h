@@ -1,0 +1,165 @@
+// Generic constrained ODE / DAE and the abstract integrator.
+//
+//   y' = F(t, y),   H(y) = 0   (holonomic constraints, J = dH/dy)
+//
+// Backends (integrators/) enforce H = 0 in different ways:
+//   rk-baumgarte   y' = F - D J^T (J D J^T)^{-1} (J F + sigma H)   (model §8.3)
+//   rk-projection  RK step of y' = F, then y <- y - D J^T (J D J^T)^{-1} H(y)
+//                  repeated until ||H||_inf <= tol                (model §8.4)
+//   ida            residual [y' - F - D J^T nu ; H(y)] = 0, nu algebraic
+//                  (index 2, GGL type), or [..; J y' + sigma H] (index 1)
+//                                                                 (model §8.5)
+// D = diag(CorrectionWeights()) >= 0 chooses which coordinates the correction
+// may move (weight 0 = never corrected). Nothing here knows about robots.
+#pragma once
+
+#include <Eigen/Core>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace quasiroll {
+
+class ConstrainedOde {
+ public:
+  virtual ~ConstrainedOde() = default;
+
+  virtual int state_size() const = 0;
+  virtual int num_constraints() const = 0;
+
+  // y' = F(t, y). Returns false if F cannot be evaluated at (t, y) (e.g. the
+  // quasi-static problem behind it has no solution there); integrators then
+  // stop with IntegratorStatus::kRhsFailure.
+  virtual bool Rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> ydot) = 0;
+
+  // H(y), num_constraints() rows. Problems without constraints return 0 rows.
+  virtual void Constraints(const Eigen::Ref<const Eigen::VectorXd>& y,
+                           Eigen::Ref<Eigen::VectorXd> h) const = 0;
+  // J = dH/dy, num_constraints() x state_size().
+  virtual void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& y,
+                                  Eigen::Ref<Eigen::MatrixXd> jac) const = 0;
+  // Diagonal of D (>= 0). Default: all ones.
+  virtual void CorrectionWeights(Eigen::Ref<Eigen::VectorXd> d) const {
+    d.setOnes();
+  }
+
+  // Optional dF/dy (state_size x state_size). Default: returns false and the
+  // integrator uses forward differences of Rhs.
+  virtual bool RhsJacobian(double /*t*/,
+                           const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
+                           Eigen::Ref<Eigen::MatrixXd> /*dfdy*/) {
+    return false;
+  }
+
+  // Optional root functions g(t, y); an integrator that supports events stops
+  // at the first sign change of any component and reports IntegratorStatus::kEvent.
+  virtual int num_roots() const { return 0; }
+  virtual void Roots(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
+                     Eigen::Ref<Eigen::VectorXd> /*g*/) const {}
+
+  // Hook called by integrators before they start on [t0, t1] so the problem can
+  // make y consistent (e.g. project onto H = 0). Default: nothing.
+  virtual void MakeConsistent(double /*t0*/, Eigen::Ref<Eigen::VectorXd> /*y*/) {}
+};
+
+enum class IntegratorStatus {
+  kSuccess,
+  kStepSizeTooSmall,
+  kConvergenceFailure,  // Newton / nonlinear solver inside the method failed
+  kConstraintFailure,   // projection could not reach the tolerance
+  kEvent,               // a root function changed sign; t_reached is the root
+  kInvalidInput,
+  kRhsFailure,          // ConstrainedOde::Rhs returned false
+  kNotRun,
+};
+
+const char* ToString(IntegratorStatus status);
+
+enum class RkMethod { kRk4, kDormandPrince54, kBogackiShampine32 };
+const char* ToString(RkMethod method);
+// Throws std::invalid_argument naming the value on an unknown name.
+RkMethod RkMethodFromString(const std::string& name);
+
+struct IntegratorOptions {
+  // Runge-Kutta scheme of rk-baumgarte / rk-projection. RK4 is fixed step;
+  // the embedded pairs adapt h with the error test below.
+  RkMethod rk_method = RkMethod::kRk4;
+  // Fixed step of RK4, and the initial step of the adaptive schemes. 0 means
+  // one step over the whole [t0, t1] interval.
+  double step = 0.0;
+  // Error test of adaptive methods (and IDA):
+  //   ||e_i / (atol + rtol * |y_i|)||_rms <= 1.
+  double rtol = 1e-8;
+  double atol = 1e-10;
+  // Smallest step an adaptive method may take before kStepSizeTooSmall.
+  double min_step = 1e-12;
+  int max_steps = 100000;
+  // Baumgarte gain sigma [1/s] (rk-baumgarte, ida index 1). RK4 is stable for
+  // sigma * h < 2.785.
+  double baumgarte_sigma = 5.0;
+  // Projection stops when ||H||_inf <= projection_tolerance.
+  double projection_tolerance = 1e-12;
+  int max_projection_iterations = 10;
+  // IDA: 2 = index-2 GGL residual (H = 0 exact), 1 = index-1 Baumgarte residual.
+  int dae_index = 2;
+
+  bool IsValid(std::string* why) const;
+};
+
+struct IntegratorResult {
+  IntegratorStatus status = IntegratorStatus::kNotRun;
+  double t_reached = 0.0;
+  int steps = 0;
+  int rejected_steps = 0;       // error-test failures of adaptive methods
+  int rhs_evaluations = 0;
+  int jacobian_evaluations = 0;  // J = dH/dy (and IDA Jacobian) evaluations
+  int projection_iterations = 0;
+  int root_index = -1;           // component that fired for kEvent
+  double wall_seconds = 0.0;
+  std::string message;
+};
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  Integrator(const Integrator&) = delete;
+  Integrator& operator=(const Integrator&) = delete;
+
+  // Integrates y from t0 to t1 in place. Throws std::invalid_argument on
+  // misuse (size mismatch, non-finite y, t1 <= t0, invalid options).
+  // Counters in *result accumulate (so one result can span many calls); the
+  // status, t_reached and message describe this call.
+  IntegratorStatus Integrate(ConstrainedOde& ode, double t0, double t1,
+                             Eigen::Ref<Eigen::VectorXd> y,
+                             const IntegratorOptions& options,
+                             IntegratorResult* result);
+
+  virtual std::string name() const = 0;
+
+ protected:
+  Integrator() = default;
+
+ private:
+  virtual void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
+                           Eigen::Ref<Eigen::VectorXd> y,
+                           const IntegratorOptions& options,
+                           IntegratorResult* result) = 0;
+};
+
+class IntegratorRegistry {
+ public:
+  using Factory = std::function<std::unique_ptr<Integrator>()>;
+  static void Register(const std::string& name, const std::string& description,
+                       Factory factory);
+  static std::unique_ptr<Integrator> Create(const std::string& name);
+  static bool Has(const std::string& name);
+  static std::vector<std::string> Names();
+  static std::string Description(const std::string& name);
+};
+
+// Defined in integrators/registry.cc. Idempotent; call once before Create().
+void RegisterBuiltinIntegrators();
+
+}  // namespace quasiroll

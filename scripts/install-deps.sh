@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs every Debian package quasiroll needs. Idempotent; safe to re-run.
+set -euo pipefail
+PACKAGES=(
+  build-essential cmake pkg-config git
+  libeigen3-dev coinor-libipopt-dev libnlopt-cxx-dev libceres-dev
+  libsundials-dev libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev
+  libcli11-dev python3 python3-matplotlib python3-numpy
+)
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}"
+$SUDO apt-get update -q
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
