@@ -1,0 +1,295 @@
+#include "core/initial_configuration.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <sstream>
+
+namespace quasiroll {
+
+namespace {
+
+using Vec15 = Eigen::Matrix<double, 15, 1>;
+using Mat15 = Eigen::Matrix<double, 15, 15>;
+
+constexpr double kResidualTolerance = 1e-10;
+constexpr double kTreadMargin = 0.1;  // epsilon_v of model.md §3
+
+struct Placement {
+  double x0, y0, yaw0;
+  std::array<double, 6> joints;
+};
+
+// Wheel pose in world for platform pose (R, p) and the scene's joint angles.
+void WheelPose(const KinematicModel& model, const Placement& pl,
+               const Mat3& R, const Vec3& p, int chain, Mat3* R_GW,
+               Vec3* p_W) {
+  Mat3 R_PW;
+  Vec3 p_PW;
+  std::array<Vec3, 2> axes, points;
+  model.Mount(chain, pl.joints[2 * chain], pl.joints[2 * chain + 1], &R_PW,
+              &p_PW, &axes, &points);
+  *R_GW = R * R_PW;
+  *p_W = p + R * p_PW;
+}
+
+// Residual of (C1), (C2) for all three wheels; false if a contact point left
+// the terrain's domain.
+bool ContactResidual(const KinematicModel& model, const Placement& pl,
+                     const Vec15& q, Vec15* res) {
+  const Mat3 R = RotationFromRpy(q(1), q(2), pl.yaw0);
+  const Vec3 p(pl.x0, pl.y0, q(0));
+  const RobotGeometry& g = model.geometry();
+  for (int i = 0; i < 3; ++i) {
+    const int k = 3 + 4 * i;
+    Mat3 R_GW;
+    Vec3 p_W;
+    WheelPose(model, pl, R, p, i, &R_GW, &p_W);
+    const SurfaceForms wheel =
+        TorusForms(g.major_radius, g.tube_radius, q(k), q(k + 1));
+    if (!model.terrain().Contains(q(k + 2), q(k + 3))) return false;
+    const SurfaceForms ground =
+        TerrainForms(model.terrain().Evaluate(q(k + 2), q(k + 3)), q(k + 2),
+                     q(k + 3));
+    res->segment<3>(5 * i) = p_W + R_GW * wheel.point - ground.point;
+    const Vec3 n_w = R_GW * wheel.frame.col(2);
+    res->segment<2>(5 * i + 3) = ground.frame.leftCols<2>().transpose() * n_w;
+  }
+  return res->allFinite();
+}
+
+}  // namespace
+
+Configuration SolveInitialConfiguration(
+    const KinematicModel& model, double x0, double y0, double yaw0,
+    const std::array<double, 6>& joint_angles,
+    InitialConfigurationReport* report) {
+  const Placement pl{x0, y0, yaw0, joint_angles};
+  const Terrain& terrain = model.terrain();
+  const RobotGeometry& g = model.geometry();
+  if (!terrain.Contains(x0, y0)) {
+    std::ostringstream os;
+    os << "initial: placement (" << x0 << ", " << y0
+       << ") is outside the terrain (" << terrain.Describe() << ")";
+    throw GeometryError(os.str());
+  }
+
+  // Initial guess of model.md §3.
+  Vec15 q;
+  q(0) = terrain.Height(x0, y0) + g.z_h + g.rho();
+  q(1) = q(2) = 0.0;
+  {
+    const Mat3 R = RotationFromRpy(0.0, 0.0, yaw0);
+    const Vec3 p(x0, y0, q(0));
+    for (int i = 0; i < 3; ++i) {
+      Mat3 R_GW;
+      Vec3 p_W;
+      WheelPose(model, pl, R, p, i, &R_GW, &p_W);
+      const Vec3 d = R_GW.transpose() * Vec3(0, 0, -1);
+      const double u = std::atan2(d.y(), d.x());
+      const double v = std::asin(std::clamp(d.z(), -1.0, 1.0));
+      const Vec3 c = p_W + R_GW * TorusForms(g.major_radius, g.tube_radius,
+                                             u, v).point;
+      q.segment<4>(3 + 4 * i) << u, v, c.x(), c.y();
+    }
+  }
+
+  // Variable scales: lengths in units of rho, tread angle v in units of
+  // r/rho so that a unit scaled step moves the contact by about rho.
+  Vec15 scale;
+  scale(0) = g.rho();
+  scale(1) = scale(2) = 1.0;
+  for (int i = 0; i < 3; ++i) {
+    scale.segment<4>(3 + 4 * i) << 1.0, 1.0, g.rho(), g.rho();
+  }
+
+  Vec15 res, trial_res, q_trial;
+  if (!ContactResidual(model, pl, q, &res))
+    throw GeometryError("initial: a wheel's first contact guess is outside the terrain");
+  int it = 0;
+  const int kMaxIterations = 60;
+  for (; it < kMaxIterations && res.lpNorm<Eigen::Infinity>() > 0.01 * kResidualTolerance; ++it) {
+    // Central-difference Jacobian in scaled variables (15 x 15, cheap; error
+    // O(h^2) only slows convergence, the residual itself is exact).
+    Mat15 jac;
+    for (int c = 0; c < 15; ++c) {
+      const double h = 1e-6 * scale(c);
+      Vec15 qp = q, qm = q, rp, rm;
+      qp(c) += h;
+      qm(c) -= h;
+      if (!ContactResidual(model, pl, qp, &rp) ||
+          !ContactResidual(model, pl, qm, &rm))
+        throw GeometryError("initial: contact search left the terrain domain");
+      jac.col(c) = (rp - rm) / (2 * h) * scale(c);
+    }
+    Eigen::FullPivLU<Mat15> lu(jac);
+    if (lu.rank() < 15) break;
+    const Vec15 step = -(lu.solve(res)).cwiseProduct(scale);
+    double t = 1.0;
+    bool accepted = false;
+    for (int ls = 0; ls < 30; ++ls, t *= 0.5) {
+      q_trial = q + t * step;
+      if (ContactResidual(model, pl, q_trial, &trial_res) &&
+          trial_res.norm() < (1.0 - 1e-4 * t) * res.norm()) {
+        accepted = true;
+        break;
+      }
+    }
+    if (!accepted) {
+      // Accept a full step once residual is at round-off level.
+      if (res.lpNorm<Eigen::Infinity>() <= kResidualTolerance) break;
+      throw GeometryError(
+          "initial: contact search stalled (no descent) at residual " +
+          std::to_string(res.lpNorm<Eigen::Infinity>()));
+    }
+    q = q_trial;
+    res = trial_res;
+  }
+  const double residual = res.lpNorm<Eigen::Infinity>();
+  if (!(residual <= kResidualTolerance)) {
+    std::ostringstream os;
+    os << "initial: no consistent contact found for placement (" << x0 << ", "
+       << y0 << ", yaw " << yaw0 << "): contact residual " << residual
+       << " after " << it << " Newton iterations";
+    throw GeometryError(os.str());
+  }
+
+  // Assemble Theta0: contact angles psi from model.md §1.6.
+  Configuration theta;
+  const Mat3 R = RotationFromRpy(q(1), q(2), yaw0);
+  const Vec3 p(x0, y0, q(0));
+  for (int i = 0; i < 3; ++i) {
+    const int k = 3 + 4 * i;
+    Mat3 R_GW;
+    Vec3 p_W;
+    WheelPose(model, pl, R, p, i, &R_GW, &p_W);
+    const SurfaceForms wheel =
+        TorusForms(g.major_radius, g.tube_radius, q(k), q(k + 1));
+    const SurfaceForms ground = TerrainForms(
+        terrain.Evaluate(q(k + 2), q(k + 3)), q(k + 2), q(k + 3));
+    const Vec3 x_w = R_GW * wheel.frame.col(0);
+    const Vec3 n_w = R_GW * wheel.frame.col(2);
+    if (!(n_w.dot(ground.frame.col(2)) < 0)) {
+      throw GeometryError("initial: wheel " + std::to_string(i + 1) +
+                          " touches the terrain with its inner side "
+                          "(normals not opposed)");
+    }
+    const double psi = std::atan2(-ground.frame.col(1).dot(x_w),
+                                  ground.frame.col(0).dot(x_w));
+    theta.segment<5>(ConfigIndex::Eta(i)) << q(k), q(k + 1), q(k + 2),
+        q(k + 3), psi;
+  }
+  for (int j = 0; j < 6; ++j) theta(ConfigIndex::kTheta + j) = joint_angles[j];
+
+  LoopClosure h;
+  model.Constraints(theta, &h);
+  const double h_norm = h.lpNorm<Eigen::Infinity>();
+  if (!(h_norm <= kResidualTolerance)) {
+    std::ostringstream os;
+    os << "initial: loop closure ||H||_inf = " << h_norm
+       << " > 1e-10 after contact solve (internal inconsistency)";
+    throw GeometryError(os.str());
+  }
+  const ValidityReport validity = CheckValidity(model, theta, true);
+  if (!validity.ok()) {
+    throw GeometryError("initial: invalid single-point contact: " +
+                        validity.Describe());
+  }
+  if (report) {
+    report->contact_residual = residual;
+    report->loop_closure = h_norm;
+    report->iterations = it;
+  }
+  return theta;
+}
+
+Configuration SolveInitialConfiguration(const KinematicModel& model,
+                                        const Scene& scene,
+                                        InitialConfigurationReport* report) {
+  return SolveInitialConfiguration(model, scene.x0, scene.y0, scene.yaw0,
+                                   scene.joint_angles, report);
+}
+
+const char* ToString(ContactValidity validity) {
+  switch (validity) {
+    case ContactValidity::kValid: return "valid";
+    case ContactValidity::kTreadAngle: return "tread_angle";
+    case ContactValidity::kCurvature: return "relative_curvature";
+    case ContactValidity::kSecondContact: return "second_contact";
+    case ContactValidity::kNormalsNotOpposed: return "normals_not_opposed";
+    case ContactValidity::kOutsideTerrain: return "outside_terrain";
+  }
+  return "unknown";
+}
+
+bool ValidityReport::ok() const {
+  for (ContactValidity c : contact)
+    if (c != ContactValidity::kValid) return false;
+  return true;
+}
+
+std::string ValidityReport::Describe() const {
+  std::string out;
+  for (int i = 0; i < 3; ++i) {
+    if (contact[i] == ContactValidity::kValid) continue;
+    if (!out.empty()) out += "; ";
+    out += "wheel " + std::to_string(i + 1) + ": " + ToString(contact[i]);
+  }
+  return out;
+}
+
+ValidityReport CheckValidity(const KinematicModel& model,
+                             const Configuration& theta,
+                             bool check_second_contact) {
+  ValidityReport report;
+  const RobotGeometry& g = model.geometry();
+  const Terrain& terrain = model.terrain();
+  for (int i = 0; i < 3; ++i) {
+    const int e = ConfigIndex::Eta(i);
+    if (!terrain.Contains(theta(e + 2), theta(e + 3))) {
+      report.contact[i] = ContactValidity::kOutsideTerrain;
+      continue;
+    }
+    if (!(std::abs(theta(e + 1)) < M_PI / 2 - kTreadMargin)) {
+      report.contact[i] = ContactValidity::kTreadAngle;
+      continue;
+    }
+    ChainState s;
+    model.EvaluateChain(theta, i, &s);
+    if (!(s.R_GW.col(2).allFinite())) {
+      report.contact[i] = ContactValidity::kCurvature;
+      continue;
+    }
+    const Mat2 k = s.wheel.K + s.r_psi * s.ground.K * s.r_psi;
+    // Symmetric 2x2 is positive definite iff k00 > 0 and det > 0.
+    if (!(k(0, 0) > 0 && k.determinant() > 0)) {
+      report.contact[i] = ContactValidity::kCurvature;
+      continue;
+    }
+    if (!check_second_contact) continue;
+    // Sample the whole torus (inner side too): every point must lie on or
+    // above the terrain. The contact is a strict local minimum of the gap
+    // when K > 0, so exact zeros only occur at the contact itself.
+    constexpr int kNu = 72, kNv = 36;
+    const double tol = 1e-9;
+    bool second = false;
+    for (int a = 0; a < kNu && !second; ++a) {
+      const double u = 2 * M_PI * a / kNu;
+      for (int b = 0; b < kNv; ++b) {
+        const double v = -M_PI + 2 * M_PI * b / kNv;
+        const double rr = g.major_radius + g.tube_radius * std::cos(v);
+        const Vec3 local(rr * std::cos(u), rr * std::sin(u),
+                         g.tube_radius * std::sin(v));
+        const Vec3 pt = s.p_W + s.R_GW * local;
+        if (!terrain.Contains(pt.x(), pt.y())) continue;
+        if (pt.z() - terrain.Height(pt.x(), pt.y()) < -tol) {
+          second = true;
+          break;
+        }
+      }
+    }
+    if (second) report.contact[i] = ContactValidity::kSecondContact;
+  }
+  return report;
+}
+
+}  // namespace quasiroll
