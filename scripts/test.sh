@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Builds quasiroll and runs the whole test suite (ctest).
+#   scripts/test.sh              Release build in build/, warnings as errors
+#   scripts/test.sh --sanitize   same with -fsanitize=address,undefined in build-asan/
+# Installs the Debian dependencies first (scripts/install-deps.sh).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+sanitize=OFF
+build_dir=build
+for arg in "$@"; do
+  case "$arg" in
+    --sanitize) sanitize=ON; build_dir=build-asan ;;
+    *) echo "usage: $0 [--sanitize]" >&2; exit 2 ;;
+  esac
+done
+bash scripts/install-deps.sh
+jobs=$(nproc 2>/dev/null || echo 2)
+build_type=Release
+[ "$sanitize" = ON ] && build_type=RelWithDebInfo
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE="$build_type" \
+  -DQUASIROLL_WERROR=ON -DQUASIROLL_SANITIZE="$sanitize"
+cmake --build "$build_dir" -j "$jobs"
+ctest --test-dir "$build_dir" --output-on-failure -j "$jobs"
