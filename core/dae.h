@@ -129,8 +129,13 @@ class Integrator {
 
   // Integrates y from t0 to t1 in place. Throws std::invalid_argument on
   // misuse (size mismatch, non-finite y, t1 <= t0, invalid options).
-  // Counters in *result accumulate (so one result can span many calls); the
-  // status, t_reached and message describe this call.
+  // Counters in *result (including wall_seconds) accumulate, so one result
+  // can span many calls; status, t_reached, root_index and message describe
+  // this call. ode.MakeConsistent(t0, y) is called before integrating. On a
+  // failure y holds the last accepted state (at t_reached); on kEvent it holds
+  // the state at the root. Exceptions other than std::invalid_argument thrown
+  // by the backend or by ode are caught and reported as kConvergenceFailure.
+  // A final non-finite y turns kSuccess/kEvent into kConvergenceFailure.
   IntegratorStatus Integrate(ConstrainedOde& ode, double t0, double t1,
                              Eigen::Ref<Eigen::VectorXd> y,
                              const IntegratorOptions& options,

@@ -1,0 +1,211 @@
+#include "core/dae.h"
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <stdexcept>
+
+namespace quasiroll {
+
+const char* ToString(IntegratorStatus status) {
+  switch (status) {
+    case IntegratorStatus::kSuccess: return "success";
+    case IntegratorStatus::kStepSizeTooSmall: return "step_size_too_small";
+    case IntegratorStatus::kConvergenceFailure: return "convergence_failure";
+    case IntegratorStatus::kConstraintFailure: return "constraint_failure";
+    case IntegratorStatus::kEvent: return "event";
+    case IntegratorStatus::kInvalidInput: return "invalid_input";
+    case IntegratorStatus::kRhsFailure: return "rhs_failure";
+    case IntegratorStatus::kNotRun: return "not_run";
+  }
+  return "unknown";
+}
+
+const char* ToString(RkMethod method) {
+  switch (method) {
+    case RkMethod::kRk4: return "rk4";
+    case RkMethod::kDormandPrince54: return "dp54";
+    case RkMethod::kBogackiShampine32: return "bs32";
+  }
+  return "unknown";
+}
+
+RkMethod RkMethodFromString(const std::string& name) {
+  if (name == "rk4") return RkMethod::kRk4;
+  if (name == "dp54" || name == "dopri5") return RkMethod::kDormandPrince54;
+  if (name == "bs32") return RkMethod::kBogackiShampine32;
+  throw std::invalid_argument("unknown Runge-Kutta method '" + name +
+                              "' (known: rk4, dp54, bs32)");
+}
+
+namespace {
+std::string Num(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+}  // namespace
+
+bool IntegratorOptions::IsValid(std::string* why) const {
+  auto fail = [why](const std::string& msg) {
+    if (why) *why = msg;
+    return false;
+  };
+  if (rk_method != RkMethod::kRk4 && rk_method != RkMethod::kDormandPrince54 &&
+      rk_method != RkMethod::kBogackiShampine32)
+    return fail("rk_method: unknown value " +
+                std::to_string(static_cast<int>(rk_method)));
+  if (!(std::isfinite(step) && step >= 0))
+    return fail("step: must be finite and >= 0, got " + Num(step));
+  if (!(std::isfinite(rtol) && rtol > 0))
+    return fail("rtol: must be finite and > 0, got " + Num(rtol));
+  if (!(std::isfinite(atol) && atol > 0))
+    return fail("atol: must be finite and > 0, got " + Num(atol));
+  if (!(std::isfinite(min_step) && min_step >= 0))
+    return fail("min_step: must be finite and >= 0, got " + Num(min_step));
+  if (max_steps < 1)
+    return fail("max_steps: must be >= 1, got " + std::to_string(max_steps));
+  if (!(std::isfinite(baumgarte_sigma) && baumgarte_sigma >= 0))
+    return fail("baumgarte_sigma: must be finite and >= 0, got " +
+                Num(baumgarte_sigma));
+  if (!(std::isfinite(projection_tolerance) && projection_tolerance > 0))
+    return fail("projection_tolerance: must be finite and > 0, got " +
+                Num(projection_tolerance));
+  if (max_projection_iterations < 1)
+    return fail("max_projection_iterations: must be >= 1, got " +
+                std::to_string(max_projection_iterations));
+  if (dae_index != 1 && dae_index != 2)
+    return fail("dae_index: must be 1 or 2, got " + std::to_string(dae_index));
+  return true;
+}
+
+IntegratorStatus Integrator::Integrate(ConstrainedOde& ode, double t0,
+                                       double t1,
+                                       Eigen::Ref<Eigen::VectorXd> y,
+                                       const IntegratorOptions& options,
+                                       IntegratorResult* result) {
+  if (result == nullptr)
+    throw std::invalid_argument("Integrator::Integrate: result must not be null");
+  std::string why;
+  if (!options.IsValid(&why))
+    throw std::invalid_argument("Integrator::Integrate(" + name() +
+                                "): invalid options: " + why);
+  const int n = ode.state_size(), m = ode.num_constraints();
+  if (n <= 0)
+    throw std::invalid_argument("Integrator::Integrate: state_size must be > 0, got " +
+                                std::to_string(n));
+  if (m < 0)
+    throw std::invalid_argument(
+        "Integrator::Integrate: num_constraints must be >= 0, got " +
+        std::to_string(m));
+  if (ode.num_roots() < 0)
+    throw std::invalid_argument("Integrator::Integrate: num_roots must be >= 0, got " +
+                                std::to_string(ode.num_roots()));
+  if (y.size() != n) {
+    std::ostringstream os;
+    os << "Integrator::Integrate: y has size " << y.size()
+       << ", problem has state_size " << n;
+    throw std::invalid_argument(os.str());
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!std::isfinite(y(i))) {
+      std::ostringstream os;
+      os << "Integrator::Integrate: y[" << i << "] is not finite (" << y(i)
+         << ")";
+      throw std::invalid_argument(os.str());
+    }
+  }
+  if (!(std::isfinite(t0) && std::isfinite(t1) && t1 > t0)) {
+    std::ostringstream os;
+    os << "Integrator::Integrate: need finite t1 > t0, got t0 = " << t0
+       << ", t1 = " << t1;
+    throw std::invalid_argument(os.str());
+  }
+
+  result->status = IntegratorStatus::kNotRun;
+  result->t_reached = t0;
+  result->root_index = -1;
+  result->message.clear();
+
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    ode.MakeConsistent(t0, y);
+    DoIntegrate(ode, t0, t1, y, options, result);
+  } catch (const std::invalid_argument&) {
+    throw;  // misuse detected by the backend (e.g. negative weights)
+  } catch (const std::exception& e) {
+    // Numerics / third-party failures are reported, not propagated.
+    result->status = IntegratorStatus::kConvergenceFailure;
+    result->message = std::string("exception: ") + e.what();
+  }
+  result->wall_seconds += std::chrono::duration<double>(
+                              std::chrono::steady_clock::now() - start)
+                              .count();
+
+  if ((result->status == IntegratorStatus::kSuccess ||
+       result->status == IntegratorStatus::kEvent) &&
+      !y.allFinite()) {
+    result->status = IntegratorStatus::kConvergenceFailure;
+    result->message += " [non-finite state]";
+  }
+  return result->status;
+}
+
+namespace {
+struct Entry {
+  std::string description;
+  IntegratorRegistry::Factory factory;
+};
+std::map<std::string, Entry>& Table() {
+  static std::map<std::string, Entry> table;
+  return table;
+}
+std::mutex& TableMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+}  // namespace
+
+void IntegratorRegistry::Register(const std::string& name,
+                                  const std::string& description,
+                                  Factory factory) {
+  if (name.empty() || !factory)
+    throw std::invalid_argument(
+        "IntegratorRegistry::Register: empty name or factory");
+  std::lock_guard<std::mutex> lock(TableMutex());
+  Table()[name] = Entry{description, std::move(factory)};
+}
+
+std::unique_ptr<Integrator> IntegratorRegistry::Create(const std::string& name) {
+  std::lock_guard<std::mutex> lock(TableMutex());
+  auto it = Table().find(name);
+  if (it == Table().end()) {
+    std::string known;
+    for (const auto& [k, v] : Table()) known += (known.empty() ? "" : ", ") + k;
+    throw std::invalid_argument("unknown integrator backend '" + name +
+                                "' (known: " + known + ")");
+  }
+  return it->second.factory();
+}
+
+bool IntegratorRegistry::Has(const std::string& name) {
+  std::lock_guard<std::mutex> lock(TableMutex());
+  return Table().count(name) > 0;
+}
+
+std::vector<std::string> IntegratorRegistry::Names() {
+  std::lock_guard<std::mutex> lock(TableMutex());
+  std::vector<std::string> names;
+  for (const auto& [k, v] : Table()) names.push_back(k);
+  return names;
+}
+
+std::string IntegratorRegistry::Description(const std::string& name) {
+  std::lock_guard<std::mutex> lock(TableMutex());
+  auto it = Table().find(name);
+  return it == Table().end() ? std::string() : it->second.description;
+}
+
+}  // namespace quasiroll

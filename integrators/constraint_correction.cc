@@ -1,0 +1,109 @@
+#include "integrators/constraint_correction.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace quasiroll::integrators_internal {
+
+void ConstraintCorrection::Begin(const ConstrainedOde& ode) {
+  const int n = ode.state_size(), m = ode.num_constraints();
+  if (n != n_ || m != m_) {
+    n_ = n;
+    m_ = m;
+    d_.resize(n);
+    jac_.resize(m, n);
+    jd_.resize(m, n);
+    a_.resize(m, m);
+    h_.resize(m);
+    r_.resize(m);
+    lambda_.resize(m);
+    delta_.resize(n);
+  }
+  d_.setOnes();
+  ode.CorrectionWeights(d_);
+  for (int i = 0; i < n; ++i) {
+    if (!(std::isfinite(d_(i)) && d_(i) >= 0)) {
+      std::ostringstream os;
+      os << "ConstrainedOde::CorrectionWeights: d[" << i
+         << "] must be finite and >= 0, got " << d_(i);
+      throw std::invalid_argument(os.str());
+    }
+  }
+}
+
+bool ConstraintCorrection::Factorize(const ConstrainedOde& ode,
+                                     const Eigen::Ref<const Eigen::VectorXd>& y,
+                                     IntegratorResult* result) {
+  if (m_ == 0) return true;
+  ode.ConstraintJacobian(y, jac_);
+  ++result->jacobian_evaluations;
+  jd_.noalias() = jac_ * d_.asDiagonal();
+  a_.noalias() = jd_ * jac_.transpose();
+  ldlt_.compute(a_);
+  bool ok = ldlt_.info() == Eigen::Success && a_.allFinite();
+  if (ok) {
+    const auto pivots = ldlt_.vectorD();
+    const double max_pivot = pivots.maxCoeff();
+    // Pivot ratio below ~1e3 eps: J D J^T is singular to working precision
+    // (J rank deficient, or D zero on every coordinate a constraint sees).
+    ok = max_pivot > 0 &&
+         pivots.minCoeff() >
+             1e3 * std::numeric_limits<double>::epsilon() * max_pivot;
+  }
+  if (!ok) {
+    std::ostringstream os;
+    os << "J D J^T is singular or not positive definite (m = " << m_ << ")";
+    result->message = os.str();
+  }
+  return ok;
+}
+
+void ConstraintCorrection::SolveMultiplier(
+    const Eigen::Ref<const Eigen::VectorXd>& r,
+    Eigen::Ref<Eigen::VectorXd> lambda) const {
+  if (m_ == 0) return;
+  lambda = ldlt_.solve(r);
+}
+
+void ConstraintCorrection::Lift(const Eigen::Ref<const Eigen::VectorXd>& lambda,
+                                Eigen::Ref<Eigen::VectorXd> delta) const {
+  if (m_ == 0) {
+    delta.setZero();
+    return;
+  }
+  delta.noalias() = jd_.transpose() * lambda;
+}
+
+IntegratorStatus ConstraintCorrection::Project(const ConstrainedOde& ode,
+                                               Eigen::Ref<Eigen::VectorXd> y,
+                                               double tol, int max_iterations,
+                                               IntegratorResult* result,
+                                               bool* moved) {
+  *moved = false;
+  if (m_ == 0) return IntegratorStatus::kSuccess;
+  for (int it = 0;; ++it) {
+    ode.Constraints(y, h_);
+    const double violation = h_.lpNorm<Eigen::Infinity>();
+    if (violation <= tol) return IntegratorStatus::kSuccess;
+    if (!std::isfinite(violation) || it == max_iterations) {
+      std::ostringstream os;
+      os << "projection: ||H||_inf = " << violation << " > tolerance " << tol
+         << " after " << it << " iterations";
+      result->message = os.str();
+      return IntegratorStatus::kConstraintFailure;
+    }
+    if (!Factorize(ode, y, result)) {
+      result->message = "projection: " + result->message;
+      return IntegratorStatus::kConstraintFailure;
+    }
+    lambda_ = ldlt_.solve(h_);
+    delta_.noalias() = jd_.transpose() * lambda_;
+    y -= delta_;
+    *moved = true;
+    ++result->projection_iterations;
+  }
+}
+
+}  // namespace quasiroll::integrators_internal

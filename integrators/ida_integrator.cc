@@ -1,0 +1,412 @@
+#include "integrators/ida_integrator.h"
+
+#include <ida/ida.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include "integrators/constraint_correction.h"
+
+namespace quasiroll {
+
+using Eigen::Map;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+struct IdaIntegrator::Impl {
+  Impl() {
+    if (SUNContext_Create(nullptr, &ctx) != 0 || ctx == nullptr)
+      throw std::runtime_error("ida: SUNContext_Create failed");
+  }
+  ~Impl() {
+    Free();
+    if (ctx != nullptr) SUNContext_Free(&ctx);
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
+  void Free() {
+    if (mem != nullptr) IDAFree(&mem);
+    if (ls != nullptr) SUNLinSolFree(ls);
+    if (mat != nullptr) SUNMatDestroy(mat);
+    for (N_Vector* v : {&yy, &yp, &id, &atol})
+      if (*v != nullptr) N_VDestroy(*v);
+    mem = nullptr;
+    ls = nullptr;
+    mat = nullptr;
+    yy = yp = id = atol = nullptr;
+    n = m = -1;
+    registered_roots = 0;
+  }
+
+  // Creates (or re-initialises, when the sizes are unchanged) the IDA memory
+  // for initial values already stored in yy / yp. Returns an IDA flag.
+  int Prepare(int n_new, int m_new, double t0);
+
+  static int Residual(double t, N_Vector yy, N_Vector yp, N_Vector rr,
+                      void* user_data);
+  static int Jacobian(double t, double cj, N_Vector yy, N_Vector yp,
+                      N_Vector rr, SUNMatrix jac, void* user_data, N_Vector tmp1,
+                      N_Vector tmp2, N_Vector tmp3);
+  static int RootFunction(double t, N_Vector yy, N_Vector yp, double* gout,
+                          void* user_data);
+  static void ErrorHandler(int error_code, const char* module,
+                           const char* function, char* msg, void* user_data);
+
+  bool CallRhs(double t, const Eigen::Ref<const VectorXd>& x,
+               Eigen::Ref<VectorXd> f) {
+    ++result->rhs_evaluations;
+    if (ode->Rhs(t, x, f)) return true;
+    rhs_failed = true;
+    rhs_failure_time = t;
+    return false;
+  }
+
+  // SUNDIALS objects.
+  SUNContext ctx = nullptr;
+  void* mem = nullptr;
+  N_Vector yy = nullptr, yp = nullptr, id = nullptr, atol = nullptr;
+  SUNMatrix mat = nullptr;
+  SUNLinearSolver ls = nullptr;
+  int n = -1, m = -1;
+  int registered_roots = 0;
+
+  // Per-call data.
+  ConstrainedOde* ode = nullptr;
+  IntegratorResult* result = nullptr;
+  int dae_index = 2;
+  double sigma = 0.0;
+  bool rhs_failed = false;
+  double rhs_failure_time = 0.0;
+  std::string last_error;
+
+  // Workspaces (resized only when sizes change).
+  integrators_internal::ConstraintCorrection correction;
+  VectorXd f, f_pert, x_pert, jt_nu, h;
+  MatrixXd jac, dfdx;
+  std::vector<int> roots_found;
+};
+
+int IdaIntegrator::Impl::Prepare(int n_new, int m_new, double t0) {
+  if (mem != nullptr && n_new == n && m_new == m)
+    return IDAReInit(mem, t0, yy, yp);
+  // Sizes changed (or first call): the vectors, matrix and linear solver
+  // are size-bound, so rebuild everything but the context.
+  std::vector<double> y0(NV_DATA_S(yy), NV_DATA_S(yy) + NV_LENGTH_S(yy));
+  std::vector<double> yp0(NV_DATA_S(yp), NV_DATA_S(yp) + NV_LENGTH_S(yp));
+  Free();
+  const sunindextype size = n_new + m_new;
+  yy = N_VNew_Serial(size, ctx);
+  yp = N_VNew_Serial(size, ctx);
+  id = N_VNew_Serial(size, ctx);
+  atol = N_VNew_Serial(size, ctx);
+  mat = SUNDenseMatrix(size, size, ctx);
+  if (yy == nullptr || yp == nullptr || id == nullptr || atol == nullptr ||
+      mat == nullptr)
+    throw std::runtime_error("ida: cannot allocate vectors / matrix");
+  ls = SUNLinSol_Dense(yy, mat, ctx);
+  mem = IDACreate(ctx);
+  if (ls == nullptr || mem == nullptr)
+    throw std::runtime_error("ida: cannot create linear solver / IDA memory");
+  std::copy(y0.begin(), y0.end(), NV_DATA_S(yy));
+  std::copy(yp0.begin(), yp0.end(), NV_DATA_S(yp));
+  for (sunindextype i = 0; i < size; ++i)
+    NV_Ith_S(id, i) = i < n_new ? 1.0 : 0.0;  // 1 differential, 0 algebraic
+  n = n_new;
+  m = m_new;
+  int flag = IDASetErrHandlerFn(mem, &Impl::ErrorHandler, this);
+  if (flag == IDA_SUCCESS) flag = IDAInit(mem, &Impl::Residual, t0, yy, yp);
+  if (flag == IDA_SUCCESS) flag = IDASetUserData(mem, this);
+  if (flag == IDA_SUCCESS) flag = IDASetLinearSolver(mem, ls, mat);
+  if (flag == IDA_SUCCESS) flag = IDASetJacFn(mem, &Impl::Jacobian);
+  if (flag == IDA_SUCCESS) flag = IDASetId(mem, id);
+  if (flag == IDA_SUCCESS) flag = IDASetSuppressAlg(mem, SUNTRUE);
+  return flag;
+}
+
+int IdaIntegrator::Impl::Residual(double t, N_Vector yy, N_Vector yp,
+                                  N_Vector rr, void* user_data) {
+  Impl& s = *static_cast<Impl*>(user_data);
+  const int n = s.n, m = s.m;
+  Map<const VectorXd> y(NV_DATA_S(yy), n + m), ydot(NV_DATA_S(yp), n + m);
+  Map<VectorXd> r(NV_DATA_S(rr), n + m);
+  // Unrecoverable (-1): kRhsFailure as for the RK backends.
+  if (!s.CallRhs(t, y.head(n), s.f)) return -1;
+  r.head(n) = ydot.head(n) - s.f;
+  if (m == 0) return 0;
+  s.ode->ConstraintJacobian(y.head(n), s.jac);
+  ++s.result->jacobian_evaluations;
+  s.jt_nu.noalias() = s.jac.transpose() * y.tail(m);
+  r.head(n) -= s.correction.weights().cwiseProduct(s.jt_nu);
+  s.ode->Constraints(y.head(n), s.h);
+  if (s.dae_index == 2) {
+    r.tail(m) = s.h;
+  } else {
+    r.tail(m).noalias() = s.jac * ydot.head(n);
+    r.tail(m) += s.sigma * s.h;
+  }
+  return 0;
+}
+
+// Iteration matrix dr/dy + cj dr/dy' for the dense linear solver:
+//
+//   [ cj I - dF/dx - d(D J^T nu)/dx    -D J^T ]
+//   [ J                       (index 2)    0  ]
+//   [ (cj + sigma) J + d(J x')/dx (idx 1)  0  ]
+//
+// d(D J^T nu)/dx and d(J x')/dx (second derivatives of H) are neglected:
+// both vanish on the constraint-consistent solution with nu = 0 and only
+// affect the convergence rate of IDA's (already modified) Newton iteration,
+// never the converged solution. dF/dx comes from ode.RhsJacobian, or from
+// forward differences of Rhs with increment sqrt(eps) * max(1, |x_j|).
+int IdaIntegrator::Impl::Jacobian(double t, double cj, N_Vector yy,
+                                  N_Vector /*yp*/, N_Vector /*rr*/,
+                                  SUNMatrix jac_matrix, void* user_data,
+                                  N_Vector /*tmp1*/, N_Vector /*tmp2*/,
+                                  N_Vector /*tmp3*/) {
+  Impl& s = *static_cast<Impl*>(user_data);
+  const int n = s.n, m = s.m;
+  Map<const VectorXd> y(NV_DATA_S(yy), n + m);
+  // SUNDenseMatrix stores column-major with leading dimension n + m.
+  Map<MatrixXd> a(SUNDenseMatrix_Data(jac_matrix), n + m, n + m);
+  ++s.result->jacobian_evaluations;
+  if (!s.ode->RhsJacobian(t, y.head(n), s.dfdx)) {
+    if (!s.CallRhs(t, y.head(n), s.f)) return -1;
+    const double sqrt_eps = std::sqrt(std::numeric_limits<double>::epsilon());
+    s.x_pert = y.head(n);
+    for (int j = 0; j < n; ++j) {
+      const double xj = s.x_pert(j);
+      const double dx = sqrt_eps * std::max(1.0, std::abs(xj));
+      s.x_pert(j) = xj + dx;
+      const double step = s.x_pert(j) - xj;  // exactly representable increment
+      if (!s.CallRhs(t, s.x_pert, s.f_pert)) return -1;
+      s.dfdx.col(j) = (s.f_pert - s.f) / step;
+      s.x_pert(j) = xj;
+    }
+  }
+  a.setZero();
+  a.topLeftCorner(n, n) = -s.dfdx;
+  a.diagonal().head(n).array() += cj;
+  if (m > 0) {
+    s.ode->ConstraintJacobian(y.head(n), s.jac);
+    ++s.result->jacobian_evaluations;
+    const VectorXd& d = s.correction.weights();
+    a.topRightCorner(n, m).noalias() = -(d.asDiagonal() * s.jac.transpose());
+    const double scale = s.dae_index == 2 ? 1.0 : cj + s.sigma;
+    a.bottomLeftCorner(m, n) = scale * s.jac;
+  }
+  return 0;
+}
+
+int IdaIntegrator::Impl::RootFunction(double t, N_Vector yy, N_Vector /*yp*/,
+                                      double* gout, void* user_data) {
+  Impl& s = *static_cast<Impl*>(user_data);
+  Map<const VectorXd> x(NV_DATA_S(yy), s.n);
+  Map<VectorXd> g(gout, s.registered_roots);
+  s.ode->Roots(t, x, g);
+  return 0;
+}
+
+void IdaIntegrator::Impl::ErrorHandler(int error_code, const char* module,
+                                       const char* function, char* msg,
+                                       void* user_data) {
+  Impl& s = *static_cast<Impl*>(user_data);
+  if (error_code == IDA_WARNING) return;  // e.g. "t + h = t": not a failure
+  s.last_error = std::string(module) + "::" + function + ": " + msg;
+}
+
+IdaIntegrator::IdaIntegrator() : impl_(std::make_unique<Impl>()) {}
+IdaIntegrator::~IdaIntegrator() = default;
+
+namespace {
+
+std::string FlagName(int flag) {
+  char* name = IDAGetReturnFlagName(flag);
+  std::string out = name != nullptr ? name : "IDA flag " + std::to_string(flag);
+  std::free(name);
+  return out;
+}
+
+}  // namespace
+
+void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
+                                Eigen::Ref<Eigen::VectorXd> y,
+                                const IntegratorOptions& options,
+                                IntegratorResult* result) {
+  Impl& s = *impl_;
+  const int n = ode.state_size(), m = ode.num_constraints();
+  const int nr = ode.num_roots();
+  s.ode = &ode;
+  s.result = result;
+  s.dae_index = options.dae_index;
+  s.sigma = options.baumgarte_sigma;
+  s.rhs_failed = false;
+  s.last_error.clear();
+  s.correction.Begin(ode);
+  if (s.f.size() != n) {
+    s.f.resize(n);
+    s.f_pert.resize(n);
+    s.x_pert.resize(n);
+    s.jt_nu.resize(n);
+    s.dfdx.resize(n, n);
+  }
+  if (s.h.size() != m || s.jac.cols() != n) {
+    s.h.resize(m);
+    s.jac.resize(m, n);
+  }
+  auto fail = [&](IntegratorStatus status, const std::string& message) {
+    result->status = status;
+    result->t_reached = t0;
+    result->message = message;
+  };
+
+  // --- consistent initial values (x, nu, x') ---
+  bool moved = false;
+  if (options.dae_index == 2 && m > 0) {
+    const IntegratorStatus status =
+        s.correction.Project(ode, y, options.projection_tolerance,
+                             options.max_projection_iterations, result, &moved);
+    if (status != IntegratorStatus::kSuccess)
+      return fail(status, "initial state: " + result->message);
+  }
+  if (!s.CallRhs(t0, y, s.f)) {
+    std::ostringstream os;
+    os << "Rhs returned false at t = " << t0;
+    return fail(IntegratorStatus::kRhsFailure, os.str());
+  }
+  if (s.yy == nullptr || NV_LENGTH_S(s.yy) != n + m) {
+    // Temporary holders so that Prepare() can copy the initial values.
+    s.Free();
+    s.yy = N_VNew_Serial(n + m, s.ctx);
+    s.yp = N_VNew_Serial(n + m, s.ctx);
+    if (s.yy == nullptr || s.yp == nullptr)
+      throw std::runtime_error("ida: cannot allocate vectors");
+  }
+  Map<VectorXd> yy(NV_DATA_S(s.yy), n + m), yp(NV_DATA_S(s.yp), n + m);
+  yy.head(n) = y;
+  yp.head(n) = s.f;
+  yp.tail(m).setZero();
+  if (m > 0) {
+    if (!s.correction.Factorize(ode, y, result))
+      return fail(IntegratorStatus::kConstraintFailure,
+                  "initial multipliers: " + result->message);
+    s.correction.r().noalias() = s.correction.jacobian() * s.f;
+    if (options.dae_index == 1) {
+      ode.Constraints(y, s.h);
+      s.correction.r() += options.baumgarte_sigma * s.h;
+    }
+    s.correction.SolveMultiplier(s.correction.r(), s.correction.lambda());
+    yy.tail(m) = -s.correction.lambda();  // nu0
+    s.correction.Lift(s.correction.lambda(), s.jt_nu);
+    yp.head(n) -= s.jt_nu;  // x'0 = F + D J^T nu0
+  }
+
+  // --- IDA setup (IDAReInit when the sizes are unchanged) ---
+  int flag = s.Prepare(n, m, t0);
+  // Prepare may have rebuilt the vectors: re-map.
+  Map<VectorXd> yy_now(NV_DATA_S(s.yy), n + m);
+  // Tolerances: rtol / atol on x. nu is excluded from the local error test
+  // (IDASetSuppressAlg) but would still enter IDA's Newton convergence test.
+  // There it must not: near a step size h the iteration determines nu only
+  // to O(residual / h) (index 2: the nu block of the iteration matrix is
+  // h J D J^T), so an atol of 1e-10 on nu makes the corrector fail at every
+  // small h (observed: IDA_CONV_FAIL at h = hmin on the first step). nu acts
+  // on the solution only through D J^T nu in x', whose convergence is tested
+  // on x, so nu gets the loose kMultiplierAtol (results identical for any
+  // value in [1, 1e6]; 1e-6 already works, 1e-10 does not).
+  constexpr double kMultiplierAtol = 1e3;
+  for (int i = 0; i < n + m; ++i)
+    NV_Ith_S(s.atol, i) = i < n ? options.atol : kMultiplierAtol;
+  if (flag == IDA_SUCCESS) flag = IDASVtolerances(s.mem, options.rtol, s.atol);
+  if (flag == IDA_SUCCESS) flag = IDASetMaxNumSteps(s.mem, options.max_steps);
+  if (flag == IDA_SUCCESS) flag = IDASetMinStep(s.mem, options.min_step);
+  if (flag == IDA_SUCCESS) flag = IDASetInitStep(s.mem, options.step);
+  if (flag == IDA_SUCCESS) flag = IDASetStopTime(s.mem, t1);
+  if (flag == IDA_SUCCESS && nr != s.registered_roots) {
+    flag = IDARootInit(s.mem, nr, nr > 0 ? &Impl::RootFunction : nullptr);
+    s.registered_roots = nr;
+    s.roots_found.resize(nr);
+  }
+  if (flag != IDA_SUCCESS)
+    return fail(IntegratorStatus::kInvalidInput,
+                "ida setup: " + FlagName(flag) + " " + s.last_error);
+
+  // --- integrate ---
+  double t_ret = t0;
+  flag = IDASolve(s.mem, t1, &t_ret, s.yy, s.yp, IDA_NORMAL);
+  long steps = 0, error_test_failures = 0;
+  IDAGetNumSteps(s.mem, &steps);
+  IDAGetNumErrTestFails(s.mem, &error_test_failures);
+  result->steps += static_cast<int>(steps);
+  result->rejected_steps += static_cast<int>(error_test_failures);
+  y = yy_now.head(n);
+  result->t_reached = t_ret;
+
+  IntegratorStatus status = IntegratorStatus::kSuccess;
+  if (flag == IDA_ROOT_RETURN) {
+    status = IntegratorStatus::kEvent;
+    IDAGetRootInfo(s.mem, s.roots_found.data());
+    for (int i = 0; i < nr; ++i) {
+      if (s.roots_found[i] != 0) {
+        result->root_index = i;
+        break;
+      }
+    }
+  } else if (flag < 0) {
+    switch (flag) {
+      case IDA_TOO_MUCH_WORK:   // max_steps reached
+      case IDA_TOO_MUCH_ACC:    // tolerances below machine precision
+      case IDA_ERR_FAIL:        // repeated error test failures / h < hmin
+        status = IntegratorStatus::kStepSizeTooSmall;
+        break;
+      case IDA_RES_FAIL:
+      case IDA_REP_RES_ERR:
+      case IDA_FIRST_RES_FAIL:
+      case IDA_CONV_FAIL:
+      case IDA_LSETUP_FAIL:
+      case IDA_LSOLVE_FAIL:
+      case IDA_CONSTR_FAIL:
+      case IDA_LINESEARCH_FAIL:
+      case IDA_NO_RECOVERY:
+      case IDA_NLS_INIT_FAIL:
+      case IDA_NLS_SETUP_FAIL:
+      case IDA_NLS_FAIL:
+      case IDA_RTFUNC_FAIL:
+        status = IntegratorStatus::kConvergenceFailure;
+        break;
+      default:  // IDA_ILL_INPUT, IDA_MEM_NULL, IDA_BAD_T, ...
+        status = IntegratorStatus::kInvalidInput;
+        break;
+    }
+    // A failing Rhs aborts IDA through the residual / Jacobian callbacks.
+    if (s.rhs_failed) status = IntegratorStatus::kRhsFailure;
+    std::ostringstream os;
+    os << FlagName(flag) << " at t = " << t_ret;
+    if (s.rhs_failed) os << " (Rhs returned false at t = " << s.rhs_failure_time << ")";
+    if (!s.last_error.empty()) os << ": " << s.last_error;
+    result->message = os.str();
+  }
+
+  // --- polish: IDA enforces H = 0 only to its Newton tolerance ---
+  if ((status == IntegratorStatus::kSuccess || status == IntegratorStatus::kEvent) &&
+      options.dae_index == 2 && m > 0) {
+    const IntegratorStatus projected =
+        s.correction.Project(ode, y, options.projection_tolerance,
+                             options.max_projection_iterations, result, &moved);
+    if (projected != IntegratorStatus::kSuccess) {
+      status = projected;
+      result->message = "final projection: " + result->message;
+    }
+  }
+  result->status = status;
+}
+
+}  // namespace quasiroll

@@ -1,0 +1,43 @@
+// ida: SUNDIALS IDA (variable-order BDF) on the DAE in y = (x, nu)
+// (model notes §8.5):
+//
+//   dae_index = 2 (GGL type):    x' - F(t, x) - D J(x)^T nu = 0,  H(x) = 0
+//   dae_index = 1 (Baumgarte):   x' - F(t, x) - D J(x)^T nu = 0,
+//                                J(x) x' + sigma H(x)       = 0
+//
+// nu (num_constraints rows) is algebraic (IDASetId 0) and excluded from the
+// local error test (IDASetSuppressAlg). Consistent initial values are computed
+// here, not by IDACalcIC: for index 2, x is first projected onto H = 0 (Newton
+// projection as rk-projection), then nu0 = -(J D J^T)^{-1} (J F [+ sigma H]),
+// x'0 = F + D J^T nu0. For index 2 the final x is projected again, so H holds
+// to projection_tolerance and not only to the Newton tolerance of IDA.
+//
+// The IDA memory, vectors, dense matrix / linear solver and the SUNContext
+// live as long as this object and are reused via IDAReInit while
+// (state_size, num_constraints) are unchanged. SUNDIALS headers are confined
+// to ida_integrator.cc.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "core/dae.h"
+
+namespace quasiroll {
+
+class IdaIntegrator final : public Integrator {
+ public:
+  IdaIntegrator();
+  ~IdaIntegrator() override;
+  std::string name() const override { return "ida"; }
+
+ private:
+  void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
+                   Eigen::Ref<Eigen::VectorXd> y, const IntegratorOptions& options,
+                   IntegratorResult* result) override;
+
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace quasiroll

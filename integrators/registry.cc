@@ -1,0 +1,24 @@
+#include <memory>
+#include <mutex>
+
+#include "core/dae.h"
+#include "integrators/rk_baumgarte.h"
+#include "integrators/rk_projection.h"
+#ifdef QUASIROLL_HAVE_SUNDIALS
+#include "integrators/ida_integrator.h"
+#endif
+
+namespace quasiroll {
+
+void RegisterBuiltinIntegrators() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    IntegratorRegistry::Register("rk-baumgarte", "explicit Runge-Kutta on the Baumgarte-corrected field (model §8.3)", [] { return std::make_unique<RkBaumgarteIntegrator>(); });
+    IntegratorRegistry::Register("rk-projection", "explicit Runge-Kutta step + Newton projection onto H = 0 (model §8.4)", [] { return std::make_unique<RkProjectionIntegrator>(); });
+#ifdef QUASIROLL_HAVE_SUNDIALS
+    IntegratorRegistry::Register("ida", "SUNDIALS IDA on the index-2 GGL / index-1 Baumgarte DAE (model §8.5)", [] { return std::make_unique<IdaIntegrator>(); });
+#endif
+  });
+}
+
+}  // namespace quasiroll

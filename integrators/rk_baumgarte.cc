@@ -1,0 +1,41 @@
+#include "integrators/rk_baumgarte.h"
+
+#include <sstream>
+
+namespace quasiroll {
+
+IntegratorStatus RkBaumgarteIntegrator::CorrectedField::Field(
+    double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+    Eigen::Ref<Eigen::VectorXd> f, IntegratorResult* result) {
+  ++result->rhs_evaluations;
+  if (!ode->Rhs(t, y, f)) {
+    std::ostringstream os;
+    os << "Rhs returned false at t = " << t;
+    result->message = os.str();
+    return IntegratorStatus::kRhsFailure;
+  }
+  if (correction.m() == 0) return IntegratorStatus::kSuccess;
+  ode->Constraints(y, correction.h());
+  if (!correction.Factorize(*ode, y, result))
+    return IntegratorStatus::kConstraintFailure;
+  // r = J F + sigma H;  f <- F - D J^T (J D J^T)^{-1} r
+  correction.r().noalias() = correction.jacobian() * f;
+  correction.r() += sigma * correction.h();
+  correction.SolveMultiplier(correction.r(), correction.lambda());
+  correction.Lift(correction.lambda(), delta);
+  f -= delta;
+  return IntegratorStatus::kSuccess;
+}
+
+void RkBaumgarteIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
+                                        double t1, Eigen::Ref<Eigen::VectorXd> y,
+                                        const IntegratorOptions& options,
+                                        IntegratorResult* result) {
+  field_.ode = &ode;
+  field_.sigma = options.baumgarte_sigma;
+  field_.correction.Begin(ode);
+  if (field_.delta.size() != y.size()) field_.delta.resize(y.size());
+  driver_.Run(field_, ode, t0, t1, y, options, result);
+}
+
+}  // namespace quasiroll

@@ -1,0 +1,44 @@
+// rk-projection: explicit Runge-Kutta step of y' = F, then the Newton
+// projection y <- y - D J^T (J D J^T)^{-1} H(y), repeated until
+// ||H||_inf <= projection_tolerance (at most max_projection_iterations, else
+// kConstraintFailure) (model notes §8.4). The initial state is projected too.
+// With an FSAL pair the first stage is re-evaluated whenever the projection
+// moved y. Methods, step control and events: integrators/runge_kutta.h.
+#pragma once
+
+#include <string>
+
+#include "core/dae.h"
+#include "integrators/constraint_correction.h"
+#include "integrators/runge_kutta.h"
+
+namespace quasiroll {
+
+class RkProjectionIntegrator final : public Integrator {
+ public:
+  RkProjectionIntegrator() = default;
+  std::string name() const override { return "rk-projection"; }
+
+ private:
+  class System final : public integrators_internal::RkSystem {
+   public:
+    IntegratorStatus Field(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                           Eigen::Ref<Eigen::VectorXd> f,
+                           IntegratorResult* result) override;
+    IntegratorStatus PostStep(double t, Eigen::Ref<Eigen::VectorXd> y,
+                              IntegratorResult* result, bool* moved) override;
+    ConstrainedOde* ode = nullptr;
+    double tolerance = 0.0;
+    int max_iterations = 0;
+    integrators_internal::ConstraintCorrection correction;
+  };
+
+  void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
+                   Eigen::Ref<Eigen::VectorXd> y, const IntegratorOptions& options,
+                   IntegratorResult* result) override;
+
+  System system_;
+  integrators_internal::RungeKuttaDriver driver_;
+};
+
+}  // namespace quasiroll

@@ -1,0 +1,357 @@
+#include "integrators/runge_kutta.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace quasiroll::integrators_internal {
+namespace {
+
+ButcherTableau MakeRk4() {
+  ButcherTableau t;
+  t.stages = 4;
+  t.order = 4;
+  t.a = Eigen::MatrixXd::Zero(4, 4);
+  t.a(1, 0) = 0.5;
+  t.a(2, 1) = 0.5;
+  t.a(3, 2) = 1.0;
+  t.b = Eigen::Vector4d(1.0 / 6, 1.0 / 3, 1.0 / 3, 1.0 / 6);
+  t.c = Eigen::Vector4d(0.0, 0.5, 0.5, 1.0);
+  return t;
+}
+
+// Dormand & Prince (1980), "A family of embedded Runge-Kutta formulae".
+ButcherTableau MakeDormandPrince54() {
+  ButcherTableau t;
+  t.stages = 7;
+  t.order = 5;
+  t.embedded_order = 4;
+  t.fsal = true;
+  t.a = Eigen::MatrixXd::Zero(7, 7);
+  t.a(1, 0) = 1.0 / 5;
+  t.a(2, 0) = 3.0 / 40;
+  t.a(2, 1) = 9.0 / 40;
+  t.a(3, 0) = 44.0 / 45;
+  t.a(3, 1) = -56.0 / 15;
+  t.a(3, 2) = 32.0 / 9;
+  t.a(4, 0) = 19372.0 / 6561;
+  t.a(4, 1) = -25360.0 / 2187;
+  t.a(4, 2) = 64448.0 / 6561;
+  t.a(4, 3) = -212.0 / 729;
+  t.a(5, 0) = 9017.0 / 3168;
+  t.a(5, 1) = -355.0 / 33;
+  t.a(5, 2) = 46732.0 / 5247;
+  t.a(5, 3) = 49.0 / 176;
+  t.a(5, 4) = -5103.0 / 18656;
+  t.a(6, 0) = 35.0 / 384;
+  t.a(6, 2) = 500.0 / 1113;
+  t.a(6, 3) = 125.0 / 192;
+  t.a(6, 4) = -2187.0 / 6784;
+  t.a(6, 5) = 11.0 / 84;
+  t.b = t.a.row(6).transpose();
+  t.b_hat.resize(7);
+  t.b_hat << 5179.0 / 57600, 0.0, 7571.0 / 16695, 393.0 / 640,
+      -92097.0 / 339200, 187.0 / 2100, 1.0 / 40;
+  t.c.resize(7);
+  t.c << 0.0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1.0, 1.0;
+  return t;
+}
+
+// Bogacki & Shampine (1989), "A 3(2) pair of Runge-Kutta formulas".
+ButcherTableau MakeBogackiShampine32() {
+  ButcherTableau t;
+  t.stages = 4;
+  t.order = 3;
+  t.embedded_order = 2;
+  t.fsal = true;
+  t.a = Eigen::MatrixXd::Zero(4, 4);
+  t.a(1, 0) = 1.0 / 2;
+  t.a(2, 1) = 3.0 / 4;
+  t.a(3, 0) = 2.0 / 9;
+  t.a(3, 1) = 1.0 / 3;
+  t.a(3, 2) = 4.0 / 9;
+  t.b = t.a.row(3).transpose();
+  t.b_hat = Eigen::Vector4d(7.0 / 24, 1.0 / 4, 1.0 / 3, 1.0 / 8);
+  t.c = Eigen::Vector4d(0.0, 1.0 / 2, 3.0 / 4, 1.0);
+  return t;
+}
+
+}  // namespace
+
+const ButcherTableau& Tableau(RkMethod method) {
+  static const ButcherTableau rk4 = MakeRk4();
+  static const ButcherTableau dp54 = MakeDormandPrince54();
+  static const ButcherTableau bs32 = MakeBogackiShampine32();
+  switch (method) {
+    case RkMethod::kRk4: return rk4;
+    case RkMethod::kDormandPrince54: return dp54;
+    case RkMethod::kBogackiShampine32: return bs32;
+  }
+  return rk4;
+}
+
+void RungeKuttaDriver::Resize(int n, int stages, int roots) {
+  if (k_.rows() != n || k_.cols() != stages) k_.resize(n, stages);
+  if (y_.size() != n) {
+    y_.resize(n);
+    y_stage_.resize(n);
+    y_new_.resize(n);
+    err_.resize(n);
+    y_hi_.resize(n);
+  }
+  if (g_old_.size() != roots) {
+    g_old_.resize(roots);
+    g_new_.resize(roots);
+    g_trial_.resize(roots);
+    g_lo_.resize(roots);
+    g_hi_.resize(roots);
+  }
+}
+
+IntegratorStatus RungeKuttaDriver::Step(RkSystem& system,
+                                        const ButcherTableau& tab, double t,
+                                        double h, IntegratorResult* result) {
+  const int s = tab.stages;
+  for (int i = 1; i < s; ++i) {
+    y_stage_ = y_;
+    for (int j = 0; j < i; ++j) {
+      const double aij = tab.a(i, j);
+      if (aij != 0.0) y_stage_.noalias() += (h * aij) * k_.col(j);
+    }
+    const IntegratorStatus status =
+        system.Field(t + tab.c(i) * h, y_stage_, k_.col(i), result);
+    if (status != IntegratorStatus::kSuccess) return status;
+  }
+  if (tab.fsal) {
+    y_new_ = y_stage_;  // last stage is evaluated at y_new (a.row(s-1) == b)
+  } else {
+    y_new_ = y_;
+    for (int j = 0; j < s; ++j)
+      if (tab.b(j) != 0.0) y_new_.noalias() += (h * tab.b(j)) * k_.col(j);
+  }
+  if (tab.embedded_order > 0) {
+    err_.setZero();
+    for (int j = 0; j < s; ++j) {
+      const double e = tab.b(j) - tab.b_hat(j);
+      if (e != 0.0) err_.noalias() += (h * e) * k_.col(j);
+    }
+  }
+  return IntegratorStatus::kSuccess;
+}
+
+bool RungeKuttaDriver::Fired(int i, const Eigen::VectorXd& g) const {
+  const double g0 = g_old_(i), g1 = g(i);
+  if (g0 == 0.0 || std::isnan(g1)) return false;
+  return g1 == 0.0 || ((g1 > 0.0) != (g0 > 0.0));
+}
+
+IntegratorStatus RungeKuttaDriver::LocateRoot(
+    RkSystem& system, ConstrainedOde& ode, const ButcherTableau& tab, double t,
+    double h, IntegratorResult* result, double* t_root, int* index) {
+  const int nr = static_cast<int>(g_old_.size());
+  double lo = 0.0, hi = 1.0;
+  g_lo_ = g_old_;
+  g_hi_ = g_new_;
+  y_hi_ = y_new_;
+  // Root time tolerance as in SUNDIALS: 100 * unit roundoff * (|t| + |h|).
+  const double theta_tol =
+      100.0 * std::numeric_limits<double>::epsilon() * (std::abs(t) + std::abs(h)) /
+      std::abs(h);
+  // Illinois modification of regula falsi: alpha weights g_lo against g_hi;
+  // when the same end is replaced twice in a row the retained end's value is
+  // halved, which restores superlinear convergence.
+  double alpha = 1.0;
+  int last_side = 0;  // 1: lo replaced, 2: hi replaced
+  auto earliest = [&](double weight, double* frac_out) {
+    int best = -1;
+    double best_frac = -1.0;
+    for (int i = 0; i < nr; ++i) {
+      if (!Fired(i, g_hi_)) continue;
+      const double denom = g_hi_(i) - weight * g_lo_(i);
+      const double frac = denom == 0.0 ? 0.0 : g_hi_(i) / denom;
+      if (frac > best_frac) {
+        best_frac = frac;
+        best = i;
+      }
+    }
+    *frac_out = std::clamp(best_frac, 0.0, 1.0);
+    return best;
+  };
+  for (int iter = 0; iter < 200 && hi - lo > theta_tol; ++iter) {
+    double frac = 0.0;
+    earliest(alpha, &frac);
+    double theta = hi - (hi - lo) * frac;
+    // Keep the trial strictly inside the bracket, half a tolerance from ends.
+    const double margin = std::min(0.5 * theta_tol, 0.25 * (hi - lo));
+    theta = std::clamp(theta, lo + margin, hi - margin);
+
+    // Re-step from y_ (state at t); k_.col(0) = f(t, y_) is still valid.
+    IntegratorStatus status = Step(system, tab, t, theta * h, result);
+    if (status != IntegratorStatus::kSuccess) return status;
+    bool moved = false;
+    status = system.PostStep(t + theta * h, y_new_, result, &moved);
+    if (status != IntegratorStatus::kSuccess) return status;
+    ode.Roots(t + theta * h, y_new_, g_trial_);
+    bool fired = false;
+    for (int i = 0; i < nr && !fired; ++i) fired = Fired(i, g_trial_);
+    if (fired) {
+      hi = theta;
+      g_hi_ = g_trial_;
+      y_hi_ = y_new_;
+      alpha = last_side == 2 ? 0.5 * alpha : 1.0;
+      last_side = 2;
+    } else {
+      lo = theta;
+      g_lo_ = g_trial_;
+      alpha = last_side == 1 ? 2.0 * alpha : 1.0;
+      last_side = 1;
+    }
+  }
+  double frac = 0.0;
+  *index = earliest(1.0, &frac);
+  *t_root = t + hi * h;
+  y_new_ = y_hi_;
+  return IntegratorStatus::kSuccess;
+}
+
+void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
+                           double t1, Eigen::Ref<Eigen::VectorXd> y,
+                           const IntegratorOptions& options,
+                           IntegratorResult* result) {
+  const ButcherTableau& tab = Tableau(options.rk_method);
+  const int n = static_cast<int>(y.size());
+  const int nr = ode.num_roots();
+  Resize(n, tab.stages, nr);
+  y_ = y;
+  double t = t0;
+  auto finish = [&](IntegratorStatus status) {
+    y = y_;
+    result->status = status;
+    result->t_reached = t;
+  };
+
+  const bool adaptive = tab.embedded_order > 0;
+  const double span = t1 - t0;
+  int fixed_steps = 1;
+  double h = span;
+  if (!adaptive) {
+    if (options.step > 0.0 && options.step < span) {
+      // Relative slack so that e.g. 0.05 / 0.01 = 5.000000000000001 gives 5.
+      const double ratio = span / options.step * (1.0 - 1e-10);
+      if (ratio >= static_cast<double>(options.max_steps)) {
+        std::ostringstream os;
+        os << "RK4 needs " << std::ceil(ratio) << " steps of " << options.step
+           << " > max_steps = " << options.max_steps;
+        result->message = os.str();
+        finish(IntegratorStatus::kStepSizeTooSmall);
+        return;
+      }
+      fixed_steps = std::max(1, static_cast<int>(std::ceil(ratio)));
+    }
+  } else if (options.step > 0.0) {
+    h = std::min(options.step, span);
+  }
+  const double exponent =
+      adaptive ? -1.0 / (std::min(tab.order, tab.embedded_order) + 1) : 0.0;
+
+  if (nr > 0) ode.Roots(t, y_, g_old_);
+  IntegratorStatus status = system.Field(t, y_, k_.col(0), result);
+  if (status != IntegratorStatus::kSuccess) return finish(status);
+
+  int accepted = 0;
+  bool last_rejected = false;
+  while (true) {
+    double t_new = 0.0, h_try = 0.0;
+    if (!adaptive) {
+      t_new = accepted + 1 == fixed_steps ? t1 : t0 + (accepted + 1) * options.step;
+      h_try = t_new - t;
+    } else {
+      if (accepted >= options.max_steps) {
+        std::ostringstream os;
+        os << "max_steps = " << options.max_steps << " reached at t = " << t;
+        result->message = os.str();
+        return finish(IntegratorStatus::kStepSizeTooSmall);
+      }
+      if (h >= t1 - t) {
+        h_try = t1 - t;
+        t_new = t1;
+      } else {
+        h_try = h;
+        t_new = t + h;
+      }
+    }
+
+    status = Step(system, tab, t, h_try, result);
+    if (status != IntegratorStatus::kSuccess) return finish(status);
+
+    if (adaptive) {
+      double sum = 0.0;
+      for (int i = 0; i < n; ++i) {
+        const double scale =
+            options.atol +
+            options.rtol * std::max(std::abs(y_(i)), std::abs(y_new_(i)));
+        const double e = err_(i) / scale;
+        sum += e * e;
+      }
+      const double err = std::sqrt(sum / n);
+      if (!(err <= 1.0)) {
+        ++result->rejected_steps;
+        const double factor =
+            std::isfinite(err) ? std::max(0.2, 0.9 * std::pow(err, exponent)) : 0.2;
+        h = h_try * factor;
+        last_rejected = true;
+        if (h < options.min_step) {
+          std::ostringstream os;
+          os << "step size " << h << " < min_step = " << options.min_step
+             << " at t = " << t << " (error norm " << err << ")";
+          result->message = os.str();
+          return finish(IntegratorStatus::kStepSizeTooSmall);
+        }
+        continue;
+      }
+      double factor =
+          err > 0.0 ? std::clamp(0.9 * std::pow(err, exponent), 0.2, 5.0) : 5.0;
+      if (last_rejected) factor = std::min(1.0, factor);
+      last_rejected = false;
+      if (t_new != t1) h = h_try * factor;
+    }
+
+    bool moved = false;
+    status = system.PostStep(t_new, y_new_, result, &moved);
+    if (status != IntegratorStatus::kSuccess) return finish(status);
+
+    if (nr > 0) {
+      ode.Roots(t_new, y_new_, g_new_);
+      bool fired = false;
+      for (int i = 0; i < nr && !fired; ++i) fired = Fired(i, g_new_);
+      if (fired) {
+        double t_root = t_new;
+        int index = -1;
+        status = LocateRoot(system, ode, tab, t, h_try, result, &t_root, &index);
+        if (status != IntegratorStatus::kSuccess) return finish(status);
+        ++result->steps;
+        y_.swap(y_new_);
+        t = t_root >= t_new ? t_new : t_root;
+        result->root_index = index;
+        return finish(IntegratorStatus::kEvent);
+      }
+      g_old_.swap(g_new_);
+    }
+
+    ++accepted;
+    ++result->steps;
+    y_.swap(y_new_);
+    t = t_new;
+    if (t == t1) break;
+    if (tab.fsal && !moved) {
+      k_.col(0) = k_.col(tab.stages - 1);
+    } else {
+      status = system.Field(t, y_, k_.col(0), result);
+      if (status != IntegratorStatus::kSuccess) return finish(status);
+    }
+  }
+  finish(IntegratorStatus::kSuccess);
+}
+
+}  // namespace quasiroll::integrators_internal

@@ -1,0 +1,492 @@
+// Tests of the integrator backends (integrators/) on problems with known
+// solutions. Every tolerance states its origin.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/dae.h"
+#include "tests/integrators/test_problems.h"
+
+namespace quasiroll {
+namespace {
+
+using testing::FallingBodyOde;
+using testing::FailingRhsOde;
+using testing::HarmonicOde;
+using testing::LinearConstraintOde;
+using testing::PendulumOde;
+
+std::vector<std::string> Backends() {
+  RegisterBuiltinIntegrators();
+  return IntegratorRegistry::Names();
+}
+
+std::vector<std::string> RkBackends() { return {"rk-baumgarte", "rk-projection"}; }
+
+std::string ParamName(const ::testing::TestParamInfo<std::string>& info) {
+  std::string s = info.param;
+  for (char& c : s)
+    if (c == '-') c = '_';
+  return s;
+}
+
+double ConstraintNorm(const ConstrainedOde& ode, const Eigen::VectorXd& y) {
+  Eigen::VectorXd h(ode.num_constraints());
+  ode.Constraints(y, h);
+  return h.size() == 0 ? 0.0 : h.lpNorm<Eigen::Infinity>();
+}
+
+// ---------------------------------------------------------------- registry
+
+TEST(IntegratorRegistryTest, BuiltinsRegistered) {
+  RegisterBuiltinIntegrators();
+  RegisterBuiltinIntegrators();  // idempotent
+  EXPECT_TRUE(IntegratorRegistry::Has("rk-baumgarte"));
+  EXPECT_TRUE(IntegratorRegistry::Has("rk-projection"));
+#ifdef QUASIROLL_TEST_HAVE_SUNDIALS
+  EXPECT_TRUE(IntegratorRegistry::Has("ida"));
+#endif
+  for (const auto& name : IntegratorRegistry::Names()) {
+    auto integrator = IntegratorRegistry::Create(name);
+    ASSERT_NE(integrator, nullptr);
+    EXPECT_EQ(integrator->name(), name);
+    EXPECT_FALSE(IntegratorRegistry::Description(name).empty());
+  }
+  EXPECT_THROW(IntegratorRegistry::Create("no-such-integrator"),
+               std::invalid_argument);
+}
+
+TEST(IntegratorOptionsTest, StringsAndValidation) {
+  EXPECT_EQ(RkMethodFromString("rk4"), RkMethod::kRk4);
+  EXPECT_EQ(RkMethodFromString("dp54"), RkMethod::kDormandPrince54);
+  EXPECT_EQ(RkMethodFromString("bs32"), RkMethod::kBogackiShampine32);
+  EXPECT_THROW(RkMethodFromString("euler"), std::invalid_argument);
+  EXPECT_STREQ(ToString(IntegratorStatus::kEvent), "event");
+  EXPECT_STREQ(ToString(RkMethod::kDormandPrince54), "dp54");
+  IntegratorOptions o;
+  std::string why;
+  EXPECT_TRUE(o.IsValid(&why));
+  o.baumgarte_sigma = -1.0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("baumgarte_sigma"), std::string::npos) << why;
+  o = IntegratorOptions{};
+  o.dae_index = 3;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("dae_index"), std::string::npos) << why;
+}
+
+// ----------------------------------------------------- pendulum accuracy
+
+struct PendulumCase {
+  std::string backend;
+  RkMethod method;
+  int dae_index;
+  double step;
+  double rtol;
+  double position_tolerance;  // |x(T) - x_ref(T)|_inf
+  double drift_bound;         // ||H(y(T))||_inf
+  std::string label;
+};
+
+class PendulumTest : public ::testing::TestWithParam<PendulumCase> {};
+
+// theta0 = 0.5 rad, T = 2 s integrated as 40 hold intervals of 0.05 s (one
+// Integrate call each, as the zoh client does).
+TEST_P(PendulumTest, MatchesReferenceAndBoundsDrift) {
+  const PendulumCase& c = GetParam();
+  RegisterBuiltinIntegrators();
+  if (!IntegratorRegistry::Has(c.backend)) GTEST_SKIP() << c.backend << " not built";
+  auto integrator = IntegratorRegistry::Create(c.backend);
+  PendulumOde ode;
+  const double theta0 = 0.5, hold = 0.05;
+  const int holds = 40;
+  Eigen::VectorXd y = ode.AtAngle(theta0);
+  IntegratorOptions o;
+  o.rk_method = c.method;
+  o.step = c.step;
+  o.rtol = c.rtol;
+  o.atol = c.rtol * 1e-2;
+  o.dae_index = c.dae_index;
+  IntegratorResult r;
+  for (int k = 0; k < holds; ++k) {
+    ASSERT_EQ(integrator->Integrate(ode, k * hold, (k + 1) * hold, y, o, &r),
+              IntegratorStatus::kSuccess)
+        << r.message;
+    EXPECT_DOUBLE_EQ(r.t_reached, (k + 1) * hold);
+  }
+  const Eigen::Vector4d ref = ode.Reference(theta0, holds * hold);
+  const double error = (y - ref).lpNorm<Eigen::Infinity>();
+  const double drift = ConstraintNorm(ode, y);
+  std::printf("[ measured ] %-28s error %.3e  drift %.3e  steps %d rejected %d "
+              "rhs %d jac %d proj %d\n",
+              c.label.c_str(), error, drift, r.steps, r.rejected_steps,
+              r.rhs_evaluations, r.jacobian_evaluations, r.projection_iterations);
+  EXPECT_LE(error, c.position_tolerance);
+  EXPECT_LE(drift, c.drift_bound);
+  EXPECT_GT(r.steps, 0);
+  EXPECT_GT(r.rhs_evaluations, 0);
+}
+
+// Tolerances: the value measured on x86-64 / GCC 12 (printed as
+// "[ measured ]", quoted below) times about 10 for platform / compiler slack.
+INSTANTIATE_TEST_SUITE_P(
+    Backends, PendulumTest,
+    ::testing::Values(
+        // RK4, h = 0.01: global error C h^4, measured 2.5e-8. Drift: the
+        // projection runs to projection_tolerance = 1e-12 (default).
+        PendulumCase{"rk-projection", RkMethod::kRk4, 2, 0.01, 1e-8, 3e-7,
+                     1e-10, "rk_projection_rk4"},
+        // rtol 1e-10: measured 5.6e-11.
+        PendulumCase{"rk-projection", RkMethod::kDormandPrince54, 2, 0.0, 1e-10,
+                     1e-9, 1e-10, "rk_projection_dp54"},
+        // rtol 1e-8: measured 2.2e-8.
+        PendulumCase{"rk-projection", RkMethod::kBogackiShampine32, 2, 0.0, 1e-8,
+                     3e-7, 1e-10, "rk_projection_bs32"},
+        // Baumgarte sigma = 5: error measured 1.4e-7, drift (RK local error,
+        // damped at rate sigma) 1.1e-8.
+        PendulumCase{"rk-baumgarte", RkMethod::kRk4, 2, 0.01, 1e-8, 1.5e-6, 1e-7,
+                     "rk_baumgarte_rk4"},
+        // rtol 1e-10: error measured 2.2e-11, drift 9.6e-12.
+        PendulumCase{"rk-baumgarte", RkMethod::kDormandPrince54, 2, 0.0, 1e-10,
+                     3e-10, 1e-10, "rk_baumgarte_dp54"},
+        // IDA, rtol 1e-8 (measured 2.0e-7 / 2.8e-7: BDF global error ~ 20 rtol);
+        // index 2 ends with a projection to 1e-12; index 1 drift measured
+        // 1.3e-8.
+        PendulumCase{"ida", RkMethod::kRk4, 2, 0.0, 1e-8, 3e-6, 1e-10, "ida_index2"},
+        PendulumCase{"ida", RkMethod::kRk4, 1, 0.0, 1e-8, 3e-6, 1e-7, "ida_index1"}),
+    [](const ::testing::TestParamInfo<PendulumCase>& info) { return info.param.label; });
+
+// -------------------------------------------------- RK4 convergence order
+
+class RkBackendTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(RkBackendTest, Rk4ConvergesWithOrderFour) {
+  auto integrator = IntegratorRegistry::Create(GetParam());
+  HarmonicOde ode(2.0);
+  const Eigen::Vector2d y0(1.0, 0.5);
+  const double t_end = 2.0;
+  double errors[3];
+  const double steps[3] = {0.1, 0.05, 0.025};
+  for (int i = 0; i < 3; ++i) {
+    Eigen::VectorXd y = y0;
+    IntegratorOptions o;
+    o.step = steps[i];
+    IntegratorResult r;
+    ASSERT_EQ(integrator->Integrate(ode, 0.0, t_end, y, o, &r),
+              IntegratorStatus::kSuccess);
+    EXPECT_EQ(r.steps, static_cast<int>(std::lround(t_end / steps[i])));
+    EXPECT_EQ(r.rhs_evaluations, 4 * r.steps);
+    errors[i] = (y - ode.Exact(t_end, y0)).norm();
+  }
+  const double order1 = std::log2(errors[0] / errors[1]);
+  const double order2 = std::log2(errors[1] / errors[2]);
+  std::printf("[ measured ] %s RK4 errors %.3e %.3e %.3e, orders %.4f %.4f\n",
+              GetParam().c_str(), errors[0], errors[1], errors[2], order1, order2);
+  // Asymptotic order 4; +-0.1 covers the O(h^5) term at w h <= 0.2.
+  EXPECT_NEAR(order1, 4.0, 0.1);
+  EXPECT_NEAR(order2, 4.0, 0.1);
+}
+
+TEST_P(RkBackendTest, Rk4LastStepLandsOnT1) {
+  auto integrator = IntegratorRegistry::Create(GetParam());
+  HarmonicOde ode;
+  Eigen::VectorXd y = Eigen::Vector2d(1.0, 0.0);
+  IntegratorOptions o;
+  o.step = 0.03;  // 0.1 = 3 * 0.03 + 0.01
+  IntegratorResult r;
+  ASSERT_EQ(integrator->Integrate(ode, 0.0, 0.1, y, o, &r),
+            IntegratorStatus::kSuccess);
+  EXPECT_EQ(r.steps, 4);
+  EXPECT_EQ(r.t_reached, 0.1);
+  // One RK4 step over [t0, t1] when step = 0.
+  o.step = 0.0;
+  IntegratorResult r1;
+  ASSERT_EQ(integrator->Integrate(ode, 0.0, 0.05, y, o, &r1),
+            IntegratorStatus::kSuccess);
+  EXPECT_EQ(r1.steps, 1);
+  EXPECT_EQ(r1.rhs_evaluations, 4);
+}
+
+// Dormand-Prince 5(4) and Bogacki-Shampine 3(2) on y' = A y over 10 s
+// (about 3 periods). Tolerance: error per step is controlled, so the global
+// error may exceed the local tolerance by roughly the number of steps times
+// the controller safety; we accept 20 * (rtol |y| + atol), and check the
+// error also scales with the tolerance (ratio >= 10 for 1000x tighter).
+TEST_P(RkBackendTest, AdaptivePairsMeetTolerance) {
+  auto integrator = IntegratorRegistry::Create(GetParam());
+  HarmonicOde ode(1.0);
+  const Eigen::Vector2d y0(1.0, 0.0);
+  for (RkMethod method : {RkMethod::kDormandPrince54, RkMethod::kBogackiShampine32}) {
+    double previous_error = 0.0;
+    for (double rtol : {1e-6, 1e-9}) {
+      Eigen::VectorXd y = y0;
+      IntegratorOptions o;
+      o.rk_method = method;
+      o.rtol = rtol;
+      o.atol = rtol * 1e-2;
+      IntegratorResult r;
+      ASSERT_EQ(integrator->Integrate(ode, 0.0, 10.0, y, o, &r),
+                IntegratorStatus::kSuccess)
+          << r.message;
+      const double error = (y - ode.Exact(10.0, y0)).lpNorm<Eigen::Infinity>();
+      std::printf("[ measured ] %s %s rtol %.0e: error %.3e steps %d rejected %d\n",
+                  GetParam().c_str(), ToString(method), rtol, error, r.steps,
+                  r.rejected_steps);
+      EXPECT_LE(error, 20 * (rtol * 1.0 + o.atol));
+      // The first trial step is the whole interval (step = 0): rejected.
+      EXPECT_GT(r.rejected_steps, 0);
+      if (previous_error > 0) {
+        EXPECT_GE(previous_error / error, 10.0);
+      }
+      previous_error = error;
+    }
+  }
+}
+
+TEST_P(RkBackendTest, MinStepAndMaxSteps) {
+  auto integrator = IntegratorRegistry::Create(GetParam());
+  HarmonicOde ode(1.0);
+  Eigen::VectorXd y = Eigen::Vector2d(1.0, 0.0);
+  IntegratorOptions o;
+  o.rk_method = RkMethod::kDormandPrince54;
+  o.max_steps = 3;
+  IntegratorResult r;
+  EXPECT_EQ(integrator->Integrate(ode, 0.0, 10.0, y, o, &r),
+            IntegratorStatus::kStepSizeTooSmall);
+  EXPECT_LT(r.t_reached, 10.0);
+  o = IntegratorOptions{};
+  o.rk_method = RkMethod::kDormandPrince54;
+  o.min_step = 0.5;  // rtol 1e-8 needs h ~ 0.05
+  y = Eigen::Vector2d(1.0, 0.0);
+  EXPECT_EQ(integrator->Integrate(ode, 0.0, 10.0, y, o, &r),
+            IntegratorStatus::kStepSizeTooSmall);
+  o = IntegratorOptions{};
+  o.step = 1e-3;
+  o.max_steps = 10;
+  y = Eigen::Vector2d(1.0, 0.0);
+  EXPECT_EQ(integrator->Integrate(ode, 0.0, 1.0, y, o, &r),
+            IntegratorStatus::kStepSizeTooSmall);
+}
+
+INSTANTIATE_TEST_SUITE_P(Rk, RkBackendTest, ::testing::ValuesIn(RkBackends()),
+                         ParamName);
+
+// ------------------------------------------------------- Baumgarte decay
+
+// |H(0)| = 1e-3, sigma = 5, RK4 with h = 0.05 over 1 s. With a linear
+// constraint H_k = R(-sigma h)^k H_0 exactly, R(z) = 1 + z + z^2/2 + z^3/6 +
+// z^4/24, so |H(t)| / (|H0| e^{-sigma t}) = (R(-0.25) e^{0.25})^{t/h} rises
+// monotonically from 1 to 1.0002 (model notes O8: RK4 amplification error);
+// the bound [1, 1.001] leaves 5x margin plus rounding.
+TEST(RkBaumgarteTest, ConstraintDecaysAtTheBaumgarteRate) {
+  RegisterBuiltinIntegrators();
+  auto integrator = IntegratorRegistry::Create("rk-baumgarte");
+  LinearConstraintOde ode(1.0);
+  Eigen::VectorXd y(3);
+  y << 0.3, 0.2, 0.3 + 0.4 - 1.0 - 1e-3;  // H = 1e-3
+  const double h0 = ConstraintNorm(ode, y);
+  ASSERT_NEAR(h0, 1e-3, 1e-15);
+  IntegratorOptions o;
+  o.baumgarte_sigma = 5.0;
+  o.step = 0.05;
+  IntegratorResult r;
+  double ratio = 0.0;
+  for (int k = 0; k < 20; ++k) {
+    const double t1 = (k + 1) * 0.05;
+    ASSERT_EQ(integrator->Integrate(ode, k * 0.05, t1, y, o, &r),
+              IntegratorStatus::kSuccess);
+    ratio = ConstraintNorm(ode, y) / (h0 * std::exp(-5.0 * t1));
+    EXPECT_GE(ratio, 1.0 - 1e-9) << "t = " << t1;  // 1e-9: rounding of H ~ 1e-16 / 1e-3
+    EXPECT_LE(ratio, 1.001) << "t = " << t1;
+  }
+  const double predicted = std::pow(
+      (1 - 0.25 + 0.25 * 0.25 / 2 - std::pow(0.25, 3) / 6 + std::pow(0.25, 4) / 24) *
+          std::exp(0.25),
+      20);
+  std::printf("[ measured ] Baumgarte ratio at t = 1: %.8f (predicted %.8f)\n",
+              ratio, predicted);
+  EXPECT_NEAR(ratio, predicted, 1e-6);  // 1e-6: rounding of H at 1e-5 level
+  // y2 has weight 0: the correction never moves it beyond F's own change.
+}
+
+// ---------------------------------------------------------------- events
+
+class AllBackendsTest : public ::testing::TestWithParam<std::string> {};
+
+// Drop from 1 m: ground contact at t* = sqrt(2 h / g). The RK backends are
+// exact on this quadratic solution (order >= 3) up to the root tolerance
+// 100 eps (|t| + |h|); IDA locates roots on its interpolant, error bounded by
+// its local error (rtol 1e-8) -> we accept 1e-6 for IDA and 1e-12 for RK.
+TEST_P(AllBackendsTest, FallingBodyStopsAtGroundContact) {
+  auto integrator = IntegratorRegistry::Create(GetParam());
+  FallingBodyOde ode;
+  const double t_star = std::sqrt(2.0 * 1.0 / ode.gravity());
+  const double tolerance = GetParam() == "ida" ? 1e-6 : 1e-12;
+  for (RkMethod method : {RkMethod::kRk4, RkMethod::kDormandPrince54}) {
+    Eigen::VectorXd y = Eigen::Vector2d(1.0, 0.0);
+    IntegratorOptions o;
+    o.rk_method = method;
+    o.step = 0.05;
+    IntegratorResult r;
+    ASSERT_EQ(integrator->Integrate(ode, 0.0, 1.0, y, o, &r),
+              IntegratorStatus::kEvent)
+        << r.message;
+    std::printf("[ measured ] %s %s root time error %.3e\n", GetParam().c_str(),
+                ToString(method), r.t_reached - t_star);
+    EXPECT_NEAR(r.t_reached, t_star, tolerance);
+    EXPECT_EQ(r.root_index, 1);
+    EXPECT_NEAR(y(0), 0.0, ode.gravity() * t_star * tolerance + 1e-12);
+    EXPECT_NEAR(y(1), -ode.gravity() * t_star, ode.gravity() * tolerance * 10);
+    if (GetParam() == "ida") break;  // rk_method does not apply to IDA
+  }
+}
+
+// ------------------------------------------------------------ misuse
+
+TEST_P(AllBackendsTest, InvalidInputThrows) {
+  auto integrator = IntegratorRegistry::Create(GetParam());
+  PendulumOde ode;
+  IntegratorOptions o;
+  IntegratorResult r;
+  Eigen::VectorXd y = ode.AtAngle(0.1);
+  Eigen::VectorXd wrong(3);
+  wrong.setZero();
+  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, wrong, o, &r),
+               std::invalid_argument);
+  Eigen::VectorXd nan = y;
+  nan(2) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, nan, o, &r),
+               std::invalid_argument);
+  EXPECT_THROW(integrator->Integrate(ode, 0.1, 0.1, y, o, &r), std::invalid_argument);
+  EXPECT_THROW(integrator->Integrate(ode, 0.2, 0.1, y, o, &r), std::invalid_argument);
+  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, o, nullptr),
+               std::invalid_argument);
+  IntegratorOptions bad = o;
+  bad.baumgarte_sigma = -1.0;
+  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, bad, &r), std::invalid_argument);
+  bad = o;
+  bad.rtol = 0.0;
+  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, bad, &r), std::invalid_argument);
+  bad = o;
+  bad.step = -0.1;
+  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, bad, &r), std::invalid_argument);
+  bad = o;
+  bad.max_projection_iterations = 0;
+  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, bad, &r), std::invalid_argument);
+  // Negative correction weight: detected by the backend, still misuse.
+  class NegativeWeights : public PendulumOde {
+    void CorrectionWeights(Eigen::Ref<Eigen::VectorXd> d) const override {
+      d.setConstant(-1.0);
+    }
+  } negative;
+  EXPECT_THROW(integrator->Integrate(negative, 0.0, 0.1, y, o, &r),
+               std::invalid_argument);
+  // After all that the integrator is still usable.
+  EXPECT_EQ(integrator->Integrate(ode, 0.0, 0.1, y, o, &r), IntegratorStatus::kSuccess)
+      << r.message;
+}
+
+TEST_P(AllBackendsTest, RhsFailureIsReported) {
+  auto integrator = IntegratorRegistry::Create(GetParam());
+  IntegratorOptions o;
+  o.step = 0.01;
+  {
+    FailingRhsOde ode(0.025);
+    Eigen::VectorXd y = ode.AtAngle(0.2);
+    IntegratorResult r;
+    EXPECT_EQ(integrator->Integrate(ode, 0.0, 0.05, y, o, &r),
+              IntegratorStatus::kRhsFailure)
+        << r.message;
+    EXPECT_LE(r.t_reached, 0.025 + 1e-12);
+    EXPECT_TRUE(y.allFinite());
+    EXPECT_FALSE(r.message.empty());
+  }
+  {
+    FailingRhsOde ode(-1.0);  // fails immediately
+    Eigen::VectorXd y = ode.AtAngle(0.2);
+    IntegratorResult r;
+    EXPECT_EQ(integrator->Integrate(ode, 0.0, 0.05, y, o, &r),
+              IntegratorStatus::kRhsFailure);
+    EXPECT_EQ(r.t_reached, 0.0);
+  }
+}
+
+// The same integrator object is reused across problems of different sizes
+// (IDA: rebuild) and of the same size (IDA: IDAReInit); results must not
+// depend on what ran before.
+TEST_P(AllBackendsTest, ReuseAcrossProblemSizes) {
+  auto integrator = IntegratorRegistry::Create(GetParam());
+  auto fresh = IntegratorRegistry::Create(GetParam());
+  PendulumOde pendulum;
+  HarmonicOde harmonic;
+  IntegratorOptions o;
+  o.step = 0.01;
+  IntegratorResult r;
+  Eigen::VectorXd a = pendulum.AtAngle(0.3);
+  ASSERT_EQ(integrator->Integrate(pendulum, 0.0, 0.05, a, o, &r),
+            IntegratorStatus::kSuccess);
+  Eigen::VectorXd b = Eigen::Vector2d(1.0, 0.0);
+  ASSERT_EQ(integrator->Integrate(harmonic, 0.0, 0.05, b, o, &r),
+            IntegratorStatus::kSuccess);
+  Eigen::VectorXd c = pendulum.AtAngle(0.3);
+  ASSERT_EQ(integrator->Integrate(pendulum, 0.0, 0.05, c, o, &r),
+            IntegratorStatus::kSuccess);
+  Eigen::VectorXd d = pendulum.AtAngle(0.3);
+  IntegratorResult r2;
+  ASSERT_EQ(fresh->Integrate(pendulum, 0.0, 0.05, d, o, &r2),
+            IntegratorStatus::kSuccess);
+  EXPECT_EQ(a, c);
+  EXPECT_EQ(c, d);
+  EXPECT_GT(r.steps, 2 * r2.steps);  // counters accumulate across calls
+}
+
+INSTANTIATE_TEST_SUITE_P(All, AllBackendsTest, ::testing::ValuesIn(Backends()),
+                         ParamName);
+
+// ------------------------------------------------------------ projection
+
+TEST(RkProjectionTest, ProjectionFailureIsReported) {
+  RegisterBuiltinIntegrators();
+  auto integrator = IntegratorRegistry::Create("rk-projection");
+  PendulumOde ode;
+  Eigen::VectorXd y = ode.AtAngle(0.3);
+  y.head(2) *= 1.5;  // |H1| = 1.25: one Newton step cannot reach 1e-12
+  IntegratorOptions o;
+  o.max_projection_iterations = 1;
+  IntegratorResult r;
+  EXPECT_EQ(integrator->Integrate(ode, 0.0, 0.05, y, o, &r),
+            IntegratorStatus::kConstraintFailure);
+  EXPECT_NE(r.message.find("projection"), std::string::npos) << r.message;
+  // With the default 10 iterations Newton converges quadratically.
+  o.max_projection_iterations = 10;
+  IntegratorResult r2;
+  EXPECT_EQ(integrator->Integrate(ode, 0.0, 0.05, y, o, &r2),
+            IntegratorStatus::kSuccess);
+  EXPECT_LE(ConstraintNorm(ode, y), o.projection_tolerance);
+}
+
+TEST(RkProjectionTest, SingularConstraintJacobianIsReported) {
+  RegisterBuiltinIntegrators();
+  class ZeroWeights : public PendulumOde {
+    void CorrectionWeights(Eigen::Ref<Eigen::VectorXd> d) const override {
+      d.setZero();
+    }
+  } ode;
+  for (const char* name : {"rk-projection", "rk-baumgarte"}) {
+    auto integrator = IntegratorRegistry::Create(name);
+    Eigen::VectorXd y = ode.AtAngle(0.3);
+    y(0) += 1e-3;
+    IntegratorResult r;
+    EXPECT_EQ(integrator->Integrate(ode, 0.0, 0.05, y, IntegratorOptions{}, &r),
+              IntegratorStatus::kConstraintFailure)
+        << name;
+  }
+}
+
+}  // namespace
+}  // namespace quasiroll
