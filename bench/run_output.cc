@@ -1,0 +1,236 @@
+#include "bench/run_output.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+namespace quasiroll {
+
+namespace fs = std::filesystem;
+
+void AtomicWriteFile(const std::string& path, const std::string& content) {
+  const fs::path target(path);
+  if (target.has_parent_path()) {
+    std::error_code ec;
+    fs::create_directories(target.parent_path(), ec);
+    if (ec)
+      throw std::runtime_error("cannot create directory '" +
+                               target.parent_path().string() + "': " + ec.message());
+  }
+  std::ostringstream tmp_name;
+  tmp_name << path << ".tmp." << ::getpid() << "."
+           << std::hash<std::thread::id>{}(std::this_thread::get_id());
+  {
+    std::ofstream out(tmp_name.str(), std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot write '" + tmp_name.str() + "'");
+    out << content;
+    out.flush();
+    if (!out) throw std::runtime_error("write failed for '" + tmp_name.str() + "'");
+  }
+  std::error_code ec;
+  fs::rename(tmp_name.str(), target, ec);
+  if (ec) {
+    fs::remove(tmp_name.str(), ec);
+    throw std::runtime_error("cannot rename onto '" + path + "'");
+  }
+}
+
+namespace {
+void AppendNumber(std::string* out, double v) {
+  char buf[32];
+  if (std::isnan(v)) {
+    *out += "nan";
+    return;
+  }
+  std::snprintf(buf, sizeof(buf), "%.17g", v);
+  *out += buf;
+}
+}  // namespace
+
+std::string TrajectoryCsvHeader() {
+  std::string h =
+      "t,x,y,z,roll,pitch,yaw,vx,vy,vz,wx,wy,wz,phi1,alpha1,delta2,alpha2,"
+      "delta3,alpha3";
+  for (int i = 1; i <= 3; ++i) {
+    const std::string s = std::to_string(i);
+    h += ",c" + s + "_x,c" + s + "_y,c" + s + "_z,n" + s + ",t" + s +
+         "_lon,t" + s + "_lat,slip" + s + ",use" + s;
+  }
+  h += ",drift,gap_max,nlp_status,nlp_iters";
+  return h;
+}
+
+std::string TrajectoryCsv(const SimulationResult& result) {
+  std::string out = TrajectoryCsvHeader();
+  out += '\n';
+  for (const TrajectorySample& s : result.samples) {
+    std::string row;
+    auto add = [&row](double v) {
+      if (!row.empty()) row += ',';
+      AppendNumber(&row, v);
+    };
+    add(s.t);
+    for (int k = 0; k < 3; ++k) add(s.position(k));
+    for (int k = 0; k < 3; ++k) add(s.rpy(k));
+    for (int k = 0; k < 3; ++k) add(s.velocity(k));
+    for (int k = 0; k < 3; ++k) add(s.angular_velocity(k));
+    for (double j : s.joints) add(j);
+    for (const ContactSample& c : s.contacts) {
+      for (int k = 0; k < 3; ++k) add(c.point(k));
+      add(c.normal_force);
+      add(c.traction_lon);
+      add(c.traction_lat);
+      add(c.slip);
+      add(c.friction_use);
+    }
+    add(s.drift);
+    add(s.gap_max);
+    row += ',' + s.nlp_status + ',' + std::to_string(s.nlp_iterations);
+    out += row;
+    out += '\n';
+  }
+  return out;
+}
+
+std::string GitCommit() {
+#ifdef QUASIROLL_SOURCE_DIR_FOR_GIT
+  const std::string dir = QUASIROLL_SOURCE_DIR_FOR_GIT;
+#else
+  const std::string dir = ".";
+#endif
+  auto run = [](const std::string& cmd) {
+    std::string out;
+    FILE* pipe = ::popen(cmd.c_str(), "r");
+    if (!pipe) return out;
+    char buf[256];
+    while (std::fgets(buf, sizeof(buf), pipe)) out += buf;
+    ::pclose(pipe);
+    while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
+    return out;
+  };
+  std::string commit =
+      run("git -C '" + dir + "' rev-parse --short=12 HEAD 2>/dev/null");
+  if (commit.empty()) return "unknown";
+  const std::string dirty = run("git -C '" + dir +
+                                "' status --porcelain --untracked-files=no 2>/dev/null");
+  if (!dirty.empty()) commit += "-dirty";
+  return commit;
+}
+
+void WriteLibraryVersions(JsonWriter* json) {
+  json->BeginObject();
+#ifdef QUASIROLL_LIBRARY_VERSIONS
+  // "name=version,name=version,..." from CMake.
+  std::stringstream ss(QUASIROLL_LIBRARY_VERSIONS);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    const auto eq = item.find('=');
+    if (eq == std::string::npos) continue;
+    json->Key(item.substr(0, eq)).Value(item.substr(eq + 1));
+  }
+#endif
+  json->Key("compiler").Value(
+#if defined(__clang__)
+      std::string("clang ") + __clang_version__
+#elif defined(__GNUC__)
+      std::string("gcc ") + __VERSION__
+#else
+      std::string("unknown")
+#endif
+  );
+  json->EndObject();
+}
+
+void WriteMachine(JsonWriter* json) {
+  char host[256] = {0};
+  if (::gethostname(host, sizeof(host) - 1) != 0) host[0] = 0;
+  std::string cpu = "unknown";
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(cpuinfo, line)) {
+    if (line.rfind("model name", 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) cpu = line.substr(colon + 2);
+      break;
+    }
+  }
+  json->BeginObject();
+  json->Key("hostname").Value(std::string(host));
+  json->Key("cpu").Value(cpu);
+  json->Key("hardware_threads")
+      .Value(static_cast<int>(std::thread::hardware_concurrency()));
+  json->EndObject();
+}
+
+std::string IsoTimeNow() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(
+      std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof(buf), "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string RunJson(const Scene& scene, const SimulationOptions& options,
+                    double dt, double t_end, const SimulationResult& r) {
+  JsonWriter j;
+  j.BeginObject();
+  j.Key("status").Value(r.status);
+  j.Key("stop_reason").Value(r.stop_reason);
+  j.Key("t_reached").Value(r.t_reached);
+  j.Key("mu_min_at_stop").Value(r.mu_min_at_stop);
+  j.Key("critical_wheel").Value(r.critical_contact);
+  j.Key("samples").Value(static_cast<int>(r.samples.size()));
+  j.Key("counters").BeginObject();
+  j.Key("nlp_solves").Value(r.nlp_solves);
+  j.Key("nlp_iterations").Value(r.nlp_iterations);
+  j.Key("rhs_evaluations").Value(r.rhs_evaluations);
+  j.Key("jacobian_evaluations").Value(r.jacobian_evaluations);
+  j.Key("steps").Value(r.steps);
+  j.Key("rejected_steps").Value(r.rejected_steps);
+  j.EndObject();
+  j.Key("wall_s").Value(r.wall_seconds);
+  j.Key("scene").BeginObject();
+  j.Key("name").Value(scene.name);
+  j.Key("file").Value(scene.source_path);
+  j.Key("mode").Value(ToString(scene.mode));
+  j.Key("mu").Value(scene.mu);
+  j.Key("epsilon").Value(scene.epsilon);
+  j.Key("terrain").Value(scene.terrain ? scene.terrain->Describe() : "");
+  j.EndObject();
+  j.Key("options").BeginObject();
+  j.Key("nlp").Value(options.nlp);
+  j.Key("dae").Value(options.dae);
+  j.Key("coupling").Value(ToString(options.coupling));
+  j.Key("dt").Value(dt);
+  j.Key("t_end").Value(t_end);
+  j.Key("rk_method").Value(ToString(options.integrator.rk_method));
+  j.Key("step").Value(options.integrator.step > 0 ? options.integrator.step : dt);
+  j.Key("rtol").Value(options.integrator.rtol);
+  j.Key("atol").Value(options.integrator.atol);
+  j.Key("sigma").Value(options.integrator.baumgarte_sigma);
+  j.Key("projection_tolerance").Value(options.integrator.projection_tolerance);
+  j.Key("dae_index").Value(options.integrator.dae_index);
+  j.Key("nlp_residual_tolerance").Value(options.quasi_static.residual_tolerance);
+  j.EndObject();
+  j.Key("commit").Value(GitCommit());
+  j.Key("library_versions");
+  WriteLibraryVersions(&j);
+  j.Key("machine");
+  WriteMachine(&j);
+  j.Key("written_at").Value(IsoTimeNow());
+  j.EndObject();
+  return j.str() + "\n";
+}
+
+}  // namespace quasiroll

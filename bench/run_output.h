@@ -1,0 +1,35 @@
+// Files written by `quasiroll run` and the benchmark harness (docs/formats.md):
+// trajectory.csv, run.json, and the metadata every result carries.
+#pragma once
+
+#include <string>
+
+#include "bench/json_writer.h"
+#include "core/scene.h"
+#include "core/simulator.h"
+
+namespace quasiroll {
+
+// Writes `content` to `path` atomically: a temporary file in the same
+// directory, then rename(2). Creates parent directories. Throws
+// std::runtime_error naming the path on I/O failure.
+void AtomicWriteFile(const std::string& path, const std::string& content);
+
+// trajectory.csv: the header line (no trailing newline) and the whole file.
+std::string TrajectoryCsvHeader();
+std::string TrajectoryCsv(const SimulationResult& result);
+
+// Short commit hash of the source tree ("unknown" outside a git checkout),
+// with "-dirty" when the tree has uncommitted changes.
+std::string GitCommit();
+// {"eigen": "3.4.0", "ipopt": ..., ...}: versions seen at configure time.
+void WriteLibraryVersions(JsonWriter* json);
+// Host name, CPU model, core count.
+void WriteMachine(JsonWriter* json);
+std::string IsoTimeNow();
+
+// run.json of `quasiroll run`.
+std::string RunJson(const Scene& scene, const SimulationOptions& options,
+                    double dt, double t_end, const SimulationResult& result);
+
+}  // namespace quasiroll

@@ -1,0 +1,125 @@
+// The forward-motion loop (paper §IV steps i–iii; model.md §8):
+//   for t_k = k dt:  solve the quasi-static problem at Theta_k,  record,
+//                    integrate Theta' = F(Theta, w) over [t_k, t_k + dt].
+// Coupling modes (model.md §8.2):
+//   zoh      w = (V^B, thetadot) held over the interval (the paper); contact
+//            velocities are recomputed from Theta(t) at every stage;
+//   coupled  w = w(Theta) re-solved (warm-started) at every RHS evaluation.
+// The NLP backend and the integrator are chosen by registry name. Any non-OK
+// quasi-static status or integrator failure stops the run cleanly; every
+// sample computed before it is kept and the reason recorded.
+#pragma once
+
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/dae.h"
+#include "core/kinematics.h"
+#include "core/quasi_static.h"
+#include "core/scene.h"
+
+namespace quasiroll {
+
+enum class Coupling { kZoh, kCoupled };
+const char* ToString(Coupling coupling);
+// Throws std::invalid_argument naming the value.
+Coupling CouplingFromString(const std::string& name);
+
+struct SimulationOptions {
+  std::string nlp = "newton";
+  std::string dae = "rk-projection";
+  Coupling coupling = Coupling::kZoh;
+  // Hold / output interval and end time; <= 0 means "take the scene's".
+  double dt = 0.0;
+  double t_end = 0.0;
+  // Integrator options; step <= 0 means one RK4 step per hold interval.
+  IntegratorOptions integrator;
+  QuasiStaticOptions quasi_static;
+  // Run the sampled second-contact check every N samples (0 = never).
+  int second_contact_check_every = 0;
+  bool IsValid(std::string* why) const;
+};
+
+struct ContactSample {
+  Vec3 point = Vec3::Zero();
+  double normal_force = 0, traction_lon = 0, traction_lat = 0;
+  double slip = 0;  // |s_i| [m/s]
+  double friction_use = 0;
+};
+
+// One output row (docs/formats.md, trajectory.csv).
+struct TrajectorySample {
+  double t = 0;
+  Vec3 position = Vec3::Zero();  // COM, world [m]
+  Vec3 rpy = Vec3::Zero();       // [rad]
+  Vec3 velocity = Vec3::Zero();  // COM velocity, world frame [m/s]
+  Vec3 angular_velocity = Vec3::Zero();  // world frame [rad/s]
+  std::array<double, 6> joints{};
+  std::array<ContactSample, 3> contacts;
+  double drift = 0;    // ||H(Theta)||_inf
+  double gap_max = 0;  // max_i |terrain height - wheel lowest point| [m]
+  std::string nlp_status;
+  int nlp_iterations = 0;
+  Configuration theta = Configuration::Zero();
+};
+
+struct SimulationResult {
+  // "success", a quasi-static status ("INFEASIBLE_FRICTION", ...) or an
+  // integrator status ("step_size_too_small", ...).
+  std::string status = "not_run";
+  std::string stop_reason;  // human-readable, "" on success
+  double t_reached = 0;
+  double mu_min_at_stop = std::numeric_limits<double>::quiet_NaN();
+  int critical_contact = -1;  // 1-based wheel, -1 if none
+  std::vector<TrajectorySample> samples;
+  // Cost counters.
+  int nlp_solves = 0;
+  long long nlp_iterations = 0;
+  long long rhs_evaluations = 0;
+  long long jacobian_evaluations = 0;
+  int steps = 0;
+  int rejected_steps = 0;
+  double wall_seconds = 0;
+  bool success() const { return status == "success"; }
+};
+
+// Largest vertical distance between the terrain and each wheel's lowest point
+// (relative to the terrain), from the platform pose of chain 1 and the joint
+// angles by a closest-point search over the torus: an independent check of
+// the contact kinematics (0 for exact contact).
+double GeometricGap(const KinematicModel& model, const Configuration& theta);
+
+class Simulator {
+ public:
+  // Backends are looked up by name in the registries: call
+  // RegisterBuiltinNlpSolvers() / RegisterBuiltinIntegrators() (and register
+  // any plugin) first. Throws std::invalid_argument for unknown backend names
+  // or invalid options
+  // and GeometryError if the scene has no valid initial configuration.
+  Simulator(const Scene& scene, const SimulationOptions& options);
+  ~Simulator();
+
+  const Configuration& initial_configuration() const { return theta0_; }
+  const KinematicModel& model() const { return *model_; }
+  const SimulationOptions& options() const { return options_; }
+  double dt() const { return dt_; }
+  double t_end() const { return t_end_; }
+
+  SimulationResult Run();
+
+ private:
+  class RobotOde;
+  void Record(double t, const Configuration& theta,
+              const QuasiStaticSolution& sol, SimulationResult* result,
+              int index) const;
+
+  Scene scene_;
+  SimulationOptions options_;
+  double dt_ = 0, t_end_ = 0;
+  std::unique_ptr<KinematicModel> model_;
+  Configuration theta0_;
+};
+
+}  // namespace quasiroll
