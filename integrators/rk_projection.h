@@ -4,6 +4,14 @@
 // kConstraintFailure) (model notes §8.4). The initial state is projected too.
 // With an FSAL pair the first stage is re-evaluated whenever the projection
 // moved y. Methods, step control and events: integrators/runge_kutta.h.
+//
+// Accuracy note: the method has the order of the RK scheme only when F is
+// tangent to the constraint manifold (J F = 0 on H = 0, as for a velocity
+// that already satisfies the loop closures), i.e. when the projection only
+// removes numerical drift. If J F != 0 it is a splitting ("flow of F, then
+// project") of order 1 towards x' = F - D J^T (J D J^T)^{-1} J F; use
+// rk-baumgarte or ida there (observed on a 21-state test field with
+// J F != 0: error 7e-3 at h = 0.05, decreasing only linearly with h).
 #pragma once
 
 #include <string>

@@ -2,6 +2,7 @@
 // integrator tests.
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <cmath>
 
@@ -154,6 +155,57 @@ class FallingBodyOde : public ConstrainedOde {
 
  private:
   double g_;
+};
+
+// Sizes of the robot loop-closure client: state 21, 12 nonlinear holonomic
+// constraints, correction weights D with zeros. Synthetic but smooth:
+//   H_i = y_i + 0.2 sin(y_{12 + i % 9}) y_{(i + 1) % 12} - c_i,  i < 12
+// (J has the identity in its first 12 columns, so J D J^T is nonsingular as
+// long as the first 12 weights are positive). Like the quasi-static velocity
+// of the client, F is tangent to the constraint manifold (J F = 0): a smooth
+// drift G projected with the unweighted J^+ , F = G - J^T (J J^T)^{-1} J G.
+// (For a field with J F != 0, "RK step of F + projection" is a splitting of
+// order 1 only; see integrators/rk_projection.h.)
+class RobotSizedOde : public ConstrainedOde {
+ public:
+  int state_size() const override { return 21; }
+  int num_constraints() const override { return 12; }
+  bool Rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+           Eigen::Ref<Eigen::VectorXd> ydot) override {
+    Eigen::VectorXd g(21);
+    for (int j = 0; j < 21; ++j)
+      g(j) = std::cos(t + 0.1 * j) - 0.1 * y(j) + 0.05 * y((j + 5) % 21);
+    Eigen::MatrixXd jac(12, 21);
+    ConstraintJacobian(y, jac);
+    const Eigen::VectorXd mult = (jac * jac.transpose()).ldlt().solve(jac * g);
+    ydot = g - jac.transpose() * mult;
+    return true;
+  }
+  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> h) const override {
+    for (int i = 0; i < 12; ++i)
+      h(i) = y(i) + 0.2 * std::sin(y(12 + i % 9)) * y((i + 1) % 12) - 0.1 * i;
+  }
+  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& y,
+                          Eigen::Ref<Eigen::MatrixXd> j) const override {
+    j.setZero();
+    for (int i = 0; i < 12; ++i) {
+      const int a = 12 + i % 9, b = (i + 1) % 12;
+      j(i, i) += 1.0;
+      j(i, a) += 0.2 * std::cos(y(a)) * y(b);
+      j(i, b) += 0.2 * std::sin(y(a));
+    }
+  }
+  void CorrectionWeights(Eigen::Ref<Eigen::VectorXd> d) const override {
+    d.setOnes();
+    d(14) = d(17) = d(20) = 0.0;
+    d(3) = 0.5;
+  }
+  Eigen::VectorXd Initial() const {
+    Eigen::VectorXd y(21);
+    for (int j = 0; j < 21; ++j) y(j) = 0.1 * std::sin(1.0 + j);
+    return y;  // inconsistent: the backends project / correct it
+  }
 };
 
 // Wraps a problem; Rhs returns false for t > fail_after.
