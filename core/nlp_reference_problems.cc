@@ -1,0 +1,507 @@
+#include "core/nlp_reference_problems.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace quasiroll {
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+}  // namespace
+
+// ---------------------------------------------------------------- HS 71 ---
+Hs071Problem::Hs071Problem() {
+  name_ = "hs071";
+  x0_ = Eigen::Vector4d(1.0, 5.0, 5.0, 1.0);
+  // Exact KKT point (x1 = 1 at its bound, both constraints active), solved
+  // with 40-digit arithmetic (mpmath.findroot on the 5x5 KKT system;
+  // multipliers -0.55229366012, 0.16146856677, bound multiplier 1.0878712287).
+  // The widely quoted 16-digit values x = (1, 4.7429996418092970,
+  // 3.8211499817883077, 1.3794082897556983), f = 17.014017145179164 are an
+  // Ipopt answer at default tolerances: they violate x1 x2 x3 x4 >= 25 by
+  // 5.4e-8 and sit 1.4e-7 below the true optimum.
+  x_star_ = Eigen::Vector4d(1.0, 4.7429996372644171, 3.8211499841848739,
+                            1.3794082931726724);
+  f_star_ = 17.014017289156302;
+  source_ = "Hock-Schittkowski #71; exact KKT point at 40 digits";
+}
+
+void Hs071Problem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                             Eigen::Ref<Eigen::VectorXd> x_ub,
+                             Eigen::Ref<Eigen::VectorXd> g_lb,
+                             Eigen::Ref<Eigen::VectorXd> g_ub) const {
+  x_lb.setConstant(1.0);
+  x_ub.setConstant(5.0);
+  g_lb << 25.0, 40.0;
+  g_ub << kInf, 40.0;
+}
+
+double Hs071Problem::Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  return x(0) * x(3) * (x(0) + x(1) + x(2)) + x(2);
+}
+
+void Hs071Problem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                     Eigen::Ref<Eigen::VectorXd> grad) const {
+  grad(0) = x(3) * (2.0 * x(0) + x(1) + x(2));
+  grad(1) = x(0) * x(3);
+  grad(2) = x(0) * x(3) + 1.0;
+  grad(3) = x(0) * (x(0) + x(1) + x(2));
+}
+
+void Hs071Problem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                               Eigen::Ref<Eigen::VectorXd> g) const {
+  g(0) = x(0) * x(1) * x(2) * x(3);
+  g(1) = x.squaredNorm();
+}
+
+void Hs071Problem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                      Eigen::Ref<Eigen::MatrixXd> jac) const {
+  jac(0, 0) = x(1) * x(2) * x(3);
+  jac(0, 1) = x(0) * x(2) * x(3);
+  jac(0, 2) = x(0) * x(1) * x(3);
+  jac(0, 3) = x(0) * x(1) * x(2);
+  jac.row(1) = 2.0 * x.transpose();
+}
+
+void Hs071Problem::LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                     double sigma,
+                                     const Eigen::Ref<const Eigen::VectorXd>& lambda,
+                                     Eigen::Ref<Eigen::MatrixXd> hess) const {
+  const double l0 = lambda(0), l1 = lambda(1);
+  hess.setZero();
+  // Objective.
+  hess(0, 0) = sigma * 2.0 * x(3);
+  hess(1, 0) = sigma * x(3);
+  hess(2, 0) = sigma * x(3);
+  hess(3, 0) = sigma * (2.0 * x(0) + x(1) + x(2));
+  hess(3, 1) = sigma * x(0);
+  hess(3, 2) = sigma * x(0);
+  // Product constraint.
+  hess(1, 0) += l0 * x(2) * x(3);
+  hess(2, 0) += l0 * x(1) * x(3);
+  hess(3, 0) += l0 * x(1) * x(2);
+  hess(2, 1) += l0 * x(0) * x(3);
+  hess(3, 1) += l0 * x(0) * x(2);
+  hess(3, 2) += l0 * x(0) * x(1);
+  // Sphere constraint.
+  hess.diagonal().array() += 2.0 * l1;
+  hess.triangularView<Eigen::StrictlyUpper>() = hess.transpose();
+}
+
+// ---------------------------------------------------------------- HS 32 ---
+Hs032Problem::Hs032Problem() {
+  name_ = "hs032";
+  x0_ = Eigen::Vector3d(0.1, 0.7, 0.2);
+  x_star_ = Eigen::Vector3d(0.0, 0.0, 1.0);
+  f_star_ = 1.0;
+  source_ = "Hock-Schittkowski #32 (exact)";
+}
+
+void Hs032Problem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                             Eigen::Ref<Eigen::VectorXd> x_ub,
+                             Eigen::Ref<Eigen::VectorXd> g_lb,
+                             Eigen::Ref<Eigen::VectorXd> g_ub) const {
+  x_lb.setZero();
+  x_ub.setConstant(kInf);
+  g_lb << 3.0, 1.0;
+  g_ub << kInf, 1.0;
+}
+
+double Hs032Problem::Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  const double s = x(0) + 3.0 * x(1) + x(2), d = x(0) - x(1);
+  return s * s + 4.0 * d * d;
+}
+
+void Hs032Problem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                     Eigen::Ref<Eigen::VectorXd> grad) const {
+  const double s = x(0) + 3.0 * x(1) + x(2), d = x(0) - x(1);
+  grad(0) = 2.0 * s + 8.0 * d;
+  grad(1) = 6.0 * s - 8.0 * d;
+  grad(2) = 2.0 * s;
+}
+
+void Hs032Problem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                               Eigen::Ref<Eigen::VectorXd> g) const {
+  g(0) = 6.0 * x(1) + 4.0 * x(2) - x(0) * x(0) * x(0);
+  g(1) = x(0) + x(1) + x(2);
+}
+
+void Hs032Problem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                      Eigen::Ref<Eigen::MatrixXd> jac) const {
+  jac(0, 0) = -3.0 * x(0) * x(0);
+  jac(0, 1) = 6.0;
+  jac(0, 2) = 4.0;
+  jac.row(1).setOnes();
+}
+
+void Hs032Problem::LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                     double sigma,
+                                     const Eigen::Ref<const Eigen::VectorXd>& lambda,
+                                     Eigen::Ref<Eigen::MatrixXd> hess) const {
+  hess << 10.0, -2.0, 2.0,  //
+      -2.0, 26.0, 6.0,      //
+      2.0, 6.0, 2.0;
+  hess *= sigma;
+  hess(0, 0) += lambda(0) * (-6.0 * x(0));
+}
+
+// ---------------------------------------------------------------- HS 40 ---
+Hs040Problem::Hs040Problem() {
+  name_ = "hs040";
+  x0_ = Eigen::Vector4d::Constant(0.8);
+  x_star_ = Eigen::Vector4d(std::pow(2.0, -1.0 / 3.0), std::pow(2.0, -0.5),
+                            std::pow(2.0, -11.0 / 12.0), std::pow(2.0, -0.25));
+  f_star_ = -0.25;
+  source_ = "Hock-Schittkowski #40 (closed form)";
+}
+
+void Hs040Problem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                             Eigen::Ref<Eigen::VectorXd> x_ub,
+                             Eigen::Ref<Eigen::VectorXd> g_lb,
+                             Eigen::Ref<Eigen::VectorXd> g_ub) const {
+  x_lb.setConstant(-kInf);
+  x_ub.setConstant(kInf);
+  g_lb << 1.0, 0.0, 0.0;
+  g_ub = g_lb;
+}
+
+double Hs040Problem::Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  return -x(0) * x(1) * x(2) * x(3);
+}
+
+void Hs040Problem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                     Eigen::Ref<Eigen::VectorXd> grad) const {
+  grad(0) = -x(1) * x(2) * x(3);
+  grad(1) = -x(0) * x(2) * x(3);
+  grad(2) = -x(0) * x(1) * x(3);
+  grad(3) = -x(0) * x(1) * x(2);
+}
+
+void Hs040Problem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                               Eigen::Ref<Eigen::VectorXd> g) const {
+  g(0) = x(0) * x(0) * x(0) + x(1) * x(1);
+  g(1) = x(0) * x(0) * x(3) - x(2);
+  g(2) = x(3) * x(3) - x(1);
+}
+
+void Hs040Problem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                      Eigen::Ref<Eigen::MatrixXd> jac) const {
+  jac.setZero();
+  jac(0, 0) = 3.0 * x(0) * x(0);
+  jac(0, 1) = 2.0 * x(1);
+  jac(1, 0) = 2.0 * x(0) * x(3);
+  jac(1, 2) = -1.0;
+  jac(1, 3) = x(0) * x(0);
+  jac(2, 1) = -1.0;
+  jac(2, 3) = 2.0 * x(3);
+}
+
+void Hs040Problem::LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                     double sigma,
+                                     const Eigen::Ref<const Eigen::VectorXd>& lambda,
+                                     Eigen::Ref<Eigen::MatrixXd> hess) const {
+  hess.setZero();
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      if (i == j) continue;
+      double p = -sigma;
+      for (int k = 0; k < 4; ++k)
+        if (k != i && k != j) p *= x(k);
+      hess(i, j) = p;
+    }
+  }
+  hess(0, 0) += lambda(0) * 6.0 * x(0);
+  hess(1, 1) += lambda(0) * 2.0;
+  hess(0, 0) += lambda(1) * 2.0 * x(3);
+  hess(0, 3) += lambda(1) * 2.0 * x(0);
+  hess(3, 0) += lambda(1) * 2.0 * x(0);
+  hess(3, 3) += lambda(2) * 2.0;
+}
+
+// ---------------------------------------------------------------- HS 73 ---
+namespace {
+const double kHs73Var[4] = {0.28, 0.19, 20.5, 0.62};
+}
+
+Hs073Problem::Hs073Problem() {
+  name_ = "hs073";
+  x0_ = Eigen::Vector4d::Ones();
+  // Published (HS 1981): f* = 29.894378, x* = (0.6355216, -0.12e-11,
+  // 0.3127019, 0.05177655). The optimum is a vertex (x2 = 0 and all three
+  // constraints active), refined by solving those 3 equations in x1, x3, x4
+  // with 40-digit arithmetic (mpmath.findroot); agrees with every published
+  // digit, and every backend converges to it.
+  x_star_ = Eigen::Vector4d(0.63552156863506973, 0.0, 0.31270188075152350,
+                            0.051776550613406777);
+  f_star_ = 29.894378159143353;
+  source_ = "Hock-Schittkowski #73, vertex refined at 40 digits";
+}
+
+void Hs073Problem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                             Eigen::Ref<Eigen::VectorXd> x_ub,
+                             Eigen::Ref<Eigen::VectorXd> g_lb,
+                             Eigen::Ref<Eigen::VectorXd> g_ub) const {
+  x_lb.setZero();
+  x_ub.setConstant(kInf);
+  g_lb << 5.0, 21.0, 1.0;
+  g_ub << kInf, kInf, 1.0;
+}
+
+double Hs073Problem::Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  return 24.55 * x(0) + 26.75 * x(1) + 39.0 * x(2) + 40.50 * x(3);
+}
+
+void Hs073Problem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
+                                     Eigen::Ref<Eigen::VectorXd> grad) const {
+  grad << 24.55, 26.75, 39.0, 40.50;
+}
+
+void Hs073Problem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                               Eigen::Ref<Eigen::VectorXd> g) const {
+  double s = 0.0;
+  for (int i = 0; i < 4; ++i) s += kHs73Var[i] * x(i) * x(i);
+  g(0) = 2.3 * x(0) + 5.6 * x(1) + 11.1 * x(2) + 1.3 * x(3);
+  g(1) = 12.0 * x(0) + 11.9 * x(1) + 41.8 * x(2) + 52.1 * x(3) -
+         1.645 * std::sqrt(s);
+  g(2) = x(0) + x(1) + x(2) + x(3);
+}
+
+void Hs073Problem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                      Eigen::Ref<Eigen::MatrixXd> jac) const {
+  double s = 0.0;
+  for (int i = 0; i < 4; ++i) s += kHs73Var[i] * x(i) * x(i);
+  const double q = std::sqrt(s);
+  jac.row(0) << 2.3, 5.6, 11.1, 1.3;
+  jac.row(1) << 12.0, 11.9, 41.8, 52.1;
+  // d sqrt(s) / dx_i = var_i x_i / sqrt(s); the origin (s = 0) is excluded by
+  // the equality row, use the one-sided limit 0 there.
+  if (q > 0.0)
+    for (int i = 0; i < 4; ++i) jac(1, i) -= 1.645 * kHs73Var[i] * x(i) / q;
+  jac.row(2).setOnes();
+}
+
+// ------------------------------------------------------- infeasible NLP ---
+InfeasibleDiskProblem::InfeasibleDiskProblem() {
+  name_ = "infeasible_disk";
+  x0_ = Eigen::Vector2d(0.5, 0.25);
+  x_star_ = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  f_star_ = std::numeric_limits<double>::quiet_NaN();
+  feasible_ = false;
+  source_ = "disk of radius 1 never meets the half-plane x1 + x2 >= 3";
+}
+
+void InfeasibleDiskProblem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                                      Eigen::Ref<Eigen::VectorXd> x_ub,
+                                      Eigen::Ref<Eigen::VectorXd> g_lb,
+                                      Eigen::Ref<Eigen::VectorXd> g_ub) const {
+  x_lb.setConstant(-kInf);
+  x_ub.setConstant(kInf);
+  g_lb << -kInf, 3.0;
+  g_ub << 1.0, kInf;
+}
+
+double InfeasibleDiskProblem::Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  return x.squaredNorm();
+}
+
+void InfeasibleDiskProblem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                              Eigen::Ref<Eigen::VectorXd> grad) const {
+  grad = 2.0 * x;
+}
+
+void InfeasibleDiskProblem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                        Eigen::Ref<Eigen::VectorXd> g) const {
+  g(0) = x.squaredNorm();
+  g(1) = x(0) + x(1);
+}
+
+void InfeasibleDiskProblem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                               Eigen::Ref<Eigen::MatrixXd> jac) const {
+  jac.row(0) = 2.0 * x.transpose();
+  jac.row(1).setOnes();
+}
+
+// ----------------------------------------------------- circle and line ---
+CircleLineSystem::CircleLineSystem() {
+  name_ = "circle_line";
+  x0_ = Eigen::Vector2d(1.0, 0.5);
+  x_star_ = Eigen::Vector2d::Constant(std::sqrt(2.0));
+  f_star_ = 0.0;
+  source_ = "closed form (sqrt 2, sqrt 2)";
+}
+
+void CircleLineSystem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                                 Eigen::Ref<Eigen::VectorXd> x_ub,
+                                 Eigen::Ref<Eigen::VectorXd> g_lb,
+                                 Eigen::Ref<Eigen::VectorXd> g_ub) const {
+  x_lb << 0.0, -kInf;
+  x_ub.setConstant(kInf);
+  g_lb << 4.0, 0.0, -kInf;
+  g_ub << 4.0, 0.0, 10.0;
+}
+
+double CircleLineSystem::Objective(const Eigen::Ref<const Eigen::VectorXd>& /*x*/) const {
+  return 0.0;
+}
+
+void CircleLineSystem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
+                                         Eigen::Ref<Eigen::VectorXd> grad) const {
+  grad.setZero();
+}
+
+void CircleLineSystem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                   Eigen::Ref<Eigen::VectorXd> g) const {
+  g(0) = x.squaredNorm();
+  g(1) = x(0) - x(1);
+  g(2) = x(0) + 2.0 * x(1);
+}
+
+void CircleLineSystem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                          Eigen::Ref<Eigen::MatrixXd> jac) const {
+  jac.row(0) = 2.0 * x.transpose();
+  jac.row(1) << 1.0, -1.0;
+  jac.row(2) << 1.0, 2.0;
+}
+
+// ------------------------------------------------- contact-like system ---
+ContactLikeSystem::ContactLikeSystem(int n) : n_(n) {
+  if (n < 9)
+    throw std::invalid_argument("ContactLikeSystem: n must be >= 9, got " +
+                                std::to_string(n));
+  name_ = "contact_like_" + std::to_string(n);
+  a_.resize(n, n);
+  const double off = 3.4 / (n - 1);  // row sums of |off-diagonal| <= 3.4 < 4
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      a_(i, j) = i == j ? 4.0 + 0.1 * i / n : off * std::cos(0.7 * i + 1.9 * j);
+  x_star_.resize(n);
+  for (int i = 0; i < n; ++i) x_star_(i) = 0.5 + 0.3 * std::sin(1.3 * i + 0.4);
+  for (int j = 0; j < 3; ++j) {
+    x_star_(2 * j) = 0.2 - 0.1 * j;        // tangential components
+    x_star_(2 * j + 1) = -0.3 + 0.1 * j;
+    x_star_(n - 3 + j) = 1.0 + 0.1 * j;    // normal forces
+  }
+  x0_.resize(n);
+  for (int i = 0; i < n; ++i)
+    x0_(i) = x_star_(i) + 0.15 * std::cos(2.1 * i + 0.3);
+  f_star_ = 0.0;
+  source_ = "exact root by construction";
+}
+
+void ContactLikeSystem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                                  Eigen::Ref<Eigen::VectorXd> x_ub,
+                                  Eigen::Ref<Eigen::VectorXd> g_lb,
+                                  Eigen::Ref<Eigen::VectorXd> g_ub) const {
+  x_lb.setConstant(-kInf);
+  x_lb.tail(3).setZero();
+  x_ub.setConstant(kInf);
+  g_lb.head(n_).setZero();
+  g_ub.head(n_).setZero();
+  g_lb.tail(3).setConstant(-kInf);
+  g_ub.tail(3).setZero();
+}
+
+double ContactLikeSystem::Objective(const Eigen::Ref<const Eigen::VectorXd>& /*x*/) const {
+  return 0.0;
+}
+
+void ContactLikeSystem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
+                                          Eigen::Ref<Eigen::VectorXd> grad) const {
+  grad.setZero();
+}
+
+void ContactLikeSystem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                    Eigen::Ref<Eigen::VectorXd> g) const {
+  for (int i = 0; i < n_; ++i) {
+    double s = 0.0;
+    for (int j = 0; j < n_; ++j) s += a_(i, j) * (x(j) - x_star_(j));
+    const double di = x(i) - x_star_(i);
+    const int k = (i + 1) % n_;
+    g(i) = s + 0.5 * di * di + 0.25 * std::sin(x(k) - x_star_(k));
+  }
+  for (int j = 0; j < 3; ++j) {
+    const double fn = x(n_ - 3 + j);
+    g(n_ + j) = x(2 * j) * x(2 * j) + x(2 * j + 1) * x(2 * j + 1) - 0.64 * fn * fn;
+  }
+}
+
+void ContactLikeSystem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                           Eigen::Ref<Eigen::MatrixXd> jac) const {
+  jac.topRows(n_) = a_;
+  for (int i = 0; i < n_; ++i) {
+    const int k = (i + 1) % n_;
+    jac(i, i) += x(i) - x_star_(i);
+    jac(i, k) += 0.25 * std::cos(x(k) - x_star_(k));
+  }
+  jac.bottomRows(3).setZero();
+  for (int j = 0; j < 3; ++j) {
+    jac(n_ + j, 2 * j) = 2.0 * x(2 * j);
+    jac(n_ + j, 2 * j + 1) = 2.0 * x(2 * j + 1);
+    jac(n_ + j, n_ - 3 + j) = -1.28 * x(n_ - 3 + j);
+  }
+}
+
+// ------------------------------------------------ infeasible-root system ---
+InfeasibleRootSystem::InfeasibleRootSystem() {
+  name_ = "infeasible_root";
+  x0_ = Eigen::Vector2d(0.0, 1.0);
+  // The root of the equalities, which violates x2 <= 2.
+  x_star_ = Eigen::Vector2d(std::log(2.0), 3.0 - std::log(2.0));
+  f_star_ = 0.0;
+  feasible_ = false;
+  source_ = "unique root (ln 2, 3 - ln 2) violates x2 <= 2";
+}
+
+void InfeasibleRootSystem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                                     Eigen::Ref<Eigen::VectorXd> x_ub,
+                                     Eigen::Ref<Eigen::VectorXd> g_lb,
+                                     Eigen::Ref<Eigen::VectorXd> g_ub) const {
+  x_lb.setConstant(-kInf);
+  x_ub << kInf, 2.0;
+  g_lb << 2.0, 3.0;
+  g_ub = g_lb;
+}
+
+double InfeasibleRootSystem::Objective(const Eigen::Ref<const Eigen::VectorXd>& /*x*/) const {
+  return 0.0;
+}
+
+void InfeasibleRootSystem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
+                                             Eigen::Ref<Eigen::VectorXd> grad) const {
+  grad.setZero();
+}
+
+void InfeasibleRootSystem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                       Eigen::Ref<Eigen::VectorXd> g) const {
+  g(0) = std::exp(x(0));
+  g(1) = x(0) + x(1);
+}
+
+void InfeasibleRootSystem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                              Eigen::Ref<Eigen::MatrixXd> jac) const {
+  jac(0, 0) = std::exp(x(0));
+  jac(0, 1) = 0.0;
+  jac.row(1).setOnes();
+}
+
+// ------------------------------------------------------------- factory ---
+std::vector<std::unique_ptr<ReferenceProblem>> MakeReferenceProblems() {
+  std::vector<std::unique_ptr<ReferenceProblem>> v;
+  v.push_back(std::make_unique<Hs071Problem>());
+  v.push_back(std::make_unique<Hs032Problem>());
+  v.push_back(std::make_unique<Hs040Problem>());
+  v.push_back(std::make_unique<Hs073Problem>());
+  v.push_back(std::make_unique<InfeasibleDiskProblem>());
+  v.push_back(std::make_unique<CircleLineSystem>());
+  v.push_back(std::make_unique<ContactLikeSystem>(18));
+  v.push_back(std::make_unique<InfeasibleRootSystem>());
+  return v;
+}
+
+std::unique_ptr<ReferenceProblem> MakeReferenceProblem(const std::string& name) {
+  for (auto& p : MakeReferenceProblems())
+    if (p->name() == name) return std::move(p);
+  return nullptr;
+}
+
+}  // namespace quasiroll

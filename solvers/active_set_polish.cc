@@ -1,0 +1,123 @@
+#include "solvers/active_set_polish.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/QR>
+
+namespace quasiroll::internal {
+
+void NlpBounds::Load(const NlpProblem& problem) {
+  const int n = problem.num_variables(), m = problem.num_constraints();
+  x_lb.resize(n);
+  x_ub.resize(n);
+  g_lb.resize(m);
+  g_ub.resize(m);
+  problem.GetBounds(x_lb, x_ub, g_lb, g_ub);
+}
+
+PolishStats PolishActiveConstraints(const NlpProblem& problem,
+                                    const NlpBounds& b, double active_tol,
+                                    double feasibility_tolerance,
+                                    int max_iterations, Eigen::VectorXd* x_io) {
+  PolishStats stats;
+  Eigen::VectorXd& x = *x_io;
+  const int n = problem.num_variables(), m = problem.num_constraints();
+  Eigen::VectorXd g(m), g_trial(m), x_trial(n), r, dx;
+  Eigen::MatrixXd jac(m, n), ja;
+  std::vector<int> free_vars, rows;
+  std::vector<double> targets;
+
+  // Project onto the box and freeze near-active variables at their bound.
+  for (int j = 0; j < n; ++j) {
+    if (x(j) <= b.x_lb(j) + active_tol) {
+      x(j) = b.x_lb(j);
+    } else if (x(j) >= b.x_ub(j) - active_tol) {
+      x(j) = b.x_ub(j);
+    } else {
+      free_vars.push_back(j);
+    }
+  }
+  problem.Constraints(x, g);
+  ++stats.constraint_evaluations;
+  stats.max_violation = MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
+
+  while (stats.max_violation > feasibility_tolerance &&
+         stats.iterations < max_iterations && !free_vars.empty() &&
+         std::isfinite(stats.max_violation)) {
+    rows.clear();
+    targets.clear();
+    for (int i = 0; i < m; ++i) {
+      if (b.g_lb(i) == b.g_ub(i) || g(i) <= b.g_lb(i) + active_tol) {
+        rows.push_back(i);
+        targets.push_back(b.g_lb(i));
+      } else if (g(i) >= b.g_ub(i) - active_tol) {
+        rows.push_back(i);
+        targets.push_back(b.g_ub(i));
+      }
+    }
+    if (rows.empty()) break;  // only bounds violated: projection did it
+    problem.ConstraintJacobian(x, jac);
+    ++stats.jacobian_evaluations;
+    const int k = static_cast<int>(rows.size()), f = static_cast<int>(free_vars.size());
+    ja.resize(k, f);
+    r.resize(k);
+    for (int a = 0; a < k; ++a) {
+      r(a) = g(rows[a]) - targets[a];
+      for (int c = 0; c < f; ++c) ja(a, c) = jac(rows[a], free_vars[c]);
+    }
+    if (!ja.allFinite()) break;
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(ja);
+    dx = cod.solve(r);
+    // Halve the step until the violation decreases.
+    bool improved = false;
+    for (double alpha = 1.0; alpha >= 1.0 / 64; alpha *= 0.5) {
+      x_trial = x;
+      for (int c = 0; c < f; ++c) {
+        const int j = free_vars[c];
+        x_trial(j) = std::clamp(x(j) - alpha * dx(c), b.x_lb(j), b.x_ub(j));
+      }
+      problem.Constraints(x_trial, g_trial);
+      ++stats.constraint_evaluations;
+      const double v = MaxConstraintViolation(x_trial, g_trial, b.x_lb, b.x_ub,
+                                              b.g_lb, b.g_ub);
+      if (v < stats.max_violation) {
+        x.swap(x_trial);
+        g.swap(g_trial);
+        stats.max_violation = v;
+        improved = true;
+        break;
+      }
+    }
+    ++stats.iterations;
+    if (!improved) break;
+  }
+  stats.success = stats.max_violation <= feasibility_tolerance;
+  return stats;
+}
+
+bool LooksLocallyInfeasible(const NlpProblem& problem, const NlpBounds& b,
+                            const Eigen::VectorXd& x) {
+  const int n = problem.num_variables(), m = problem.num_constraints();
+  Eigen::VectorXd g(m), v(m), grad(n);
+  Eigen::MatrixXd jac(m, n);
+  problem.Constraints(x, g);
+  problem.ConstraintJacobian(x, jac);
+  if (!g.allFinite() || !jac.allFinite()) return false;
+  const double viol = MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
+  if (viol < 1e-6) return false;  // not clearly infeasible
+  for (int i = 0; i < m; ++i)
+    v(i) = g(i) < b.g_lb(i) ? g(i) - b.g_lb(i)
+                            : (g(i) > b.g_ub(i) ? g(i) - b.g_ub(i) : 0.0);
+  grad.noalias() = jac.transpose() * v;
+  // Projected gradient: at a bound, a component pushing outwards is blocked.
+  for (int j = 0; j < n; ++j) {
+    if (x(j) <= b.x_lb(j) && grad(j) > 0) grad(j) = 0;
+    if (x(j) >= b.x_ub(j) && grad(j) < 0) grad(j) = 0;
+  }
+  const double scale = std::max(1.0, jac.cwiseAbs().maxCoeff()) * v.lpNorm<Eigen::Infinity>();
+  return grad.lpNorm<Eigen::Infinity>() <= 1e-6 * scale;
+}
+
+}  // namespace quasiroll::internal

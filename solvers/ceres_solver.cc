@@ -1,0 +1,495 @@
+#include "solvers/ceres_solver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <vector>
+
+#include <ceres/ceres.h>
+
+#include "solvers/active_set_polish.h"
+
+namespace quasiroll {
+
+struct CeresNlpSolver::Impl {
+  // ---- problem classification (refreshed every solve, no allocation when
+  // sizes repeat) -----------------------------------------------------------
+  const NlpProblem* problem = nullptr;
+  internal::NlpBounds b;
+  int n = 0, m = 0;
+  std::vector<int> eq_rows, side_rows, fixed_vars, lb_vars, ub_vars;
+  std::vector<double> side_sign;  // +1: h = g - g_ub, -1: h = g_lb - g
+  Eigen::VectorXd g, grad, w, gx;
+  Eigen::MatrixXd jac;
+  int f_evals = 0, g_evals = 0, j_evals = 0;
+
+  int NumResiduals() const {
+    return static_cast<int>(eq_rows.size() + side_rows.size() + fixed_vars.size());
+  }
+  double SideValue(size_t k) const {
+    const int i = side_rows[k];
+    return side_sign[k] > 0 ? g(i) - b.g_ub(i) : b.g_lb(i) - g(i);
+  }
+
+  // ---- phase 1: feasibility least squares ----------------------------------
+  class FeasibilityCost final : public ceres::CostFunction {
+   public:
+    FeasibilityCost(Impl* s, int num_residuals, int n) : s_(s) {
+      set_num_residuals(num_residuals);
+      mutable_parameter_block_sizes()->push_back(n);
+    }
+    bool Evaluate(double const* const* parameters, double* residuals,
+                  double** jacobians) const override {
+      return s_->EvalFeasibility(parameters[0], residuals,
+                                 jacobians != nullptr ? jacobians[0] : nullptr);
+    }
+
+   private:
+    Impl* s_;
+  };
+
+  class StopWhenFeasible final : public ceres::IterationCallback {
+   public:
+    double threshold = 0.0;  // on |r|_2 = sqrt(2 cost)
+    ceres::CallbackReturnType operator()(const ceres::IterationSummary& it) override {
+      return std::sqrt(2.0 * it.cost) <= threshold ? ceres::SOLVER_TERMINATE_SUCCESSFULLY
+                                                   : ceres::SOLVER_CONTINUE;
+    }
+  };
+
+  bool EvalFeasibility(const double* xp, double* r, double* jr) {
+    Eigen::Map<const Eigen::VectorXd> x(xp, n);
+    problem->Constraints(x, g);
+    ++g_evals;
+    int k = 0;
+    for (int i : eq_rows) r[k++] = g(i) - b.g_lb(i);
+    for (size_t s = 0; s < side_rows.size(); ++s) r[k++] = std::max(0.0, SideValue(s));
+    for (int j : fixed_vars) r[k++] = x(j) - b.x_lb(j);
+    for (int q = 0; q < k; ++q)
+      if (!std::isfinite(r[q])) return false;
+    if (jr == nullptr) return true;
+    problem->ConstraintJacobian(x, jac);
+    ++j_evals;
+    if (!jac.allFinite()) return false;
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
+        jr, k, n);
+    int row = 0;
+    for (int i : eq_rows) J.row(row++) = jac.row(i);
+    for (size_t s = 0; s < side_rows.size(); ++s, ++row) {
+      if (r[row] > 0.0)
+        J.row(row) = side_sign[s] * jac.row(side_rows[s]);
+      else
+        J.row(row).setZero();
+    }
+    for (int j : fixed_vars) {
+      J.row(row).setZero();
+      J(row++, j) = 1.0;
+    }
+    return true;
+  }
+
+  std::unique_ptr<FeasibilityCost> cost;
+  std::unique_ptr<ceres::Problem> ls;
+  Eigen::VectorXd xp;  // Ceres parameter block (pointer must stay stable)
+  std::vector<char> ls_key, key;
+  StopWhenFeasible stop_cb;
+
+  // ---- phase 2: augmented Lagrangian ---------------------------------------
+  class AlFunction final : public ceres::FirstOrderFunction {
+   public:
+    AlFunction(Impl* s, int n) : s_(s), n_(n) {}
+    bool Evaluate(const double* x, double* cost, double* gradient) const override {
+      return s_->EvalAl(x, cost, gradient);
+    }
+    int NumParameters() const override { return n_; }
+
+   private:
+    Impl* s_;
+    int n_;
+  };
+
+  Eigen::VectorXd lam_eq, mu_side, lam_fix, mu_lb, mu_ub;
+  double rho = 10.0;
+
+  bool EvalAl(const double* xp_al, double* cost_out, double* gradient) {
+    Eigen::Map<const Eigen::VectorXd> x(xp_al, n);
+    const double f = problem->Objective(x);
+    ++f_evals;
+    problem->Constraints(x, g);
+    ++g_evals;
+    if (!std::isfinite(f) || !g.allFinite()) return false;
+    double phi = f;
+    w.setZero();
+    gx.setZero();
+    for (size_t k = 0; k < eq_rows.size(); ++k) {
+      const int i = eq_rows[k];
+      const double c = g(i) - b.g_lb(i);
+      phi += lam_eq(k) * c + 0.5 * rho * c * c;
+      w(i) += lam_eq(k) + rho * c;
+    }
+    auto ineq = [&](double mu, double h) {  // PHR term, returns max(0, mu + rho h)
+      const double t = std::max(0.0, mu + rho * h);
+      phi += (t * t - mu * mu) / (2.0 * rho);
+      return t;
+    };
+    for (size_t k = 0; k < side_rows.size(); ++k)
+      w(side_rows[k]) += side_sign[k] * ineq(mu_side(k), SideValue(k));
+    for (size_t k = 0; k < fixed_vars.size(); ++k) {
+      const int j = fixed_vars[k];
+      const double c = x(j) - b.x_lb(j);
+      phi += lam_fix(k) * c + 0.5 * rho * c * c;
+      gx(j) += lam_fix(k) + rho * c;
+    }
+    for (size_t k = 0; k < lb_vars.size(); ++k) {
+      const int j = lb_vars[k];
+      gx(j) -= ineq(mu_lb(k), b.x_lb(j) - x(j));
+    }
+    for (size_t k = 0; k < ub_vars.size(); ++k) {
+      const int j = ub_vars[k];
+      gx(j) += ineq(mu_ub(k), x(j) - b.x_ub(j));
+    }
+    *cost_out = phi;
+    if (!std::isfinite(phi)) return false;
+    if (gradient != nullptr) {
+      problem->ObjectiveGradient(x, grad);
+      problem->ConstraintJacobian(x, jac);
+      ++j_evals;
+      Eigen::Map<Eigen::VectorXd> gout(gradient, n);
+      gout = grad + gx;
+      gout.noalias() += jac.transpose() * w;
+      if (!gout.allFinite()) return false;
+    }
+    return true;
+  }
+
+  std::unique_ptr<ceres::GradientProblem> gp;
+  int gp_n = -1;
+  Eigen::VectorXd xa;
+
+  void Classify(const NlpProblem& p) {
+    problem = &p;
+    b.Load(p);
+    n = p.num_variables();
+    m = p.num_constraints();
+    eq_rows.clear();
+    side_rows.clear();
+    side_sign.clear();
+    fixed_vars.clear();
+    lb_vars.clear();
+    ub_vars.clear();
+    for (int i = 0; i < m; ++i) {
+      if (b.g_lb(i) == b.g_ub(i)) {
+        eq_rows.push_back(i);
+        continue;
+      }
+      if (std::isfinite(b.g_lb(i))) {
+        side_rows.push_back(i);
+        side_sign.push_back(-1.0);
+      }
+      if (std::isfinite(b.g_ub(i))) {
+        side_rows.push_back(i);
+        side_sign.push_back(+1.0);
+      }
+    }
+    key.clear();
+    for (int j = 0; j < n; ++j) {
+      if (b.x_lb(j) == b.x_ub(j)) {
+        fixed_vars.push_back(j);
+        key.push_back('f');
+        continue;
+      }
+      if (std::isfinite(b.x_lb(j))) lb_vars.push_back(j);
+      if (std::isfinite(b.x_ub(j))) ub_vars.push_back(j);
+      key.push_back(static_cast<char>('0' + std::isfinite(b.x_lb(j)) +
+                                      2 * std::isfinite(b.x_ub(j))));
+    }
+    key.push_back('|');
+    const int nres = NumResiduals();
+    for (int shift = 0; shift < 32; shift += 8)
+      key.push_back(static_cast<char>((nres >> shift) & 0xff));
+    g.resize(m);
+    w.resize(m);
+    gx.resize(n);
+    grad.resize(n);
+    jac.resize(m, n);
+    f_evals = g_evals = j_evals = 0;
+  }
+
+  // (Re)builds the persistent least-squares problem if the structure changed.
+  void PrepareLeastSquares() {
+    if (ls && key == ls_key) return;
+    ls.reset();
+    cost.reset();
+    xp.resize(n);
+    cost = std::make_unique<FeasibilityCost>(this, NumResiduals(), n);
+    ceres::Problem::Options po;
+    // The cost function is a member of this object.
+    po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ls = std::make_unique<ceres::Problem>(po);
+    ls->AddResidualBlock(cost.get(), nullptr, xp.data());
+    ls_key = key;
+  }
+};
+
+CeresNlpSolver::CeresNlpSolver() : impl_(std::make_unique<Impl>()) {}
+CeresNlpSolver::~CeresNlpSolver() = default;
+
+namespace {
+const char* TerminationName(ceres::TerminationType t) {
+  switch (t) {
+    case ceres::CONVERGENCE: return "CONVERGENCE";
+    case ceres::NO_CONVERGENCE: return "NO_CONVERGENCE";
+    case ceres::FAILURE: return "FAILURE";
+    case ceres::USER_SUCCESS: return "USER_SUCCESS";
+    case ceres::USER_FAILURE: return "USER_FAILURE";
+  }
+  return "UNKNOWN";
+}
+}  // namespace
+
+void CeresNlpSolver::DoSolve(const NlpProblem& problem,
+                             const Eigen::Ref<const Eigen::VectorXd>& x0,
+                             const NlpOptions& options, NlpResult* result) {
+  Impl& s = *impl_;
+  s.Classify(problem);
+  const int n = s.n, m = s.m;
+  const double feas_tol = options.feasibility_tolerance;
+  const bool square = static_cast<int>(s.eq_rows.size()) == n;
+  char msg[256];
+  Eigen::VectorXd& x = result->x;
+  for (int j = 0; j < n; ++j) x(j) = std::clamp(x0(j), s.b.x_lb(j), s.b.x_ub(j));
+  int iterations = 0;
+  auto finish = [&](NlpStatus status) {
+    result->status = status;
+    result->iterations = iterations;
+    result->objective_evaluations = s.f_evals;
+    result->constraint_evaluations = s.g_evals;
+    result->jacobian_evaluations = s.j_evals;
+  };
+
+  // -------------------------------------------------------------- phase 1 --
+  if (s.NumResiduals() > 0) {
+    s.PrepareLeastSquares();
+    s.xp = x;
+    for (int j : s.lb_vars) s.ls->SetParameterLowerBound(s.xp.data(), j, s.b.x_lb(j));
+    for (int j : s.ub_vars) s.ls->SetParameterUpperBound(s.xp.data(), j, s.b.x_ub(j));
+    ceres::Solver::Options o;
+    o.minimizer_type = ceres::TRUST_REGION;
+    o.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    o.linear_solver_type = ceres::DENSE_QR;
+    o.max_num_iterations = options.max_iterations;
+    // Round-off, not Ceres' tolerances, should end a zero-residual solve; the
+    // callback stops as soon as every residual is below the tolerance.
+    o.function_tolerance = 1e-16;
+    o.gradient_tolerance = 1e-16;
+    o.parameter_tolerance = 1e-16;
+    o.num_threads = 1;
+    o.logging_type = options.verbosity > 0 ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+    o.minimizer_progress_to_stdout = options.verbosity > 0;
+    s.stop_cb.threshold = 0.5 * feas_tol;
+    o.callbacks.push_back(&s.stop_cb);
+    std::string why;
+    if (!o.IsValid(&why)) {
+      result->backend_status = "invalid Ceres options: " + why;
+      finish(NlpStatus::kNumericalFailure);
+      return;
+    }
+    ceres::Solver::Summary summary;
+    ceres::Solve(o, s.ls.get(), &summary);
+    iterations += summary.num_successful_steps + summary.num_unsuccessful_steps;
+    x = s.xp;
+    s.g.resize(m);
+    problem.Constraints(x, s.g);
+    ++s.g_evals;
+    const double viol =
+        MaxConstraintViolation(x, s.g, s.b.x_lb, s.b.x_ub, s.b.g_lb, s.b.g_ub);
+    std::snprintf(msg, sizeof msg, "LM %s after %d iterations, violation %.2e",
+                  TerminationName(summary.termination_type), iterations, viol);
+    result->backend_status = msg;
+    if (summary.termination_type == ceres::FAILURE || !std::isfinite(viol)) {
+      result->backend_status += ": " + summary.message;
+      finish(NlpStatus::kNumericalFailure);
+      return;
+    }
+    if (viol > feas_tol) {
+      if (summary.termination_type == ceres::CONVERGENCE && viol >= 1e-6) {
+        result->backend_status += " (minimum of the violation > 0)";
+        finish(NlpStatus::kInfeasible);
+        return;
+      }
+      if (square) {
+        finish(summary.termination_type == ceres::NO_CONVERGENCE
+                   ? NlpStatus::kIterationLimit
+                   : NlpStatus::kNumericalFailure);
+        return;
+      }
+    } else if (square) {
+      finish(NlpStatus::kConverged);  // isolated root: the objective is moot
+      return;
+    }
+  }
+
+  // -------------------------------------------------------------- phase 2 --
+  const size_t n_eq = s.eq_rows.size(), n_side = s.side_rows.size();
+  s.lam_eq.setZero(static_cast<Eigen::Index>(n_eq));
+  s.mu_side.setZero(static_cast<Eigen::Index>(n_side));
+  s.lam_fix.setZero(static_cast<Eigen::Index>(s.fixed_vars.size()));
+  s.mu_lb.setZero(static_cast<Eigen::Index>(s.lb_vars.size()));
+  s.mu_ub.setZero(static_cast<Eigen::Index>(s.ub_vars.size()));
+  if (options.warm_start_multipliers && result->multipliers.size() == m &&
+      result->multipliers.allFinite()) {
+    const Eigen::VectorXd& lam = result->multipliers;
+    for (size_t k = 0; k < n_eq; ++k) s.lam_eq(k) = lam(s.eq_rows[k]);
+    for (size_t k = 0; k < n_side; ++k)
+      s.mu_side(k) = std::max(0.0, s.side_sign[k] * lam(s.side_rows[k]));
+    // Box multipliers from the reduced gradient r = grad f + J^T lambda:
+    // r = z_L - z_U at a KKT point.
+    problem.ObjectiveGradient(x, s.grad);
+    problem.ConstraintJacobian(x, s.jac);
+    ++s.j_evals;
+    s.gx = s.grad;
+    s.gx.noalias() += s.jac.transpose() * lam;
+    if (s.gx.allFinite()) {
+      for (size_t k = 0; k < s.fixed_vars.size(); ++k) s.lam_fix(k) = -s.gx(s.fixed_vars[k]);
+      for (size_t k = 0; k < s.lb_vars.size(); ++k) s.mu_lb(k) = std::max(0.0, s.gx(s.lb_vars[k]));
+      for (size_t k = 0; k < s.ub_vars.size(); ++k) s.mu_ub(k) = std::max(0.0, -s.gx(s.ub_vars[k]));
+    }
+  }
+  s.rho = 10.0;
+
+  if (!s.gp || s.gp_n != n) {
+    s.gp = std::make_unique<ceres::GradientProblem>(new Impl::AlFunction(&s, n));
+    s.gp_n = n;
+  }
+  s.xa = x;
+  problem.ObjectiveGradient(x, s.grad);
+  const double grad_scale = s.grad.allFinite() ? std::max(1.0, s.grad.lpNorm<Eigen::Infinity>()) : 1.0;
+
+  ceres::GradientProblemSolver::Options go;
+  go.line_search_direction_type = ceres::BFGS;
+  go.line_search_type = ceres::WOLFE;
+  go.max_num_iterations = options.max_iterations;
+  go.function_tolerance = 1e-16;
+  go.parameter_tolerance = 1e-16;
+  go.gradient_tolerance = options.optimality_tolerance * grad_scale;
+  go.logging_type = options.verbosity > 0 ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  go.minimizer_progress_to_stdout = options.verbosity > 0;
+  std::string why;
+  if (!go.IsValid(&why)) {
+    result->backend_status = "invalid Ceres options: " + why;
+    finish(NlpStatus::kNumericalFailure);
+    return;
+  }
+
+  // V below which the answer is finished by an active-set Newton polish: the
+  // AL error bound |x - x*| <= C |lambda - lambda*| / rho ~ C V makes further
+  // outer iterations pointless once V is this small.
+  const double polish_v = std::max(feas_tol, 1e-7);
+  bool polished = false;
+  double v_prev = std::numeric_limits<double>::infinity();
+  double viol = std::numeric_limits<double>::infinity();
+  bool converged = false;
+  int outer = 0;
+  ceres::GradientProblemSolver::Summary gs;
+  for (; outer < options.max_iterations && !converged; ++outer) {
+    ceres::Solve(go, *s.gp, s.xa.data(), &gs);
+    if (!gs.iterations.empty()) iterations += static_cast<int>(gs.iterations.size()) - 1;
+    if (gs.termination_type == ceres::FAILURE && gs.iterations.size() <= 1 &&
+        !std::isfinite(gs.final_cost)) {
+      std::snprintf(msg, sizeof msg, "; AL inner solve failed: ");
+      result->backend_status += msg + gs.message;
+      x = s.xa;
+      finish(NlpStatus::kNumericalFailure);
+      return;
+    }
+    x = s.xa;
+    problem.Constraints(x, s.g);
+    ++s.g_evals;
+    if (!s.g.allFinite()) {
+      finish(NlpStatus::kNumericalFailure);
+      result->backend_status += "; non-finite constraints in the AL loop";
+      return;
+    }
+    viol = MaxConstraintViolation(x, s.g, s.b.x_lb, s.b.x_ub, s.b.g_lb, s.b.g_ub);
+    // Feasibility / complementarity measure and multiplier updates.
+    double v = 0.0;
+    for (size_t k = 0; k < n_eq; ++k) {
+      const double c = s.g(s.eq_rows[k]) - s.b.g_lb(s.eq_rows[k]);
+      v = std::max(v, std::abs(c));
+      s.lam_eq(k) += s.rho * c;
+    }
+    auto upd = [&](double& mu, double h) {
+      v = std::max(v, std::abs(std::min(-h, mu / s.rho)));
+      mu = std::max(0.0, mu + s.rho * h);
+    };
+    for (size_t k = 0; k < n_side; ++k) upd(s.mu_side(k), s.SideValue(k));
+    for (size_t k = 0; k < s.fixed_vars.size(); ++k) {
+      const int j = s.fixed_vars[k];
+      const double c = x(j) - s.b.x_lb(j);
+      v = std::max(v, std::abs(c));
+      s.lam_fix(k) += s.rho * c;
+    }
+    for (size_t k = 0; k < s.lb_vars.size(); ++k)
+      upd(s.mu_lb(k), s.b.x_lb(s.lb_vars[k]) - x(s.lb_vars[k]));
+    for (size_t k = 0; k < s.ub_vars.size(); ++k)
+      upd(s.mu_ub(k), x(s.ub_vars[k]) - s.b.x_ub(s.ub_vars[k]));
+    // KKT: the inner gradient is grad_x L at the updated multipliers.
+    const double inner_grad = gs.iterations.empty()
+                                  ? std::numeric_limits<double>::infinity()
+                                  : gs.iterations.back().gradient_max_norm;
+    const bool stationary = inner_grad <= 100.0 * go.gradient_tolerance ||
+                            gs.termination_type == ceres::CONVERGENCE;
+    converged = viol <= feas_tol && v <= feas_tol && stationary;
+    if (!converged && stationary && v <= polish_v) {
+      // Close enough that the active set is settled: finish feasibility with
+      // a Newton polish instead of driving rho up against round-off.
+      s.xa = x;
+      const internal::PolishStats ps = internal::PolishActiveConstraints(
+          problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/5, &s.xa);
+      s.g_evals += ps.constraint_evaluations;
+      s.j_evals += ps.jacobian_evaluations;
+      if (ps.success) {
+        x = s.xa;
+        viol = ps.max_violation;
+        converged = true;
+        polished = true;
+      } else {
+        s.xa = x;
+      }
+    }
+    if (options.verbosity > 0)
+      std::printf("ceres AL outer %3d: inner %-14s %4zu it, |grad L| %.2e, "
+                  "violation %.2e, V %.2e, rho %.0e\n",
+                  outer, TerminationName(gs.termination_type),
+                  gs.iterations.empty() ? size_t{0} : gs.iterations.size() - 1,
+                  inner_grad, viol, v, s.rho);
+    if (v > 0.25 * v_prev) s.rho = std::min(10.0 * s.rho, 1e8);
+    v_prev = v;
+  }
+
+  std::snprintf(msg, sizeof msg,
+                "; AL %d outer iterations, rho %.0e, violation %.2e%s, last inner %s",
+                outer, s.rho, viol, polished ? " (polished)" : "",
+                TerminationName(gs.termination_type));
+  result->backend_status += msg;
+  NlpStatus status = converged ? NlpStatus::kConverged : NlpStatus::kIterationLimit;
+  if (!converged && viol > feas_tol && viol <= 1e-6) {
+    const internal::PolishStats ps = internal::PolishActiveConstraints(
+        problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/5, &x);
+    s.g_evals += ps.constraint_evaluations;
+    s.j_evals += ps.jacobian_evaluations;
+    std::snprintf(msg, sizeof msg, "; polish -> violation %.2e", ps.max_violation);
+    result->backend_status += msg;
+    if (ps.success) status = NlpStatus::kConverged;
+  }
+  // Multipliers in Ipopt's convention.
+  if (result->multipliers.size() != m) result->multipliers.resize(m);
+  result->multipliers.setZero();
+  for (size_t k = 0; k < n_eq; ++k) result->multipliers(s.eq_rows[k]) = s.lam_eq(k);
+  for (size_t k = 0; k < n_side; ++k)
+    result->multipliers(s.side_rows[k]) += s.side_sign[k] * s.mu_side(k);
+  finish(status);
+}
+
+}  // namespace quasiroll

@@ -1,0 +1,342 @@
+#include "solvers/ipopt_solver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include <IpIpoptApplication.hpp>
+#include <IpJournalist.hpp>
+#include <IpTNLP.hpp>
+
+namespace quasiroll {
+namespace {
+
+using Ipopt::Index;
+using Ipopt::Number;
+
+constexpr double kIpoptInf = 2e19;  // beyond nlp_{lower,upper}_bound_inf
+
+// TNLP adapter: forwards to the NlpProblem, counts evaluations, stores the
+// answer in the NlpResult. Buffers persist across solves.
+class Adapter final : public Ipopt::TNLP {
+ public:
+  // Per-solve state.
+  const NlpProblem* problem = nullptr;
+  const Eigen::VectorXd* x0 = nullptr;
+  NlpResult* result = nullptr;
+  bool warm = false;
+  bool exact_hessian = false;
+  int n = 0, m = 0;
+  Eigen::VectorXd x_lb, x_ub, g_lb, g_ub, grad, reduced;
+  Eigen::MatrixXd jac, hess;
+  int max_iter_seen = 0;
+  bool finalized = false;
+
+  void Prepare(const NlpProblem& p) {
+    problem = &p;
+    n = p.num_variables();
+    m = p.num_constraints();
+    x_lb.resize(n);
+    x_ub.resize(n);
+    g_lb.resize(m);
+    g_ub.resize(m);
+    grad.resize(n);
+    reduced.resize(n);
+    jac.resize(m, n);
+    p.GetBounds(x_lb, x_ub, g_lb, g_ub);
+    exact_hessian = p.HasLagrangianHessian();
+    if (exact_hessian) hess.resize(n, n);
+    max_iter_seen = 0;
+    finalized = false;
+  }
+
+  bool get_nlp_info(Index& nv, Index& mc, Index& nnz_jac_g, Index& nnz_h_lag,
+                    IndexStyleEnum& index_style) override {
+    nv = n;
+    mc = m;
+    nnz_jac_g = n * m;  // dense
+    nnz_h_lag = exact_hessian ? n * (n + 1) / 2 : 0;
+    index_style = C_STYLE;
+    return true;
+  }
+
+  bool get_bounds_info(Index, Number* xl, Number* xu, Index, Number* gl,
+                       Number* gu) override {
+    auto clip = [](double v) { return std::clamp(v, -kIpoptInf, kIpoptInf); };
+    for (int j = 0; j < n; ++j) {
+      xl[j] = clip(x_lb(j));
+      xu[j] = clip(x_ub(j));
+    }
+    for (int i = 0; i < m; ++i) {
+      gl[i] = clip(g_lb(i));
+      gu[i] = clip(g_ub(i));
+    }
+    return true;
+  }
+
+  bool get_starting_point(Index, bool init_x, Number* x, bool init_z, Number* z_l,
+                          Number* z_u, Index, bool init_lambda,
+                          Number* lambda) override {
+    if (init_x)
+      for (int j = 0; j < n; ++j) x[j] = (*x0)(j);
+    if (init_lambda) {
+      if (!warm) return false;
+      for (int i = 0; i < m; ++i) lambda[i] = result->multipliers(i);
+    }
+    if (init_z) {
+      if (!warm) return false;
+      // Stationarity grad f + J^T lambda - z_L + z_U = 0 at the warm point.
+      problem->ObjectiveGradient(*x0, grad);
+      problem->ConstraintJacobian(*x0, jac);
+      reduced = grad;
+      reduced.noalias() += jac.transpose() * result->multipliers;
+      for (int j = 0; j < n; ++j) {
+        const double r = std::isfinite(reduced(j)) ? reduced(j) : 0.0;
+        z_l[j] = std::isfinite(x_lb(j)) ? std::max(r, 0.0) : 0.0;
+        z_u[j] = std::isfinite(x_ub(j)) ? std::max(-r, 0.0) : 0.0;
+      }
+    }
+    return true;
+  }
+
+  bool eval_f(Index nv, const Number* x, bool, Number& obj) override {
+    obj = problem->Objective(Eigen::Map<const Eigen::VectorXd>(x, nv));
+    ++result->objective_evaluations;
+    return std::isfinite(obj);
+  }
+
+  bool eval_grad_f(Index nv, const Number* x, bool, Number* g) override {
+    Eigen::Map<Eigen::VectorXd> gm(g, nv);
+    problem->ObjectiveGradient(Eigen::Map<const Eigen::VectorXd>(x, nv), gm);
+    return gm.allFinite();
+  }
+
+  bool eval_g(Index nv, const Number* x, bool, Index mc, Number* g) override {
+    Eigen::Map<Eigen::VectorXd> gm(g, mc);
+    problem->Constraints(Eigen::Map<const Eigen::VectorXd>(x, nv), gm);
+    ++result->constraint_evaluations;
+    return gm.allFinite();
+  }
+
+  bool eval_jac_g(Index nv, const Number* x, bool, Index mc, Index, Index* i_row,
+                  Index* j_col, Number* values) override {
+    if (values == nullptr) {  // structure: dense, row-major
+      Index k = 0;
+      for (Index i = 0; i < mc; ++i)
+        for (Index j = 0; j < nv; ++j, ++k) {
+          i_row[k] = i;
+          j_col[k] = j;
+        }
+      return true;
+    }
+    problem->ConstraintJacobian(Eigen::Map<const Eigen::VectorXd>(x, nv), jac);
+    ++result->jacobian_evaluations;
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+        values, mc, nv) = jac;
+    return jac.allFinite();
+  }
+
+  bool eval_h(Index nv, const Number* x, bool, Number obj_factor, Index mc,
+              const Number* lambda, bool, Index, Index* i_row, Index* j_col,
+              Number* values) override {
+    if (!exact_hessian) return false;
+    Index k = 0;
+    if (values == nullptr) {  // lower triangle, row by row
+      for (Index i = 0; i < nv; ++i)
+        for (Index j = 0; j <= i; ++j, ++k) {
+          i_row[k] = i;
+          j_col[k] = j;
+        }
+      return true;
+    }
+    problem->LagrangianHessian(Eigen::Map<const Eigen::VectorXd>(x, nv), obj_factor,
+                               Eigen::Map<const Eigen::VectorXd>(lambda, mc), hess);
+    for (Index i = 0; i < nv; ++i)
+      for (Index j = 0; j <= i; ++j, ++k) values[k] = hess(i, j);
+    return hess.allFinite();
+  }
+
+  void finalize_solution(Ipopt::SolverReturn, Index nv, const Number* x,
+                         const Number*, const Number*, Index mc, const Number*,
+                         const Number* lambda, Number, const Ipopt::IpoptData*,
+                         Ipopt::IpoptCalculatedQuantities*) override {
+    result->x = Eigen::Map<const Eigen::VectorXd>(x, nv);
+    if (lambda != nullptr)
+      result->multipliers = Eigen::Map<const Eigen::VectorXd>(lambda, mc);
+    finalized = true;
+  }
+
+  bool intermediate_callback(Ipopt::AlgorithmMode, Index iter, Number, Number,
+                             Number, Number, Number, Number, Number, Number,
+                             Index, const Ipopt::IpoptData*,
+                             Ipopt::IpoptCalculatedQuantities*) override {
+    max_iter_seen = std::max(max_iter_seen, static_cast<int>(iter));
+    return true;
+  }
+};
+
+const char* ReturnStatusName(Ipopt::ApplicationReturnStatus s) {
+  switch (s) {
+    case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
+    case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
+    case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
+    case Ipopt::Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
+    case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
+    case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
+    case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
+    case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
+    case Ipopt::Restoration_Failed: return "Restoration_Failed";
+    case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
+    case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
+    case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
+    case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
+    case Ipopt::Invalid_Option: return "Invalid_Option";
+    case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
+    case Ipopt::Unrecoverable_Exception: return "Unrecoverable_Exception";
+    case Ipopt::NonIpopt_Exception_Thrown: return "NonIpopt_Exception_Thrown";
+    case Ipopt::Insufficient_Memory: return "Insufficient_Memory";
+    case Ipopt::Internal_Error: return "Internal_Error";
+  }
+  return "unknown Ipopt return status";
+}
+
+NlpStatus MapStatus(Ipopt::ApplicationReturnStatus s) {
+  switch (s) {
+    case Ipopt::Solve_Succeeded:
+    // Only reachable with constraint violation <= feasibility_tolerance
+    // (acceptable_constr_viol_tol below); NlpSolver::Solve re-checks it.
+    case Ipopt::Solved_To_Acceptable_Level:
+    // Square problems (no degrees of freedom): a feasible point is the answer.
+    case Ipopt::Feasible_Point_Found:
+      return NlpStatus::kConverged;
+    case Ipopt::Infeasible_Problem_Detected:
+      return NlpStatus::kInfeasible;
+    case Ipopt::Maximum_Iterations_Exceeded:
+      return NlpStatus::kIterationLimit;
+    default:
+      return NlpStatus::kNumericalFailure;
+  }
+}
+
+// Structure of a solve, as far as Ipopt's ReOptimizeTNLP cares.
+void Signature(const Adapter& a, std::vector<char>* sig) {
+  sig->clear();
+  sig->push_back(a.exact_hessian ? 'H' : 'L');
+  for (int j = 0; j < a.n; ++j) {
+    sig->push_back(a.x_lb(j) == a.x_ub(j) ? 'f'
+                                          : static_cast<char>('0' + std::isfinite(a.x_lb(j)) +
+                                                              2 * std::isfinite(a.x_ub(j))));
+  }
+  sig->push_back('|');
+  for (int i = 0; i < a.m; ++i) {
+    sig->push_back(a.g_lb(i) == a.g_ub(i) ? 'e'
+                                          : static_cast<char>('0' + std::isfinite(a.g_lb(i)) +
+                                                              2 * std::isfinite(a.g_ub(i))));
+  }
+}
+
+bool AlgorithmUsable(Ipopt::ApplicationReturnStatus s) {
+  return s >= Ipopt::Maximum_CpuTime_Exceeded;  // -4 .. 6: algorithm was built
+}
+
+}  // namespace
+
+struct IpoptSolver::Impl {
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app;
+  Ipopt::SmartPtr<Adapter> adapter;
+  Eigen::VectorXd x0;
+  std::vector<char> signature, last_signature;
+  bool can_reoptimize = false;
+  bool initialized = false;
+};
+
+IpoptSolver::IpoptSolver() : impl_(std::make_unique<Impl>()) {
+  Impl& s = *impl_;
+  s.app = IpoptApplicationFactory();
+  s.adapter = new Adapter();
+  auto opts = s.app->Options();
+  // No banner: the library runs thousands of times in a loop.
+  opts->SetStringValue("sb", "yes");
+  // Silent by default; raised per solve from NlpOptions::verbosity.
+  opts->SetIntegerValue("print_level", 0);
+  // "" = do not read an ipopt.opt file from the working directory.
+  s.initialized = s.app->Initialize("") == Ipopt::Solve_Succeeded;
+}
+
+IpoptSolver::~IpoptSolver() = default;
+
+void IpoptSolver::DoSolve(const NlpProblem& problem,
+                          const Eigen::Ref<const Eigen::VectorXd>& x0,
+                          const NlpOptions& options, NlpResult* result) {
+  Impl& s = *impl_;
+  if (!s.initialized) {
+    result->status = NlpStatus::kNumericalFailure;
+    result->backend_status = "IpoptApplication::Initialize failed";
+    return;
+  }
+  Adapter& a = *s.adapter;
+  a.Prepare(problem);
+  s.x0 = x0;
+  a.x0 = &s.x0;
+  a.result = result;
+  a.warm = options.warm_start_multipliers &&
+           result->multipliers.size() == problem.num_constraints() &&
+           result->multipliers.allFinite();
+
+  auto opts = s.app->Options();
+  const int level = std::clamp(options.verbosity, 0, 12);
+  // Console output level (the journal was created by Initialize()).
+  opts->SetIntegerValue("print_level", level);
+  if (auto console = s.app->Jnlst()->GetJournal("console"); Ipopt::IsValid(console))
+    console->SetAllPrintLevels(static_cast<Ipopt::EJournalLevel>(level));
+  // Overall (scaled) KKT error target.
+  opts->SetNumericValue("tol", options.optimality_tolerance);
+  // Absolute constraint violation target, in the problem's own units.
+  opts->SetNumericValue("constr_viol_tol", options.feasibility_tolerance);
+  // An "acceptable" stop must still be feasible to the caller's tolerance.
+  opts->SetNumericValue("acceptable_constr_viol_tol", options.feasibility_tolerance);
+  // Major iteration budget.
+  opts->SetIntegerValue("max_iter", options.max_iterations);
+  // Ipopt relaxes bounds by 1e-8 by default, which would let the answer
+  // violate bounds/inequality rows beyond feasibility_tolerance.
+  opts->SetNumericValue("bound_relax_factor", 0.0);
+  // Exact second derivatives when the problem has them, else L-BFGS.
+  opts->SetStringValue("hessian_approximation",
+                       a.exact_hessian ? "exact" : "limited-memory");
+  if (a.warm) {
+    // Start from the given x and multipliers instead of Ipopt's own init.
+    opts->SetStringValue("warm_start_init_point", "yes");
+    // Keep the warm point (almost) where it is instead of pushing it 1e-2
+    // into the interior.
+    opts->SetNumericValue("warm_start_bound_push", 1e-9);
+    opts->SetNumericValue("warm_start_bound_frac", 1e-9);
+    opts->SetNumericValue("warm_start_slack_bound_push", 1e-9);
+    opts->SetNumericValue("warm_start_slack_bound_frac", 1e-9);
+    opts->SetNumericValue("warm_start_mult_bound_push", 1e-9);
+    // A barrier parameter near the previous final one, so the solution is not
+    // pulled back to the central path of mu = 0.1.
+    opts->SetNumericValue("mu_init", 1e-6);
+  } else {
+    // Cold start: Ipopt's defaults (options persist in the application).
+    opts->SetStringValue("warm_start_init_point", "no");
+    opts->SetNumericValue("mu_init", 0.1);
+  }
+
+  Signature(a, &s.signature);
+  Ipopt::ApplicationReturnStatus st;
+  if (s.can_reoptimize && s.signature == s.last_signature) {
+    st = s.app->ReOptimizeTNLP(s.adapter);  // same structure: reuse algorithm
+  } else {
+    st = s.app->OptimizeTNLP(s.adapter);
+  }
+  s.can_reoptimize = AlgorithmUsable(st);
+  s.last_signature.swap(s.signature);
+
+  result->status = MapStatus(st);
+  result->backend_status = ReturnStatusName(st);
+  result->iterations = a.max_iter_seen;  // last iteration index reported
+  if (!a.finalized) result->x = x0;  // Ipopt stopped before finalize_solution
+}
+
+}  // namespace quasiroll

@@ -1,0 +1,160 @@
+#include "solvers/newton_solver.h"
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include <Eigen/LU>
+
+namespace quasiroll {
+
+struct NewtonSolver::Workspace {
+  Eigen::VectorXd x_lb, x_ub, g_lb, g_ub;
+  Eigen::VectorXd g, g_trial, r, r_trial, dx, x_trial;
+  Eigen::MatrixXd jac, jac_eq;
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+  std::vector<int> eq_rows;
+
+  void Resize(int n, int m) {
+    x_lb.resize(n);
+    x_ub.resize(n);
+    g_lb.resize(m);
+    g_ub.resize(m);
+    g.resize(m);
+    g_trial.resize(m);
+    r.resize(n);
+    r_trial.resize(n);
+    dx.resize(n);
+    x_trial.resize(n);
+    jac.resize(m, n);
+    jac_eq.resize(n, n);
+    eq_rows.reserve(static_cast<size_t>(n));
+  }
+};
+
+NewtonSolver::NewtonSolver() : ws_(std::make_unique<Workspace>()) {}
+NewtonSolver::~NewtonSolver() = default;
+
+namespace {
+// r = g(rows) - g_lb(rows); false if any entry is non-finite.
+bool Residual(const Eigen::VectorXd& g, const Eigen::VectorXd& g_lb,
+              const std::vector<int>& rows, Eigen::VectorXd* r) {
+  for (size_t k = 0; k < rows.size(); ++k) (*r)(k) = g(rows[k]) - g_lb(rows[k]);
+  return r->allFinite();
+}
+}  // namespace
+
+void NewtonSolver::DoSolve(const NlpProblem& problem,
+                           const Eigen::Ref<const Eigen::VectorXd>& x0,
+                           const NlpOptions& options, NlpResult* result) {
+  const int n = problem.num_variables(), m = problem.num_constraints();
+  Workspace& w = *ws_;
+  w.Resize(n, m);
+  problem.GetBounds(w.x_lb, w.x_ub, w.g_lb, w.g_ub);
+  w.eq_rows.clear();
+  for (int i = 0; i < m; ++i)
+    if (w.g_lb(i) == w.g_ub(i)) w.eq_rows.push_back(i);  // n rows (validated)
+
+  const double tol = options.feasibility_tolerance;
+  char msg[160];
+  Eigen::VectorXd& x = result->x;
+  x = x0;
+  problem.Constraints(x, w.g);
+  ++result->constraint_evaluations;
+  if (!Residual(w.g, w.g_lb, w.eq_rows, &w.r)) {
+    result->status = NlpStatus::kNumericalFailure;
+    result->backend_status = "non-finite residual at the starting point";
+    return;
+  }
+
+  int iter = 0;
+  for (;; ++iter) {
+    const double r_max = w.r.lpNorm<Eigen::Infinity>();
+    if (r_max <= tol) break;
+    if (iter >= options.max_iterations) {
+      result->status = NlpStatus::kIterationLimit;
+      std::snprintf(msg, sizeof msg, "max_iterations reached, |r|_inf = %.3e",
+                    r_max);
+      result->backend_status = msg;
+      result->iterations = iter;
+      return;
+    }
+    problem.ConstraintJacobian(x, w.jac);
+    ++result->jacobian_evaluations;
+    for (int k = 0; k < n; ++k) w.jac_eq.row(k) = w.jac.row(w.eq_rows[k]);
+    if (!w.jac_eq.allFinite()) {
+      result->status = NlpStatus::kNumericalFailure;
+      result->backend_status = "non-finite Jacobian";
+      result->iterations = iter;
+      return;
+    }
+    w.lu.compute(w.jac_eq);
+    // Rank test on the pivots of U: partial pivoting puts the largest
+    // available entry on the diagonal, so a pivot at round-off level relative
+    // to the largest one means a (numerically) rank-deficient Jacobian.
+    const auto u_diag = w.lu.matrixLU().diagonal().cwiseAbs();
+    const double pivot_max = u_diag.maxCoeff(), pivot_min = u_diag.minCoeff();
+    if (!(pivot_min > 1e-13 * pivot_max)) {
+      result->status = NlpStatus::kNumericalFailure;
+      std::snprintf(msg, sizeof msg,
+                    "rank-deficient Jacobian (pivot ratio %.3e) at iteration %d",
+                    pivot_max > 0 ? pivot_min / pivot_max : 0.0, iter);
+      result->backend_status = msg;
+      result->iterations = iter;
+      return;
+    }
+    w.dx = w.lu.solve(w.r);
+    w.dx = -w.dx;
+
+    // Backtracking (Armijo) line search on phi = |r|^2.
+    const double phi = w.r.squaredNorm();
+    double alpha = 1.0;
+    bool accepted = false;
+    while (alpha >= 1e-10) {
+      w.x_trial = x + alpha * w.dx;
+      problem.Constraints(w.x_trial, w.g_trial);
+      ++result->constraint_evaluations;
+      if (Residual(w.g_trial, w.g_lb, w.eq_rows, &w.r_trial)) {
+        const double phi_trial = w.r_trial.squaredNorm();
+        if (phi_trial <= (1.0 - 2e-4 * alpha) * phi ||
+            w.r_trial.lpNorm<Eigen::Infinity>() <= tol) {
+          accepted = true;
+          break;
+        }
+      }
+      alpha *= 0.5;
+    }
+    if (!accepted) {
+      result->status = NlpStatus::kNumericalFailure;
+      std::snprintf(msg, sizeof msg,
+                    "line search failed at iteration %d, |r|_inf = %.3e", iter,
+                    r_max);
+      result->backend_status = msg;
+      result->iterations = iter;
+      return;
+    }
+    x.swap(w.x_trial);
+    w.g.swap(w.g_trial);
+    w.r.swap(w.r_trial);
+  }
+  result->iterations = iter;
+
+  // The equalities hold; the root is unique nearby, so bounds or inequality
+  // rows violated there mean the problem is (locally) infeasible.
+  const double viol =
+      MaxConstraintViolation(x, w.g, w.x_lb, w.x_ub, w.g_lb, w.g_ub);
+  if (viol > tol) {
+    result->status = NlpStatus::kInfeasible;
+    std::snprintf(msg, sizeof msg,
+                  "root found in %d iterations violates bounds/inequalities "
+                  "by %.3e",
+                  iter, viol);
+  } else {
+    result->status = NlpStatus::kConverged;
+    std::snprintf(msg, sizeof msg, "converged in %d iterations, |r|_inf = %.3e",
+                  iter, w.r.lpNorm<Eigen::Infinity>());
+  }
+  result->backend_status = msg;
+}
+
+}  // namespace quasiroll

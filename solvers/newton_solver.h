@@ -1,0 +1,39 @@
+// Backend "newton": damped Newton on a square equality system.
+//
+// Solves  g_eq(x) = g_lb_eq  (exactly num_variables() equality rows) with
+//   J dx = -r,  r = g_eq(x) - g_lb_eq,  J = d g_eq / dx  (dense partial-pivot
+//   LU), x <- x + alpha dx,  alpha = 1, 1/2, ... until the Armijo condition
+//   |r(x + alpha dx)|^2 <= (1 - 2e-4 alpha) |r(x)|^2  holds.
+// Converged when max_i |r_i| <= options.feasibility_tolerance. The objective
+// is ignored (the root is isolated); bounds and inequality rows are checked at
+// the root: if the root violates them the status is kInfeasible (the root of
+// a nonsingular square system is locally unique).
+// A (numerically) rank-deficient Jacobian, a failed line search or a
+// non-finite residual give kNumericalFailure. Multipliers are left at zero.
+// After the first call with given sizes DoSolve() does not allocate.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "core/nlp.h"
+
+namespace quasiroll {
+
+class NewtonSolver final : public NlpSolver {
+ public:
+  NewtonSolver();
+  ~NewtonSolver() override;
+  std::string name() const override { return "newton"; }
+  bool RequiresSquareSystem() const override { return true; }
+
+ private:
+  void DoSolve(const NlpProblem& problem,
+               const Eigen::Ref<const Eigen::VectorXd>& x0,
+               const NlpOptions& options, NlpResult* result) override;
+
+  struct Workspace;
+  std::unique_ptr<Workspace> ws_;
+};
+
+}  // namespace quasiroll

@@ -1,0 +1,43 @@
+// Registers every NLP backend compiled into quasiroll::solvers.
+#include <memory>
+#include <mutex>
+
+#include "core/nlp.h"
+#include "solvers/newton_solver.h"
+#ifdef QUASIROLL_HAVE_IPOPT
+#include "solvers/ipopt_solver.h"
+#endif
+#ifdef QUASIROLL_HAVE_NLOPT
+#include "solvers/slsqp_solver.h"
+#endif
+#ifdef QUASIROLL_HAVE_CERES
+#include "solvers/ceres_solver.h"
+#endif
+
+namespace quasiroll {
+
+void RegisterBuiltinNlpSolvers() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    NlpSolverRegistry::Register(
+        "newton", "damped Newton with dense LU on square equality systems",
+        [] { return std::make_unique<NewtonSolver>(); });
+#ifdef QUASIROLL_HAVE_IPOPT
+    NlpSolverRegistry::Register(
+        "ipopt", "Ipopt interior point (exact or L-BFGS Hessian), dense Jacobian",
+        [] { return std::make_unique<IpoptSolver>(); });
+#endif
+#ifdef QUASIROLL_HAVE_NLOPT
+    NlpSolverRegistry::Register(
+        "slsqp", "NLopt SLSQP with an active-set Newton feasibility polish",
+        [] { return std::make_unique<SlsqpSolver>(); });
+#endif
+#ifdef QUASIROLL_HAVE_CERES
+    NlpSolverRegistry::Register(
+        "ceres", "Ceres: least-squares feasibility + augmented Lagrangian",
+        [] { return std::make_unique<CeresNlpSolver>(); });
+#endif
+  });
+}
+
+}  // namespace quasiroll

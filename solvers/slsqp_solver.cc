@@ -1,0 +1,272 @@
+#include "solvers/slsqp_solver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <new>
+#include <stdexcept>
+#include <vector>
+
+#include <nlopt.hpp>
+
+#include "solvers/active_set_polish.h"
+
+namespace quasiroll {
+
+struct SlsqpSolver::Impl {
+  std::unique_ptr<nlopt::opt> opt;
+  // Structure the nlopt::opt was built for.
+  int n = -1, n_eq = -1, n_ineq = -1;
+  double con_tol = -1.0;
+
+  const NlpProblem* problem = nullptr;
+  internal::NlpBounds bounds;
+  std::vector<int> eq_rows, ineq_rows;
+  std::vector<double> ineq_sign;  // +1: g - g_ub <= 0, -1: g_lb - g <= 0
+  std::vector<double> x, lb, ub, tol_eq, tol_ineq;
+
+  // Constraint / Jacobian cache keyed on x (NLopt calls the objective and
+  // both mconstraints at the same point).
+  Eigen::VectorXd cache_x, g;
+  Eigen::MatrixXd jac;
+  bool g_valid = false, jac_valid = false;
+
+  int obj_evals = 0, grad_evals = 0, con_evals = 0, jac_evals = 0;
+  bool nonfinite = false;
+
+  void Touch(const double* xp) {
+    const size_t bytes = sizeof(double) * static_cast<size_t>(n);
+    if (std::memcmp(cache_x.data(), xp, bytes) != 0) {
+      std::memcpy(cache_x.data(), xp, bytes);
+      g_valid = jac_valid = false;
+    }
+  }
+  void EnsureG(const double* xp) {
+    Touch(xp);
+    if (g_valid) return;
+    problem->Constraints(cache_x, g);
+    ++con_evals;
+    g_valid = true;
+    if (!g.allFinite()) Fail();
+  }
+  void EnsureJac(const double* xp) {
+    Touch(xp);
+    if (jac_valid) return;
+    problem->ConstraintJacobian(cache_x, jac);
+    ++jac_evals;
+    jac_valid = true;
+    if (!jac.allFinite()) Fail();
+  }
+  [[noreturn]] void Fail() {
+    nonfinite = true;
+    throw nlopt::forced_stop();  // caught by nlopt.hpp, re-thrown by optimize()
+  }
+
+  static double ObjectiveCb(unsigned n, const double* xp, double* grad, void* data) {
+    auto* s = static_cast<Impl*>(data);
+    Eigen::Map<const Eigen::VectorXd> xm(xp, n);
+    const double f = s->problem->Objective(xm);
+    ++s->obj_evals;
+    if (!std::isfinite(f)) s->Fail();
+    if (grad != nullptr) {
+      Eigen::Map<Eigen::VectorXd> gm(grad, n);
+      s->problem->ObjectiveGradient(xm, gm);
+      ++s->grad_evals;
+      if (!gm.allFinite()) s->Fail();
+    }
+    return f;
+  }
+  static void EqualityCb(unsigned m, double* res, unsigned n, const double* xp,
+                         double* grad, void* data) {
+    auto* s = static_cast<Impl*>(data);
+    s->EnsureG(xp);
+    for (unsigned k = 0; k < m; ++k) {
+      const int i = s->eq_rows[k];
+      res[k] = s->g(i) - s->bounds.g_lb(i);
+    }
+    if (grad != nullptr) {
+      s->EnsureJac(xp);
+      for (unsigned k = 0; k < m; ++k)
+        for (unsigned j = 0; j < n; ++j) grad[k * n + j] = s->jac(s->eq_rows[k], j);
+    }
+  }
+  static void InequalityCb(unsigned m, double* res, unsigned n, const double* xp,
+                           double* grad, void* data) {
+    auto* s = static_cast<Impl*>(data);
+    s->EnsureG(xp);
+    for (unsigned k = 0; k < m; ++k) {
+      const int i = s->ineq_rows[k];
+      res[k] = s->ineq_sign[k] > 0 ? s->g(i) - s->bounds.g_ub(i)
+                                   : s->bounds.g_lb(i) - s->g(i);
+    }
+    if (grad != nullptr) {
+      s->EnsureJac(xp);
+      for (unsigned k = 0; k < m; ++k)
+        for (unsigned j = 0; j < n; ++j)
+          grad[k * n + j] = s->ineq_sign[k] * s->jac(s->ineq_rows[k], j);
+    }
+  }
+
+  void Build(int nv, double tol) {
+    opt = std::make_unique<nlopt::opt>(nlopt::LD_SLSQP, static_cast<unsigned>(nv));
+    opt->set_min_objective(&Impl::ObjectiveCb, this);
+    tol_eq.assign(eq_rows.size(), tol);
+    tol_ineq.assign(ineq_rows.size(), tol);
+    if (!eq_rows.empty()) opt->add_equality_mconstraint(&Impl::EqualityCb, this, tol_eq);
+    if (!ineq_rows.empty())
+      opt->add_inequality_mconstraint(&Impl::InequalityCb, this, tol_ineq);
+    n = nv;
+    n_eq = static_cast<int>(eq_rows.size());
+    n_ineq = static_cast<int>(ineq_rows.size());
+    con_tol = tol;
+  }
+};
+
+SlsqpSolver::SlsqpSolver() : impl_(std::make_unique<Impl>()) {}
+SlsqpSolver::~SlsqpSolver() = default;
+
+namespace {
+const char* NloptResultName(nlopt::result r) {
+  switch (r) {
+    case nlopt::SUCCESS: return "SUCCESS";
+    case nlopt::STOPVAL_REACHED: return "STOPVAL_REACHED";
+    case nlopt::FTOL_REACHED: return "FTOL_REACHED";
+    case nlopt::XTOL_REACHED: return "XTOL_REACHED";
+    case nlopt::MAXEVAL_REACHED: return "MAXEVAL_REACHED";
+    case nlopt::MAXTIME_REACHED: return "MAXTIME_REACHED";
+    case nlopt::FAILURE: return "FAILURE";
+    case nlopt::INVALID_ARGS: return "INVALID_ARGS";
+    case nlopt::OUT_OF_MEMORY: return "OUT_OF_MEMORY";
+    case nlopt::ROUNDOFF_LIMITED: return "ROUNDOFF_LIMITED";
+    case nlopt::FORCED_STOP: return "FORCED_STOP";
+    default: return "UNKNOWN";
+  }
+}
+}  // namespace
+
+void SlsqpSolver::DoSolve(const NlpProblem& problem,
+                          const Eigen::Ref<const Eigen::VectorXd>& x0,
+                          const NlpOptions& options, NlpResult* result) {
+  Impl& s = *impl_;
+  const int n = problem.num_variables(), m = problem.num_constraints();
+  s.problem = &problem;
+  s.bounds.Load(problem);
+  const internal::NlpBounds& b = s.bounds;
+
+  s.eq_rows.clear();
+  s.ineq_rows.clear();
+  s.ineq_sign.clear();
+  for (int i = 0; i < m; ++i) {
+    if (b.g_lb(i) == b.g_ub(i)) {
+      s.eq_rows.push_back(i);
+      continue;
+    }
+    if (std::isfinite(b.g_lb(i))) {
+      s.ineq_rows.push_back(i);
+      s.ineq_sign.push_back(-1.0);
+    }
+    if (std::isfinite(b.g_ub(i))) {
+      s.ineq_rows.push_back(i);
+      s.ineq_sign.push_back(+1.0);
+    }
+  }
+  const double con_tol = options.feasibility_tolerance;
+  if (!s.opt || s.n != n || s.n_eq != static_cast<int>(s.eq_rows.size()) ||
+      s.n_ineq != static_cast<int>(s.ineq_rows.size()) || s.con_tol != con_tol) {
+    s.Build(n, con_tol);  // new structure: (re)create the NLopt object
+  }
+  s.cache_x.resize(n);
+  s.g.resize(m);
+  s.jac.resize(m, n);
+  s.g_valid = s.jac_valid = false;
+  s.cache_x.setConstant(std::numeric_limits<double>::quiet_NaN());
+  s.obj_evals = s.grad_evals = s.con_evals = s.jac_evals = 0;
+  s.nonfinite = false;
+
+  s.lb.resize(static_cast<size_t>(n));
+  s.ub.resize(static_cast<size_t>(n));
+  s.x.resize(static_cast<size_t>(n));
+  for (int j = 0; j < n; ++j) {
+    s.lb[j] = b.x_lb(j);
+    s.ub[j] = b.x_ub(j);
+    s.x[j] = std::clamp(x0(j), b.x_lb(j), b.x_ub(j));
+  }
+  nlopt::opt& opt = *s.opt;
+  opt.set_lower_bounds(s.lb);
+  opt.set_upper_bounds(s.ub);
+  opt.set_ftol_rel(options.optimality_tolerance);
+  opt.set_xtol_rel(options.optimality_tolerance);
+  opt.set_maxeval(3 * options.max_iterations);
+
+  enum class Outcome { kSuccess, kMaxEval, kRoundoff, kFailure, kNonFinite };
+  Outcome outcome = Outcome::kFailure;
+  double f_opt = 0.0;
+  try {
+    const nlopt::result r = opt.optimize(s.x, f_opt);
+    result->backend_status = NloptResultName(r);
+    outcome = (r == nlopt::MAXEVAL_REACHED || r == nlopt::MAXTIME_REACHED)
+                  ? Outcome::kMaxEval
+                  : Outcome::kSuccess;
+  } catch (const nlopt::roundoff_limited&) {
+    result->backend_status = "ROUNDOFF_LIMITED";
+    outcome = Outcome::kRoundoff;
+  } catch (const nlopt::forced_stop&) {
+    result->backend_status = "FORCED_STOP";
+    outcome = s.nonfinite ? Outcome::kNonFinite : Outcome::kFailure;
+  } catch (const std::bad_alloc&) {
+    result->backend_status = "OUT_OF_MEMORY";
+    outcome = Outcome::kFailure;
+  } catch (const std::invalid_argument& e) {
+    result->backend_status = std::string("INVALID_ARGS: ") + e.what();
+    outcome = Outcome::kFailure;
+  } catch (const std::runtime_error& e) {
+    result->backend_status = std::string("FAILURE: ") + e.what();
+    outcome = Outcome::kFailure;
+  }
+  for (int j = 0; j < n; ++j) result->x(j) = s.x[j];
+  result->iterations = s.grad_evals;
+  result->objective_evaluations = s.obj_evals;
+  result->constraint_evaluations = s.con_evals;
+  result->jacobian_evaluations = s.jac_evals;
+
+  if (outcome == Outcome::kNonFinite || !result->x.allFinite()) {
+    result->status = NlpStatus::kNumericalFailure;
+    result->backend_status += " (non-finite function value)";
+    return;
+  }
+  if (outcome == Outcome::kMaxEval) {
+    result->status = NlpStatus::kIterationLimit;
+    return;
+  }
+
+  // Independent feasibility check (+ active-set Newton polish if needed).
+  const internal::PolishStats ps = internal::PolishActiveConstraints(
+      problem, b, /*active_tol=*/1e-7, options.feasibility_tolerance,
+      /*max_iterations=*/5, &result->x);
+  result->constraint_evaluations += ps.constraint_evaluations;
+  result->jacobian_evaluations += ps.jacobian_evaluations;
+  char msg[128];
+  if (ps.iterations > 0) {
+    std::snprintf(msg, sizeof msg, " + %d polish step(s) -> violation %.2e",
+                  ps.iterations, ps.max_violation);
+    result->backend_status += msg;
+  }
+  if (ps.success && (outcome == Outcome::kSuccess || outcome == Outcome::kRoundoff)) {
+    result->status = NlpStatus::kConverged;
+    return;
+  }
+  if (internal::LooksLocallyInfeasible(problem, b, result->x)) {
+    result->status = NlpStatus::kInfeasible;
+    result->backend_status += " (stationary point of the constraint violation)";
+    return;
+  }
+  result->status = NlpStatus::kNumericalFailure;
+  if (!ps.success) {
+    std::snprintf(msg, sizeof msg, " (constraints violated by %.2e)",
+                  ps.max_violation);
+    result->backend_status += msg;
+  }
+}
+
+}  // namespace quasiroll

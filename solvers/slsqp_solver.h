@@ -1,0 +1,53 @@
+// Backend "slsqp": NLopt's LD_SLSQP (Kraft's sequential least-squares QP).
+//
+//   equality rows      -> one add_equality_mconstraint   (g - g_lb = 0)
+//   inequality rows    -> one add_inequality_mconstraint with a row per finite
+//                         side (g_lb - g <= 0, g - g_ub <= 0)
+//   variable bounds    -> set_lower_bounds / set_upper_bounds (x0 is clamped
+//                         into the box first)
+//   ftol_rel = xtol_rel = options.optimality_tolerance,
+//   constraint tolerance = options.feasibility_tolerance,
+//   maxeval = 3 * options.max_iterations (SLSQP does ~1-3 evaluations per
+//   major iteration; NLopt does not expose the major iteration count, so
+//   `iterations` reports objective-gradient evaluations).
+//
+// NLopt may report success (SUCCESS/FTOL/XTOL/STOPVAL, also ROUNDOFF_LIMITED
+// which "typically returns a useful result") with constraints violated beyond
+// our tolerance. Such answers are re-checked; if violated, a cheap Newton
+// polish on the active constraints (see active_set_polish.h: minimum-norm
+// Gauss-Newton steps, moving x by O(violation), so the objective changes only
+// at second order) is applied, and only a point that then meets
+// feasibility_tolerance is kConverged. Otherwise: kInfeasible if x is a
+// stationary point of the constraint violation with clearly positive
+// violation, else kNumericalFailure. NLopt exceptions (roundoff_limited,
+// forced_stop, bad_alloc, invalid_argument, runtime_error) map to statuses;
+// non-finite function values force a stop -> kNumericalFailure.
+//
+// The nlopt::opt object and all callback workspaces persist across solves with
+// the same structure; NLopt's SLSQP itself allocates its work arrays on each
+// optimize() call (library limitation).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "core/nlp.h"
+
+namespace quasiroll {
+
+class SlsqpSolver final : public NlpSolver {
+ public:
+  SlsqpSolver();
+  ~SlsqpSolver() override;
+  std::string name() const override { return "slsqp"; }
+
+ private:
+  void DoSolve(const NlpProblem& problem,
+               const Eigen::Ref<const Eigen::VectorXd>& x0,
+               const NlpOptions& options, NlpResult* result) override;
+
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace quasiroll

@@ -1,0 +1,438 @@
+// Every registered NLP backend on the reference problems of
+// core/nlp_reference_problems.h, plus input validation, NaN handling, warm
+// starts, object reuse and the registry.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+
+#include <gtest/gtest.h>
+
+#include "core/nlp.h"
+#include "core/nlp_reference_problems.h"
+
+namespace quasiroll {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::vector<std::string> Backends() {
+  RegisterBuiltinNlpSolvers();
+  return NlpSolverRegistry::Names();
+}
+
+// Accuracy expected from each backend at the default options
+// (optimality_tolerance = feasibility_tolerance = 1e-10), and why:
+struct Accuracy {
+  double x;  // max_i |x_i - x*_i|
+  double f;  // |f - f*| / max(1, |f*|)
+};
+Accuracy AccuracyOf(const std::string& backend) {
+  // newton: quadratic convergence to |r|_inf <= 1e-10 with O(1) Jacobians
+  //   -> |x - x*| <~ 1e-10 (only square systems, f irrelevant).
+  if (backend == "newton") return {1e-9, 1e-9};
+  // ipopt: tol 1e-10 on the scaled KKT error; x error is linear in the KKT
+  //   error for nondegenerate problems (the weakly active bound of HS32
+  //   converges like sqrt(mu)) -> |x - x*| <~ 1e-7 with margin, f to 1e-9.
+  if (backend == "ipopt") return {1e-7, 1e-9};
+  // slsqp: stops on ftol_rel/xtol_rel 1e-10 (relative change between
+  //   iterates); superlinear convergence makes the last change an upper
+  //   bound of the error -> |x - x*| <~ 1e-7, f to 1e-9.
+  if (backend == "slsqp") return {1e-6, 1e-8};
+  // ceres: augmented Lagrangian, linear outer convergence, inner BFGS to
+  //   gradient 1e-10 -> |x - x*| ~ 1e-7; asked to reach 1e-6 or better.
+  if (backend == "ceres") return {1e-6, 1e-8};
+  return {1e-6, 1e-6};  // plugin backends
+}
+
+void Report(const std::string& backend, const ReferenceProblem& p,
+            const NlpResult& r) {
+  const double xerr = p.is_feasible()
+                          ? (r.x - p.known_solution()).lpNorm<Eigen::Infinity>()
+                          : kNaN;
+  const double ferr = p.is_feasible() ? std::abs(r.objective - p.known_objective())
+                                      : kNaN;
+  std::printf(
+      "[nlp] %-7s %-16s %-17s iter=%4d evals(f/g/J)=%d/%d/%d |x-x*|=%.2e "
+      "|f-f*|=%.2e viol=%.2e t=%.0fus  [%s]\n",
+      backend.c_str(), p.name().c_str(), ToString(r.status), r.iterations,
+      r.objective_evaluations, r.constraint_evaluations, r.jacobian_evaluations,
+      xerr, ferr, r.max_constraint_violation, r.wall_seconds * 1e6,
+      r.backend_status.c_str());
+}
+
+// ------------------------------------------------ backend x problem grid ---
+class ReferenceSolveTest
+    : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
+
+TEST_P(ReferenceSolveTest, SolvesOrReportsInfeasible) {
+  const auto& [backend, problem_name] = GetParam();
+  auto solver = NlpSolverRegistry::Create(backend);
+  auto p = MakeReferenceProblem(problem_name);
+  ASSERT_NE(p, nullptr);
+  if (solver->RequiresSquareSystem() && !p->IsSquareSystem())
+    GTEST_SKIP() << backend << " solves square equality systems only; "
+                 << problem_name << " has " << p->num_variables()
+                 << " variables and " << p->CountEqualities() << " equalities";
+  NlpOptions options;
+  options.max_iterations = 500;
+  NlpResult r;
+  const NlpStatus status = solver->Solve(*p, p->starting_point(), options, &r);
+  Report(backend, *p, r);
+  if (p->is_feasible()) {
+    Accuracy acc = AccuracyOf(backend);
+    // HS32's bound x1 >= 0 is weakly active (zero multiplier) and f grows only
+    // like 4 x1^2 along the feasible set, so an f-accuracy of eps pins x1 only
+    // to sqrt(eps / 4): ~3e-6 for Ipopt's mu_final ~ 1e-11.
+    if (problem_name == "hs032") acc.x = std::max(acc.x, 1e-5);
+    ASSERT_EQ(status, NlpStatus::kConverged) << r.backend_status;
+    EXPECT_LE((r.x - p->known_solution()).lpNorm<Eigen::Infinity>(), acc.x)
+        << "x = " << r.x.transpose();
+    EXPECT_LE(std::abs(r.objective - p->known_objective()),
+              acc.f * std::max(1.0, std::abs(p->known_objective())));
+    EXPECT_LE(r.max_constraint_violation, options.feasibility_tolerance);
+    EXPECT_GT(r.iterations + r.constraint_evaluations, 0);
+  } else {
+    EXPECT_NE(status, NlpStatus::kConverged) << r.backend_status;
+    // Backends with an explicit infeasibility test must say so.
+    if (backend == "newton" || backend == "ceres") {
+      EXPECT_EQ(status, NlpStatus::kInfeasible) << r.backend_status;
+    }
+  }
+}
+
+std::string GridName(
+    const ::testing::TestParamInfo<std::tuple<std::string, std::string>>& info) {
+  return std::get<0>(info.param) + "_" + std::get<1>(info.param);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    AllBackends, ReferenceSolveTest,
+    ::testing::Combine(::testing::ValuesIn(Backends()),
+                       ::testing::Values("hs071", "hs032", "hs040", "hs073",
+                                         "infeasible_disk", "circle_line",
+                                         "contact_like_18", "infeasible_root")),
+    GridName);
+
+// ------------------------------------------------------ per-backend tests ---
+class BackendTest : public ::testing::TestWithParam<std::string> {
+ protected:
+  std::unique_ptr<NlpSolver> solver_ = NlpSolverRegistry::Create(GetParam());
+};
+
+// The client's setting: square systems to 1e-12 on scaled residuals.
+TEST_P(BackendTest, SquareSystemsToOneEMinus12) {
+  NlpOptions options;
+  options.feasibility_tolerance = 1e-12;
+  options.optimality_tolerance = 1e-12;
+  options.max_iterations = 500;
+  for (const char* name : {"circle_line", "contact_like_18"}) {
+    auto p = MakeReferenceProblem(name);
+    NlpResult r;
+    ASSERT_EQ(solver_->Solve(*p, p->starting_point(), options, &r),
+              NlpStatus::kConverged)
+        << name << ": " << r.backend_status;
+    Report(GetParam(), *p, r);
+    EXPECT_LE(r.max_constraint_violation, 1e-12) << name;
+    // Nonsingular Jacobian with O(1) entries: |x - x*| ~ |residual|.
+    EXPECT_LE((r.x - p->known_solution()).lpNorm<Eigen::Infinity>(), 1e-10) << name;
+  }
+}
+
+TEST_P(BackendTest, WarmStartTakesNoMoreIterations) {
+  for (const char* name : {"hs071", "contact_like_18"}) {
+    auto p = MakeReferenceProblem(name);
+    if (solver_->RequiresSquareSystem() && !p->IsSquareSystem()) continue;
+    NlpOptions options;
+    options.max_iterations = 500;
+    NlpResult r;
+    ASSERT_EQ(solver_->Solve(*p, p->starting_point(), options, &r),
+              NlpStatus::kConverged)
+        << name << ": " << r.backend_status;
+    const int cold = r.iterations;
+    const Eigen::VectorXd x_cold = r.x;
+    options.warm_start_multipliers = true;  // r.multipliers from the cold solve
+    ASSERT_EQ(solver_->Solve(*p, x_cold, options, &r), NlpStatus::kConverged)
+        << name << " (warm): " << r.backend_status;
+    std::printf("[nlp] %-7s %-16s warm start: cold %d -> warm %d iterations\n",
+                GetParam().c_str(), name, cold, r.iterations);
+    EXPECT_LE(r.iterations, cold) << name;
+    EXPECT_LE((r.x - p->known_solution()).lpNorm<Eigen::Infinity>(),
+              AccuracyOf(GetParam()).x)
+        << name;
+  }
+}
+
+// One solver object reused across problems of different structure must give
+// the same answers as fresh objects (persistent library objects are rebuilt
+// when the structure changes).
+TEST_P(BackendTest, ReuseAcrossProblemsMatchesFreshSolver) {
+  NlpOptions options;
+  options.max_iterations = 500;
+  for (int pass = 0; pass < 2; ++pass) {
+    for (const auto& p : MakeReferenceProblems()) {
+      if (solver_->RequiresSquareSystem() && !p->IsSquareSystem()) continue;
+      NlpResult reused, fresh;
+      const NlpStatus s1 = solver_->Solve(*p, p->starting_point(), options, &reused);
+      auto other = NlpSolverRegistry::Create(GetParam());
+      const NlpStatus s2 = other->Solve(*p, p->starting_point(), options, &fresh);
+      EXPECT_EQ(s1, s2) << p->name() << " pass " << pass;
+      if (s1 == NlpStatus::kConverged && s2 == NlpStatus::kConverged) {
+        EXPECT_LE((reused.x - fresh.x).lpNorm<Eigen::Infinity>(), 1e-9) << p->name();
+      }
+    }
+  }
+}
+
+// Forwards to a problem, optionally corrupting bounds or values.
+class WrappedProblem : public NlpProblem {
+ public:
+  explicit WrappedProblem(std::unique_ptr<ReferenceProblem> inner)
+      : inner_(std::move(inner)) {}
+  int num_variables() const override { return inner_->num_variables(); }
+  int num_constraints() const override { return inner_->num_constraints(); }
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> xl, Eigen::Ref<Eigen::VectorXd> xu,
+                 Eigen::Ref<Eigen::VectorXd> gl,
+                 Eigen::Ref<Eigen::VectorXd> gu) const override {
+    inner_->GetBounds(xl, xu, gl, gu);
+    if (swap_first_bound) {
+      xl(0) = 3.0;
+      xu(0) = 2.0;
+    }
+  }
+  double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override {
+    return Bad(x) ? kNaN : inner_->Objective(x);
+  }
+  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
+                         Eigen::Ref<Eigen::VectorXd> grad) const override {
+    inner_->ObjectiveGradient(x, grad);
+    if (Bad(x)) grad.setConstant(kNaN);
+  }
+  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                   Eigen::Ref<Eigen::VectorXd> g) const override {
+    inner_->Constraints(x, g);
+    if (Bad(x)) g.setConstant(kNaN);
+  }
+  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
+    inner_->ConstraintJacobian(x, jac);
+    if (Bad(x)) jac.setConstant(kNaN);
+  }
+  const ReferenceProblem& inner() const { return *inner_; }
+
+  bool swap_first_bound = false;
+  bool nan_everywhere = false;
+  double nan_above_x0 = std::numeric_limits<double>::infinity();
+
+ private:
+  bool Bad(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+    return nan_everywhere || x(0) > nan_above_x0;
+  }
+  std::unique_ptr<ReferenceProblem> inner_;
+};
+
+TEST_P(BackendTest, BadInputThrowsInvalidArgument) {
+  WrappedProblem p(std::make_unique<CircleLineSystem>());
+  const Eigen::VectorXd x0 = p.inner().starting_point();
+  NlpOptions ok;
+  NlpResult r;
+  EXPECT_THROW(solver_->Solve(p, Eigen::VectorXd::Ones(3), ok, &r),
+               std::invalid_argument);
+  Eigen::VectorXd x_nan = x0;
+  x_nan(1) = kNaN;
+  EXPECT_THROW(solver_->Solve(p, x_nan, ok, &r), std::invalid_argument);
+  Eigen::VectorXd x_inf = x0;
+  x_inf(0) = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(solver_->Solve(p, x_inf, ok, &r), std::invalid_argument);
+  NlpOptions bad = ok;
+  bad.feasibility_tolerance = -1.0;
+  EXPECT_THROW(solver_->Solve(p, x0, bad, &r), std::invalid_argument);
+  bad = ok;
+  bad.optimality_tolerance = kNaN;
+  EXPECT_THROW(solver_->Solve(p, x0, bad, &r), std::invalid_argument);
+  bad = ok;
+  bad.max_iterations = 0;
+  EXPECT_THROW(solver_->Solve(p, x0, bad, &r), std::invalid_argument);
+  EXPECT_THROW(solver_->Solve(p, x0, ok, nullptr), std::invalid_argument);
+  p.swap_first_bound = true;
+  EXPECT_THROW(solver_->Solve(p, x0, ok, &r), std::invalid_argument);
+  // Still usable afterwards.
+  p.swap_first_bound = false;
+  EXPECT_EQ(solver_->Solve(p, x0, ok, &r), NlpStatus::kConverged) << r.backend_status;
+}
+
+TEST_P(BackendTest, NaNFunctionsGiveNumericalFailure) {
+  WrappedProblem p(std::make_unique<CircleLineSystem>());
+  p.nan_everywhere = true;
+  NlpResult r;
+  NlpStatus status = NlpStatus::kNotRun;
+  EXPECT_NO_THROW(status = solver_->Solve(p, p.inner().starting_point(),
+                                          NlpOptions(), &r));
+  EXPECT_EQ(status, NlpStatus::kNumericalFailure) << r.backend_status;
+
+  // NaN only near the root (x1 > 1.2; the root has x1 = 1.414): no backend
+  // may claim convergence or throw.
+  p.nan_everywhere = false;
+  p.nan_above_x0 = 1.2;
+  EXPECT_NO_THROW(status = solver_->Solve(p, p.inner().starting_point(),
+                                          NlpOptions(), &r));
+  EXPECT_NE(status, NlpStatus::kConverged) << r.backend_status;
+  EXPECT_NE(status, NlpStatus::kNotRun);
+}
+
+TEST_P(BackendTest, IterationLimitIsReported) {
+  auto p = MakeReferenceProblem("contact_like_18");
+  NlpOptions options;
+  options.max_iterations = 1;
+  NlpResult r;
+  const NlpStatus status = solver_->Solve(*p, p->starting_point(), options, &r);
+  EXPECT_NE(status, NlpStatus::kConverged) << r.backend_status;
+  EXPECT_EQ(status, NlpStatus::kIterationLimit) << r.backend_status;
+}
+
+INSTANTIATE_TEST_SUITE_P(AllBackends, BackendTest,
+                         ::testing::ValuesIn(Backends()),
+                         [](const auto& info) { return info.param; });
+
+// --------------------------------------------------------- newton-only ---
+// Two parallel lines: singular Jacobian everywhere.
+class SingularSystem : public NlpProblem {
+ public:
+  int num_variables() const override { return 2; }
+  int num_constraints() const override { return 2; }
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> xl, Eigen::Ref<Eigen::VectorXd> xu,
+                 Eigen::Ref<Eigen::VectorXd> gl,
+                 Eigen::Ref<Eigen::VectorXd> gu) const override {
+    xl.setConstant(-std::numeric_limits<double>::infinity());
+    xu.setConstant(std::numeric_limits<double>::infinity());
+    gl << 1.0, 2.0;
+    gu = gl;
+  }
+  double Objective(const Eigen::Ref<const Eigen::VectorXd>&) const override { return 0; }
+  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>&,
+                         Eigen::Ref<Eigen::VectorXd> grad) const override {
+    grad.setZero();
+  }
+  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                   Eigen::Ref<Eigen::VectorXd> g) const override {
+    g << x(0) + x(1), 2.0 * (x(0) + x(1));
+  }
+  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>&,
+                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
+    jac << 1.0, 1.0, 2.0, 2.0;
+  }
+};
+
+TEST(NewtonSolverTest, RankDeficientJacobianIsNumericalFailure) {
+  RegisterBuiltinNlpSolvers();
+  auto solver = NlpSolverRegistry::Create("newton");
+  SingularSystem p;
+  NlpResult r;
+  EXPECT_EQ(solver->Solve(p, Eigen::Vector2d(0.3, 0.1), NlpOptions(), &r),
+            NlpStatus::kNumericalFailure);
+  EXPECT_NE(r.backend_status.find("rank"), std::string::npos) << r.backend_status;
+}
+
+TEST(NewtonSolverTest, RejectsNonSquareProblems) {
+  RegisterBuiltinNlpSolvers();
+  auto solver = NlpSolverRegistry::Create("newton");
+  EXPECT_TRUE(solver->RequiresSquareSystem());
+  Hs071Problem p;
+  NlpResult r;
+  EXPECT_THROW(solver->Solve(p, p.starting_point(), NlpOptions(), &r),
+               std::invalid_argument);
+}
+
+// ------------------------------------------------------------- registry ---
+TEST(NlpRegistryTest, UnknownNameThrowsNamingIt) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinNlpSolvers();  // idempotent
+  try {
+    NlpSolverRegistry::Create("no_such_backend");
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no_such_backend"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("newton"), std::string::npos) << e.what();
+  }
+}
+
+TEST(NlpRegistryTest, BuiltinsAreRegisteredOnce) {
+  RegisterBuiltinNlpSolvers();
+  const auto names = NlpSolverRegistry::Names();
+  EXPECT_EQ(std::count(names.begin(), names.end(), "newton"), 1);
+  for (const auto& name : names) {
+    EXPECT_FALSE(NlpSolverRegistry::Description(name).empty()) << name;
+    EXPECT_EQ(NlpSolverRegistry::Create(name)->name(), name);
+  }
+#ifdef QUASIROLL_EXPECT_ALL_BACKENDS
+  for (const char* name : {"ipopt", "slsqp", "ceres"})
+    EXPECT_TRUE(NlpSolverRegistry::Has(name)) << name;
+#endif
+}
+
+// ------------------------------------------------- reference problems ---
+// Derivatives of every reference problem against central differences, and
+// the published optima satisfy the constraints.
+TEST(NlpReferenceProblemsTest, DerivativesAndOptimaAreConsistent) {
+  for (const auto& p : MakeReferenceProblems()) {
+    SCOPED_TRACE(p->name());
+    const int n = p->num_variables(), m = p->num_constraints();
+    Eigen::VectorXd x = p->starting_point(), grad(n), g(m), gp(m), gm(m);
+    Eigen::MatrixXd jac(m, n);
+    p->ObjectiveGradient(x, grad);
+    p->ConstraintJacobian(x, jac);
+    const double h = 1e-6;
+    for (int j = 0; j < n; ++j) {
+      Eigen::VectorXd xp = x, xm = x;
+      xp(j) += h;
+      xm(j) -= h;
+      EXPECT_NEAR(grad(j), (p->Objective(xp) - p->Objective(xm)) / (2 * h), 1e-6);
+      p->Constraints(xp, gp);
+      p->Constraints(xm, gm);
+      for (int i = 0; i < m; ++i)
+        EXPECT_NEAR(jac(i, j), (gp(i) - gm(i)) / (2 * h), 1e-6) << i << "," << j;
+    }
+    if (p->HasLagrangianHessian()) {
+      Eigen::VectorXd lambda = Eigen::VectorXd::LinSpaced(m, 0.5, 1.5);
+      Eigen::MatrixXd hess(n, n);
+      p->LagrangianHessian(x, 0.7, lambda, hess);
+      EXPECT_LE((hess - hess.transpose()).norm(), 1e-14);
+      Eigen::VectorXd gradp(n), gradm(n);
+      Eigen::MatrixXd jp(m, n), jm(m, n);
+      for (int j = 0; j < n; ++j) {
+        Eigen::VectorXd xp = x, xm = x;
+        xp(j) += h;
+        xm(j) -= h;
+        p->ObjectiveGradient(xp, gradp);
+        p->ObjectiveGradient(xm, gradm);
+        p->ConstraintJacobian(xp, jp);
+        p->ConstraintJacobian(xm, jm);
+        const Eigen::VectorXd col =
+            (0.7 * (gradp - gradm) + (jp - jm).transpose() * lambda) / (2 * h);
+        EXPECT_LE((hess.col(j) - col).lpNorm<Eigen::Infinity>(), 1e-6) << j;
+      }
+    }
+    if (p->is_feasible() || p->IsSquareSystem()) {
+      Eigen::VectorXd xl(n), xu(n), gl(m), gu(m);
+      p->GetBounds(xl, xu, gl, gu);
+      p->Constraints(p->known_solution(), g);
+      const double viol =
+          MaxConstraintViolation(p->known_solution(), g, xl, xu, gl, gu);
+      if (p->is_feasible()) {
+        EXPECT_LE(viol, 1e-12);
+        EXPECT_NEAR(p->Objective(p->known_solution()), p->known_objective(), 1e-12);
+      } else {
+        EXPECT_GT(viol, 0.1);  // the root violates a bound
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace quasiroll
