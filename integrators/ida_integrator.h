@@ -12,6 +12,22 @@
 // x'0 = F + D J^T nu0. For index 2 the final x is projected again, so H holds
 // to projection_tolerance and not only to the Newton tolerance of IDA.
 //
+// Options: rtol / atol -> IDASVtolerances on x (nu gets a loose atol of 1e3:
+// it only has to converge through D J^T nu, see ida_integrator.cc), step ->
+// IDASetInitStep (0 = IDA's estimate), min_step -> IDASetMinStep, max_steps
+// -> IDASetMaxNumSteps (per call), t1 -> IDASetStopTime, ode.Roots ->
+// IDARootInit. Iteration matrix: analytic except the second-derivative terms
+// d(D J^T nu)/dx and d(J x')/dx (see Jacobian in the .cc); dF/dx from
+// ode.RhsJacobian or forward differences.
+// Status mapping: IDA_TOO_MUCH_WORK / IDA_TOO_MUCH_ACC / IDA_ERR_FAIL ->
+// kStepSizeTooSmall; corrector / linear solver / residual failures ->
+// kConvergenceFailure, or kRhsFailure whenever Rhs returned false (the
+// residual then returns -1, unrecoverable, as the RK backends stop too);
+// setup errors -> kInvalidInput. Counters: steps = IDAGetNumSteps,
+// rejected_steps = IDAGetNumErrTestFails, rhs_evaluations = Rhs calls
+// (including finite differences), jacobian_evaluations = J evaluations plus
+// IDA Jacobian evaluations.
+//
 // The IDA memory, vectors, dense matrix / linear solver and the SUNContext
 // live as long as this object and are reused via IDAReInit while
 // (state_size, num_constraints) are unchanged. SUNDIALS headers are confined

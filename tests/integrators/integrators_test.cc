@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <ostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -93,6 +94,9 @@ struct PendulumCase {
   double drift_bound;         // ||H(y(T))||_inf
   std::string label;
 };
+
+// GTest would otherwise print the raw bytes (including padding).
+void PrintTo(const PendulumCase& c, std::ostream* os) { *os << c.label; }
 
 class PendulumTest : public ::testing::TestWithParam<PendulumCase> {};
 
