@@ -217,7 +217,7 @@ void Simulator::Record(double t, const Configuration& theta,
   result->samples.push_back(std::move(s));
 }
 
-SimulationResult Simulator::Run() {
+SimulationResult Simulator::Run(const Configuration& theta0) {
   const auto start = std::chrono::steady_clock::now();
   SimulationResult result;
   QuasiStaticSolver solver(*model_, QuasiStaticParameters::FromScene(scene_),
@@ -231,7 +231,7 @@ SimulationResult Simulator::Run() {
 
   const int n = static_cast<int>(std::llround(t_end_ / dt_));
   result.samples.reserve(n + 1);
-  Configuration theta = theta0_;
+  Configuration theta = theta0;
   Eigen::VectorXd y(kConfigSize);
   IntegratorResult ires;
   QuasiStaticSolution sol;

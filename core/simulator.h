@@ -107,7 +107,10 @@ class Simulator {
   double dt() const { return dt_; }
   double t_end() const { return t_end_; }
 
-  SimulationResult Run();
+  SimulationResult Run() { return Run(theta0_); }
+  // Starts from a given configuration instead of the scene's consistent one
+  // (e.g. a perturbed start to study constraint stabilisation).
+  SimulationResult Run(const Configuration& theta0);
 
  private:
   class RobotOde;
