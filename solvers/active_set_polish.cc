@@ -17,10 +17,14 @@ void NlpBounds::Load(const NlpProblem& problem) {
   problem.GetBounds(x_lb, x_ub, g_lb, g_ub);
 }
 
-PolishStats PolishActiveConstraints(const NlpProblem& problem,
-                                    const NlpBounds& b, double active_tol,
-                                    double feasibility_tolerance,
-                                    int max_iterations, Eigen::VectorXd* x_io) {
+namespace {
+
+// One polish pass. Rows targeted: equalities, violated inequality rows and,
+// with `near_active`, inequality rows within active_tol of a bound.
+PolishStats PolishPass(const NlpProblem& problem, const NlpBounds& b,
+                       double active_tol, double feasibility_tolerance,
+                       int max_iterations, bool near_active,
+                       Eigen::VectorXd* x_io) {
   PolishStats stats;
   Eigen::VectorXd& x = *x_io;
   const int n = problem.num_variables(), m = problem.num_constraints();
@@ -48,11 +52,12 @@ PolishStats PolishActiveConstraints(const NlpProblem& problem,
          std::isfinite(stats.max_violation)) {
     rows.clear();
     targets.clear();
+    const double band = near_active ? active_tol : 0.0;
     for (int i = 0; i < m; ++i) {
-      if (b.g_lb(i) == b.g_ub(i) || g(i) <= b.g_lb(i) + active_tol) {
+      if (b.g_lb(i) == b.g_ub(i) || g(i) < b.g_lb(i) + band) {
         rows.push_back(i);
         targets.push_back(b.g_lb(i));
-      } else if (g(i) >= b.g_ub(i) - active_tol) {
+      } else if (g(i) > b.g_ub(i) - band) {
         rows.push_back(i);
         targets.push_back(b.g_ub(i));
       }
@@ -95,6 +100,35 @@ PolishStats PolishActiveConstraints(const NlpProblem& problem,
   }
   stats.success = stats.max_violation <= feasibility_tolerance;
   return stats;
+}
+
+}  // namespace
+
+PolishStats PolishActiveConstraints(const NlpProblem& problem,
+                                    const NlpBounds& b, double active_tol,
+                                    double feasibility_tolerance,
+                                    int max_iterations, Eigen::VectorXd* x_io) {
+  // Targeting an inequality that is merely close to its bound (e.g. a
+  // friction cone at |f_t| = (1 - 1e-7) mu f_n while sliding) would pull the
+  // point onto the bound and fight the equalities; so first polish without
+  // near-active rows, and include them only if that pass fails.
+  const Eigen::VectorXd x0 = *x_io;
+  PolishStats first = PolishPass(problem, b, active_tol, feasibility_tolerance,
+                                 max_iterations, false, x_io);
+  if (first.success) return first;
+  Eigen::VectorXd x_first = *x_io;
+  *x_io = x0;
+  PolishStats second = PolishPass(problem, b, active_tol, feasibility_tolerance,
+                                  max_iterations, true, x_io);
+  second.constraint_evaluations += first.constraint_evaluations;
+  second.jacobian_evaluations += first.jacobian_evaluations;
+  if (!second.success && first.max_violation < second.max_violation) {
+    *x_io = x_first;
+    first.constraint_evaluations = second.constraint_evaluations;
+    first.jacobian_evaluations = second.jacobian_evaluations;
+    return first;
+  }
+  return second;
 }
 
 bool LooksLocallyInfeasible(const NlpProblem& problem, const NlpBounds& b,
