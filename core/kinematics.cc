@@ -1,5 +1,6 @@
 #include "core/kinematics.h"
 
+#include <cstring>
 #include <stdexcept>
 
 namespace quasiroll {
@@ -50,6 +51,15 @@ void KinematicModel::Mount(int chain, double q0, double q1, Mat3* R_PW,
 void KinematicModel::EvaluateChain(const Configuration& theta, int chain,
                                    ChainState* s) const {
   const int e = ConfigIndex::Eta(chain);
+  const int j = ConfigIndex::kTheta + 2 * chain;
+  CacheEntry& entry = cache_[chain];
+  Eigen::Matrix<double, 7, 1> key;
+  key << theta.segment<5>(e), theta.segment<2>(j);
+  // Bitwise comparison: NaNs never hit, -0.0 vs 0.0 only costs a recompute.
+  if (entry.valid && std::memcmp(key.data(), entry.key.data(), sizeof(double) * 7) == 0) {
+    *s = entry.state;
+    return;
+  }
   const double u = theta(e), v = theta(e + 1), xg = theta(e + 2),
                yg = theta(e + 3), psi = theta(e + 4);
   s->wheel = TorusForms(geometry_.major_radius, geometry_.tube_radius, u, v);
@@ -61,7 +71,6 @@ void KinematicModel::EvaluateChain(const Configuration& theta, int chain,
   Mat3 R_PW;
   Vec3 p_PW;
   std::array<Vec3, 2> axes, points;
-  const int j = ConfigIndex::kTheta + 2 * chain;
   Mount(chain, theta(j), theta(j + 1), &R_PW, &p_PW, &axes, &points);
   s->R = s->R_GW * R_PW.transpose();
   s->p = s->p_W - s->R * p_PW;
@@ -70,6 +79,9 @@ void KinematicModel::EvaluateChain(const Configuration& theta, int chain,
     s->axis[k] = s->R * axes[k];
     s->point[k] = s->p + s->R * points[k];
   }
+  entry.key = key;
+  entry.state = *s;
+  entry.valid = true;
 }
 
 void KinematicModel::PlatformPose(const Configuration& theta, Mat3* R,

@@ -100,6 +100,10 @@ class KinematicModel {
   void Mount(int chain, double q0, double q1, Mat3* R_PW, Vec3* p_PW,
              std::array<Vec3, 2>* axes, std::array<Vec3, 2>* points) const;
 
+  // Evaluates chain i. The last evaluation of each chain is cached (keyed
+  // bitwise on its 7 inputs eta_i, theta_i): integrators evaluate H, J and F
+  // at the same state several times. Because of this cache a KinematicModel
+  // must not be used from several threads at once; use one per thread.
   void EvaluateChain(const Configuration& theta, int chain,
                      ChainState* out) const;
 
@@ -137,6 +141,13 @@ class KinematicModel {
   RobotGeometry geometry_;
   std::shared_ptr<const Terrain> terrain_;
   std::array<Vec3, 3> b_;  // joint points b_i in {P}
+
+  struct CacheEntry {
+    Eigen::Matrix<double, 7, 1> key;
+    ChainState state;
+    bool valid = false;
+  };
+  mutable std::array<CacheEntry, 3> cache_;
 };
 
 }  // namespace quasiroll

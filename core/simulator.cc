@@ -48,6 +48,7 @@ class Simulator::RobotOde final : public ConstrainedOde {
         weights_(model.CorrectionWeights()) {}
 
   void Hold(const Vec12& w) { w_ = w; }
+  void ClearFailure() { nlp_failed_ = false; }
   const QuasiStaticSolution& last_solution() const { return sol_; }
   bool nlp_failed() const { return nlp_failed_; }
   int nlp_solves() const { return nlp_solves_; }
@@ -122,37 +123,58 @@ double GeometricGap(const KinematicModel& model, const Configuration& theta) {
     model.Mount(i, theta(j), theta(j + 1), &R_PW, &p_PW, &axes, &points);
     const Mat3 R_GW = R * R_PW;
     const Vec3 p_W = p + R * p_PW;
-    // Vertical clearance of the torus point (u, v) above the terrain.
-    auto clearance = [&](double u, double v) {
-      const double rr = geo.major_radius + geo.tube_radius * std::cos(v);
-      const Vec3 pt = p_W + R_GW * Vec3(rr * std::cos(u), rr * std::sin(u),
-                                        geo.tube_radius * std::sin(v));
-      return pt.z() - terrain.Height(pt.x(), pt.y());
+    // Vertical clearance g(u, v) = z - h(x, y) of the torus point (u, v),
+    // with its exact gradient and Hessian (torus derivatives and the terrain
+    // jet); Newton from the contact coordinates of chain i, where the
+    // minimum is.
+    const double R0 = geo.major_radius, r0 = geo.tube_radius;
+    auto clearance = [&](double u, double v, Vec2* grad, Mat2* hess) {
+      const double su = std::sin(u), cu = std::cos(u), sv = std::sin(v),
+                   cv = std::cos(v), rr = R0 + r0 * cv;
+      const Vec3 pt = p_W + R_GW * Vec3(rr * cu, rr * su, r0 * sv);
+      const TerrainJet jet = terrain.Evaluate(pt.x(), pt.y());
+      if (grad) {
+        const Vec3 pu = R_GW * Vec3(-rr * su, rr * cu, 0);
+        const Vec3 pv = R_GW * Vec3(-r0 * sv * cu, -r0 * sv * su, r0 * cv);
+        const Vec3 puu = R_GW * Vec3(-rr * cu, -rr * su, 0);
+        const Vec3 puv = R_GW * Vec3(r0 * sv * su, -r0 * sv * cu, 0);
+        const Vec3 pvv = R_GW * Vec3(-r0 * cv * cu, -r0 * cv * su, -r0 * sv);
+        const Vec3 up(-jet.hx, -jet.hy, 1.0);  // d g / d point
+        Mat2 hh;
+        hh << jet.hxx, jet.hxy, jet.hxy, jet.hyy;
+        *grad = Vec2(pu.dot(up), pv.dot(up));
+        const Vec2 a = pu.head<2>(), b = pv.head<2>();
+        *hess << puu.dot(up) - a.dot(hh * a), puv.dot(up) - a.dot(hh * b),
+            puv.dot(up) - a.dot(hh * b), pvv.dot(up) - b.dot(hh * b);
+      }
+      return pt.z() - jet.h;
     };
-    // Newton on the clearance over (u, v), finite-difference derivatives,
-    // from the contact coordinates of chain i (the minimum is near them).
     double u = theta(ConfigIndex::U(i));
     double v = theta(ConfigIndex::V(i));
-    const double h = 1e-4;
-    double g0 = clearance(u, v);
-    for (int it = 0; it < 8; ++it) {
-      const double gu_p = clearance(u + h, v), gu_m = clearance(u - h, v);
-      const double gv_p = clearance(u, v + h), gv_m = clearance(u, v - h);
-      const double guv = (clearance(u + h, v + h) - clearance(u + h, v - h) -
-                          clearance(u - h, v + h) + clearance(u - h, v - h)) /
-                         (4 * h * h);
-      const Vec2 grad((gu_p - gu_m) / (2 * h), (gv_p - gv_m) / (2 * h));
-      Mat2 hess;
-      hess << (gu_p - 2 * g0 + gu_m) / (h * h), guv, guv,
-          (gv_p - 2 * g0 + gv_m) / (h * h);
+    Vec2 grad;
+    Mat2 hess;
+    double g0 = clearance(u, v, &grad, &hess);
+    for (int it = 0; it < 10 && grad.norm() > 1e-15; ++it) {
       Vec2 step = -hess.ldlt().solve(grad);
-      if (!step.allFinite() || hess.determinant() <= 0) step = -grad * 1e-2;
-      const double g1 = clearance(u + step(0), v + step(1));
-      if (!(g1 < g0)) break;
-      u += step(0);
-      v += step(1);
-      g0 = g1;
-      if (step.norm() < 1e-12) break;
+      if (!step.allFinite() || !(hess(0, 0) > 0 && hess.determinant() > 0))
+        step = -1e-2 * grad;
+      Vec2 grad1;
+      Mat2 hess1;
+      bool accepted = false;
+      for (double alpha = 1.0; alpha > 1e-9; alpha *= 0.5) {
+        const double g1 = clearance(u + alpha * step(0), v + alpha * step(1),
+                                    &grad1, &hess1);
+        if (g1 <= g0) {
+          u += alpha * step(0);
+          v += alpha * step(1);
+          g0 = g1;
+          grad = grad1;
+          hess = hess1;
+          accepted = alpha * step.norm() >= 1e-13;
+          break;
+        }
+      }
+      if (!accepted) break;
     }
     worst = std::max(worst, std::abs(g0));
   }
@@ -198,9 +220,9 @@ void Simulator::Record(double t, const Configuration& theta,
   for (int i = 0; i < 3; ++i) {
     ContactSample& c = s.contacts[i];
     const ContactOutput& o = sol.contacts[i];
-    c.point = Vec3(theta(ConfigIndex::Xg(i)), theta(ConfigIndex::Yg(i)),
-                   model_->terrain().Height(theta(ConfigIndex::Xg(i)),
-                                            theta(ConfigIndex::Yg(i))));
+    ChainState chain;
+    model_->EvaluateChain(theta, i, &chain);  // cached by the solve at theta
+    c.point = chain.p_c;
     c.normal_force = ok ? o.normal_force : nan;
     c.traction_lon = ok ? o.traction(0) : nan;
     c.traction_lat = ok ? o.traction(1) : nan;
@@ -217,92 +239,140 @@ void Simulator::Record(double t, const Configuration& theta,
   result->samples.push_back(std::move(s));
 }
 
-SimulationResult Simulator::Run(const Configuration& theta0) {
-  const auto start = std::chrono::steady_clock::now();
-  SimulationResult result;
-  QuasiStaticSolver solver(*model_, QuasiStaticParameters::FromScene(scene_),
-                           NlpSolverRegistry::Create(options_.nlp),
-                           options_.quasi_static);
-  std::unique_ptr<Integrator> integrator =
-      IntegratorRegistry::Create(options_.dae);
-  RobotOde ode(*model_, options_.coupling, &solver);
-  IntegratorOptions iopts = options_.integrator;
-  if (iopts.step <= 0) iopts.step = dt_;
-
-  const int n = static_cast<int>(std::llround(t_end_ / dt_));
-  result.samples.reserve(n + 1);
-  Configuration theta = theta0;
-  Eigen::VectorXd y(kConfigSize);
+struct Simulator::Session {
+  Session(const Simulator& sim)
+      : solver(*sim.model_, QuasiStaticParameters::FromScene(sim.scene_),
+               NlpSolverRegistry::Create(sim.options_.nlp),
+               sim.options_.quasi_static),
+        integrator(IntegratorRegistry::Create(sim.options_.dae)),
+        ode(*sim.model_, sim.options_.coupling, &solver),
+        y(kConfigSize) {
+    iopts = sim.options_.integrator;
+    if (iopts.step <= 0) iopts.step = sim.dt_;
+  }
+  QuasiStaticSolver solver;
+  std::unique_ptr<Integrator> integrator;
+  RobotOde ode;
+  IntegratorOptions iopts;
+  Eigen::VectorXd y;
   IntegratorResult ires;
   QuasiStaticSolution sol;
-  for (int k = 0; k <= n; ++k) {
-    const double t = k * dt_;
-    solver.Solve(theta, &sol);
-    result.nlp_solves += sol.nlp_solves;
-    result.nlp_iterations += sol.nlp_iterations;
-    if (options_.second_contact_check_every > 0 &&
-        k % options_.second_contact_check_every == 0 &&
-        sol.status == QuasiStaticStatus::kOk) {
-      const ValidityReport v = CheckValidity(*model_, theta, true);
-      if (!v.ok()) {
-        sol.status = QuasiStaticStatus::kDegenerateContact;
-        sol.message = v.Describe();
-      }
-    }
-    Record(t, theta, sol, &result, k);
-    result.t_reached = t;
-    if (sol.status != QuasiStaticStatus::kOk) {
-      result.status = ToString(sol.status);
-      result.mu_min_at_stop = sol.mu_min;
-      result.critical_contact =
-          sol.critical_contact >= 0 ? sol.critical_contact + 1 : -1;
-      std::ostringstream os;
-      os << "t=" << t << " s: " << ToString(sol.status) << " (mu=" << scene_.mu
-         << ", mu_min=" << sol.mu_min;
-      if (result.critical_contact > 0) os << ", wheel " << result.critical_contact;
-      os << "): " << sol.message;
-      result.stop_reason = os.str();
-      break;
-    }
-    if (k == n) {
-      result.status = "success";
-      break;
-    }
-    ode.Hold(solver.problem().JointSpaceVelocity(sol.z));
-    y = theta;
-    const IntegratorStatus st =
-        integrator->Integrate(ode, t, t + dt_, y, iopts, &ires);
-    if (st != IntegratorStatus::kSuccess) {
-      result.t_reached = ires.t_reached;
-      if (ode.nlp_failed()) {
-        const QuasiStaticSolution& f = ode.last_solution();
-        result.status = ToString(f.status);
-        result.mu_min_at_stop = f.mu_min;
-        result.critical_contact =
-            f.critical_contact >= 0 ? f.critical_contact + 1 : -1;
-        result.stop_reason = "t~" + std::to_string(ires.t_reached) + " s: " +
-                             ToString(f.status) + " inside the integrator: " +
-                             f.message;
-      } else {
-        result.status = ToString(st);
-        result.stop_reason = "t=" + std::to_string(ires.t_reached) + " s: " +
-                             options_.dae + ": " + ToString(st) + ": " +
-                             ires.message;
-      }
-      break;
-    }
-    theta = y;
+  Configuration theta;
+  int k = 0, n = 0;
+  int ode_solves_seen = 0;
+  long long ode_iterations_seen = 0;
+  bool done = true;
+};
+
+SimulationResult Simulator::Run(const Configuration& theta0) {
+  SimulationResult result;
+  Begin(theta0, &result);
+  while (Advance(&result)) {
   }
-  result.nlp_solves += ode.nlp_solves();
-  result.nlp_iterations += ode.nlp_iterations();
-  result.rhs_evaluations = ires.rhs_evaluations;
-  result.jacobian_evaluations = ires.jacobian_evaluations;
-  result.steps = ires.steps;
-  result.rejected_steps = ires.rejected_steps;
-  result.wall_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-          .count();
   return result;
+}
+
+void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
+  const auto start = std::chrono::steady_clock::now();
+  if (!session_) session_ = std::make_unique<Session>(*this);
+  Session& s = *session_;
+  s.solver.Reset();
+  s.ode.ClearFailure();
+  s.ires = IntegratorResult{};
+  s.theta = theta0;
+  s.k = 0;
+  s.n = static_cast<int>(std::llround(t_end_ / dt_));
+  s.ode_solves_seen = s.ode.nlp_solves();
+  s.ode_iterations_seen = s.ode.nlp_iterations();
+  s.done = false;
+  *result = SimulationResult{};
+  result->samples.reserve(s.n + 1);
+  result->wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+bool Simulator::Advance(SimulationResult* result) {
+  if (!session_ || session_->done) return false;
+  const auto start = std::chrono::steady_clock::now();
+  Session& s = *session_;
+  const bool more = Interval(result);
+  // Counters cover everything since Begin().
+  result->nlp_solves += s.ode.nlp_solves() - s.ode_solves_seen;
+  result->nlp_iterations += s.ode.nlp_iterations() - s.ode_iterations_seen;
+  s.ode_solves_seen = s.ode.nlp_solves();
+  s.ode_iterations_seen = s.ode.nlp_iterations();
+  result->rhs_evaluations = s.ires.rhs_evaluations;
+  result->jacobian_evaluations = s.ires.jacobian_evaluations;
+  result->steps = s.ires.steps;
+  result->rejected_steps = s.ires.rejected_steps;
+  result->wall_seconds +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  s.done = !more;
+  return more;
+}
+
+bool Simulator::Interval(SimulationResult* result) {
+  Session& s = *session_;
+  const int k = s.k;
+  const double t = k * dt_;
+  s.solver.Solve(s.theta, &s.sol);
+  QuasiStaticSolution& sol = s.sol;
+  result->nlp_solves += sol.nlp_solves;
+  result->nlp_iterations += sol.nlp_iterations;
+  if (options_.second_contact_check_every > 0 &&
+      k % options_.second_contact_check_every == 0 &&
+      sol.status == QuasiStaticStatus::kOk) {
+    const ValidityReport v = CheckValidity(*model_, s.theta, true);
+    if (!v.ok()) {
+      sol.status = QuasiStaticStatus::kDegenerateContact;
+      sol.message = v.Describe();
+    }
+  }
+  Record(t, s.theta, sol, result, k);
+  result->t_reached = t;
+  if (sol.status != QuasiStaticStatus::kOk) {
+    result->status = ToString(sol.status);
+    result->mu_min_at_stop = sol.mu_min;
+    result->critical_contact =
+        sol.critical_contact >= 0 ? sol.critical_contact + 1 : -1;
+    std::ostringstream os;
+    os << "t=" << t << " s: " << ToString(sol.status) << " (mu=" << scene_.mu
+       << ", mu_min=" << sol.mu_min;
+    if (result->critical_contact > 0) os << ", wheel " << result->critical_contact;
+    os << "): " << sol.message;
+    result->stop_reason = os.str();
+    return false;
+  }
+  if (k == s.n) {
+    result->status = "success";
+    return false;
+  }
+  s.ode.Hold(s.solver.problem().JointSpaceVelocity(sol.z));
+  s.y = s.theta;
+  const IntegratorStatus st =
+      s.integrator->Integrate(s.ode, t, t + dt_, s.y, s.iopts, &s.ires);
+  if (st != IntegratorStatus::kSuccess) {
+    result->t_reached = s.ires.t_reached;
+    if (s.ode.nlp_failed()) {
+      const QuasiStaticSolution& f = s.ode.last_solution();
+      result->status = ToString(f.status);
+      result->mu_min_at_stop = f.mu_min;
+      result->critical_contact =
+          f.critical_contact >= 0 ? f.critical_contact + 1 : -1;
+      result->stop_reason = "t~" + std::to_string(s.ires.t_reached) + " s: " +
+                            ToString(f.status) + " inside the integrator: " +
+                            f.message;
+    } else {
+      result->status = ToString(st);
+      result->stop_reason = "t=" + std::to_string(s.ires.t_reached) + " s: " +
+                            options_.dae + ": " + ToString(st) + ": " +
+                            s.ires.message;
+    }
+    return false;
+  }
+  s.theta = s.y;
+  s.k = k + 1;
+  return true;
 }
 
 }  // namespace quasiroll

@@ -112,8 +112,18 @@ class Simulator {
   // (e.g. a perturbed start to study constraint stabilisation).
   SimulationResult Run(const Configuration& theta0);
 
+  // Stepping API (Run() is Begin() then Advance() until false). Advance()
+  // solves at t_k, records the sample and integrates to t_{k+1}; it returns
+  // false once the run has ended (end time, or a stop). The solver,
+  // integrator and workspaces persist across Begin() calls, so a warmed-up
+  // Advance() does not allocate (tests/core/test_simulator.cc checks it).
+  void Begin(const Configuration& theta0, SimulationResult* result);
+  bool Advance(SimulationResult* result);
+
  private:
   class RobotOde;
+  struct Session;
+  bool Interval(SimulationResult* result);
   void Record(double t, const Configuration& theta,
               const QuasiStaticSolution& sol, SimulationResult* result,
               int index) const;
@@ -123,6 +133,7 @@ class Simulator {
   double dt_ = 0, t_end_ = 0;
   std::unique_ptr<KinematicModel> model_;
   Configuration theta0_;
+  std::unique_ptr<Session> session_;
 };
 
 }  // namespace quasiroll

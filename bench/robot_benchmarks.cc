@@ -1,0 +1,144 @@
+// Google Benchmark micro-benchmarks of the robot kernels (docs/performance.md):
+//   BM_QuasiStaticSolve/<nlp>/<mode>/<warm|cold>  one quasi-static solve on the
+//       paper scene; "warm" alternates between two consecutive ZOH states
+//       (each solve starts from the other's solution, as in a run), "cold"
+//       resets the warm start every time.
+//   BM_Step/<dae>/<coupling>   one warmed-up hold interval (dt = 0.05 s) of
+//       the paper scene: the quasi-static solve, the recorded sample and the
+//       integration (Simulator::Advance).
+//   BM_PaperScene/<nlp>/<dae>  the whole paper scene (20 s, 400 intervals).
+// Run: build/bench/quasiroll_benchmarks --benchmark_out=bench.json
+//      --benchmark_out_format=json   (scripts/run-benchmarks.sh does this)
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <string>
+
+#include "core/initial_configuration.h"
+#include "core/quasi_static.h"
+#include "core/simulator.h"
+
+namespace quasiroll {
+namespace {
+
+Scene PaperScene(ActuationMode mode) {
+  Scene scene = LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
+  scene.mode = mode;
+  return scene;
+}
+
+void BM_QuasiStaticSolve(benchmark::State& state, std::string nlp, ActuationMode mode,
+                         bool warm) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  const Scene scene = PaperScene(mode);
+  // Two consecutive states of a short run.
+  Scene short_scene = scene;
+  short_scene.t_end = 0.1;
+  Simulator sim(short_scene, SimulationOptions{});
+  const SimulationResult run = sim.Run();
+  if (run.samples.size() < 2) {
+    state.SkipWithError("paper scene run failed");
+    return;
+  }
+  const Configuration a = run.samples[0].theta, b = run.samples[1].theta;
+  QuasiStaticSolver solver(sim.model(), QuasiStaticParameters::FromScene(scene),
+                           NlpSolverRegistry::Create(nlp));
+  QuasiStaticSolution sol;
+  solver.Solve(a, &sol);
+  bool use_b = true;
+  long long iterations = 0, solves = 0;
+  for (auto _ : state) {
+    if (!warm) solver.Reset();
+    solver.Solve(use_b ? b : a, &sol);
+    use_b = !use_b;
+    iterations += sol.nlp_iterations;
+    ++solves;
+    if (sol.status != QuasiStaticStatus::kOk) {
+      state.SkipWithError(("solve failed: " + sol.message).c_str());
+      break;
+    }
+  }
+  state.counters["nlp_iters"] =
+      benchmark::Counter(static_cast<double>(iterations) / std::max(1LL, solves));
+}
+
+void BM_Step(benchmark::State& state, std::string dae, Coupling coupling) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  const Scene scene = PaperScene(ActuationMode::kPaper);
+  SimulationOptions options;
+  options.dae = dae;
+  options.coupling = coupling;
+  Simulator sim(scene, options);
+  SimulationResult result;
+  sim.Begin(sim.initial_configuration(), &result);
+  sim.Advance(&result);  // warm up: the first solve is cold
+  long long steps = 0;
+  for (auto _ : state) {
+    if (!sim.Advance(&result)) {
+      if (!result.success()) {
+        state.SkipWithError(result.stop_reason.c_str());
+        break;
+      }
+      state.PauseTiming();
+      sim.Begin(sim.initial_configuration(), &result);
+      sim.Advance(&result);
+      state.ResumeTiming();
+    }
+    ++steps;
+  }
+  state.SetLabel("solve + record + one 0.05 s interval");
+}
+
+void BM_PaperScene(benchmark::State& state, std::string nlp, std::string dae) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  SimulationOptions options;
+  options.nlp = nlp;
+  options.dae = dae;
+  Simulator sim(PaperScene(ActuationMode::kPaper), options);
+  for (auto _ : state) {
+    SimulationResult r = sim.Run();
+    if (!r.success()) {
+      state.SkipWithError(r.stop_reason.c_str());
+      break;
+    }
+    benchmark::DoNotOptimize(r.samples.back().position);
+  }
+}
+
+int RegisterAll() {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  for (const std::string& nlp : NlpSolverRegistry::Names()) {
+    for (ActuationMode mode : {ActuationMode::kPaper, ActuationMode::kPvc}) {
+      for (bool warm : {true, false}) {
+        const std::string name = "BM_QuasiStaticSolve/" + nlp + "/" + ToString(mode) +
+                                 (warm ? "/warm" : "/cold");
+        benchmark::RegisterBenchmark(name.c_str(), BM_QuasiStaticSolve, nlp, mode, warm)
+            ->Unit(benchmark::kMicrosecond);
+      }
+    }
+  }
+  for (const std::string& dae : IntegratorRegistry::Names()) {
+    for (Coupling c : {Coupling::kZoh, Coupling::kCoupled}) {
+      const std::string name = "BM_Step/" + dae + "/" + ToString(c);
+      benchmark::RegisterBenchmark(name.c_str(), BM_Step, dae, c)
+          ->Unit(benchmark::kMicrosecond);
+    }
+  }
+  for (const std::string& nlp : NlpSolverRegistry::Names()) {
+    for (const std::string& dae : IntegratorRegistry::Names()) {
+      const std::string name = "BM_PaperScene/" + nlp + "/" + dae;
+      benchmark::RegisterBenchmark(name.c_str(), BM_PaperScene, nlp, dae)
+          ->Unit(benchmark::kMillisecond);
+    }
+  }
+  return 0;
+}
+
+const int registered = RegisterAll();
+
+}  // namespace
+}  // namespace quasiroll

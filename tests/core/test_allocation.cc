@@ -1,0 +1,62 @@
+// No heap allocation inside a warmed-up simulation step (issue: performance
+// requirement). Counts calls to the global operator new while Simulator::
+// Advance() runs; this binary replaces operator new, so it is kept separate.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "core/simulator.h"
+
+namespace {
+std::atomic<long long> g_allocations{0};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  ++g_allocations;
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+namespace quasiroll {
+namespace {
+
+class WarmStep : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(WarmStep, AdvanceDoesNotAllocate) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer owns operator new";
+#endif
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  const Scene scene =
+      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
+  SimulationOptions options;
+  options.nlp = "newton";
+  options.dae = GetParam();
+  Simulator sim(scene, options);
+  SimulationResult result;
+  sim.Begin(sim.initial_configuration(), &result);
+  for (int k = 0; k < 5; ++k) ASSERT_TRUE(sim.Advance(&result)) << result.stop_reason;
+  const long long before = g_allocations.load();
+  for (int k = 0; k < 50; ++k) ASSERT_TRUE(sim.Advance(&result)) << result.stop_reason;
+  EXPECT_EQ(g_allocations.load() - before, 0) << "allocations in 50 warmed-up steps";
+}
+
+INSTANTIATE_TEST_SUITE_P(RkBackends, WarmStep,
+                         ::testing::Values("rk-projection", "rk-baumgarte"),
+                         [](const auto& info) {
+                           std::string n = info.param;
+                           for (char& c : n)
+                             if (c == '-') c = '_';
+                           return n;
+                         });
+
+}  // namespace
+}  // namespace quasiroll
