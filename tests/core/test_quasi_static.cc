@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "core/initial_configuration.h"
+#include "core/simulator.h"
 #include "core/quasi_static.h"
 #include "core/terrains.h"
 
@@ -263,6 +264,44 @@ TEST(QuasiStaticProblem, VirtualPowerBalance) {
   double p_act = 0;
   for (int j = 0; j < 6; ++j) p_act += sol.actuator_torques[j] * sol.joint_rates[j];
   EXPECT_NEAR(contact_power, -(p_grav + p_act), 1e-9);
+}
+
+// Cross-backend agreement: 50 configurations along drives on the rough
+// terrain R1 (paper scene), both modes. Every backend that reports OK must
+// agree with `newton` on the scaled unknowns (twist, passive rates, forces):
+// to 1e-9 where the scaled equality Jacobian's condition number is below 1e3
+// (pvc, real slip), otherwise to condition number x residual tolerance (1e-12)
+// (creeping paper-mode states are ill-conditioned by design, model.md §7).
+TEST_P(QuasiStaticBackends, AgreesWithNewtonAlongRoughDrive) {
+  RegisterBuiltinIntegrators();
+  const Scene paper = LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
+  int compared = 0;
+  for (ActuationMode mode : {ActuationMode::kPaper, ActuationMode::kPvc}) {
+    Scene scene = paper;
+    scene.mode = mode;
+    scene.t_end = 12.25;  // 246 samples: every 10th gives 25 configurations
+    Simulator sim(scene, SimulationOptions{});
+    const SimulationResult drive = sim.Run();
+    ASSERT_TRUE(drive.success()) << drive.stop_reason;
+    const QuasiStaticParameters params = QuasiStaticParameters::FromScene(scene);
+    QuasiStaticOptions options;
+    options.diagnostics = true;
+    QuasiStaticSolver reference(sim.model(), params, NlpSolverRegistry::Create("newton"), options);
+    QuasiStaticSolver candidate(sim.model(), params, NlpSolverRegistry::Create(GetParam()), options);
+    for (size_t k = 0; k < drive.samples.size() && k < 250; k += 10) {
+      const Configuration& theta = drive.samples[k].theta;
+      QuasiStaticSolution ref, got;
+      ASSERT_EQ(reference.Solve(theta, &ref), QuasiStaticStatus::kOk) << ref.message;
+      if (candidate.Solve(theta, &got) != QuasiStaticStatus::kOk) continue;
+      const double cond = ref.condition_number;
+      const double tol = cond < 1e3 ? 1e-9 : std::min(1e-5, cond * 1e-12);
+      const double diff = (got.z - ref.z).lpNorm<Eigen::Infinity>();
+      EXPECT_LE(diff, tol) << GetParam() << " " << ToString(mode) << " sample " << k
+                           << " cond " << cond;
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 45) << "too few converged solves to compare";
 }
 
 INSTANTIATE_TEST_SUITE_P(AllBackends, QuasiStaticBackends,
