@@ -1,0 +1,1 @@
+"""quasiroll comparison-report generator (see reports/README.md)."""

@@ -1,0 +1,204 @@
+"""Reading and validating a quasiroll results directory.
+
+Every problem with the input raises ReportError with a one-line message; the
+entry point turns it into `make_report: <message>` on stderr and exit code 2.
+"""
+
+import csv
+import json
+import math
+import os
+
+import numpy as np
+
+
+class ReportError(Exception):
+    """Bad input: the message is printed as one line, exit code 2."""
+
+
+REQUIRED_COLUMNS = [
+    "scene", "nlp", "dae", "coupling", "dt", "tol", "sigma", "eps", "mu",
+    "seed", "status", "stop_reason", "t_reached", "wall_s", "repeats",
+    "nlp_solves", "nlp_iters", "rhs_evals", "steps", "rejected_steps",
+    "err_pos_rms", "err_pos_max", "err_final", "err_rot_max", "err_force_rms",
+    "err_slip", "drift_max", "drift_final", "gap_max",
+]
+
+# Columns kept as strings; every other known column is parsed as a float.
+STRING_COLUMNS = {"scene", "nlp", "dae", "coupling", "status", "stop_reason",
+                  "run_id", "suite_group", "seed"}
+OPTIONAL_NUMERIC_COLUMNS = ["mu_min", "roughness", "t_end"]
+
+WHEEL_COLUMNS = ("c{i}_x", "c{i}_y", "c{i}_z", "n{i}", "t{i}_lon", "t{i}_lat",
+                 "slip{i}", "use{i}")
+TRAJECTORY_COLUMNS = (
+    ["t", "x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz",
+     "wx", "wy", "wz", "phi1", "alpha1", "delta2", "alpha2", "delta3", "alpha3"]
+    + [name.format(i=i) for i in (1, 2, 3) for name in WHEEL_COLUMNS]
+    + ["drift", "gap_max", "nlp_status", "nlp_iters"]
+)
+
+SUCCESS = "success"
+
+
+def parse_number(text):
+    """Float of a CSV field; empty, 'nan' and missing fields become nan."""
+    if text is None:
+        return math.nan
+    text = text.strip()
+    if text == "" or text.lower() in ("nan", "-nan", "na", "null", "none"):
+        return math.nan
+    return float(text)
+
+
+def is_finite(value):
+    return value is not None and isinstance(value, float) and math.isfinite(value)
+
+
+def method_name(run):
+    return f"{run['nlp']}/{run['dae']}/{run['coupling']}"
+
+
+def is_success(run):
+    return run["status"] == SUCCESS
+
+
+def _read_csv_rows(path, label):
+    if not os.path.isfile(path):
+        raise ReportError(f"{label} not found: {path}")
+    try:
+        with open(path, newline="", encoding="utf-8") as handle:
+            rows = list(csv.reader(handle))
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise ReportError(f"cannot read {label}: {exc}") from None
+    rows = [row for row in rows if any(field.strip() for field in row)]
+    if not rows:
+        raise ReportError(f"{label} is empty")
+    header = [name.strip() for name in rows[0]]
+    return header, rows[1:]
+
+
+def _check_columns(header, required, label):
+    for column in required:
+        if column not in header:
+            raise ReportError(f"{label} is missing column '{column}'")
+
+
+def _typed_run(record, line_no):
+    run = {}
+    for key, text in record.items():
+        if key in STRING_COLUMNS:
+            run[key] = (text or "").strip()
+            continue
+        try:
+            run[key] = parse_number(text)
+        except ValueError:
+            raise ReportError(
+                f"runs.csv line {line_no}: column '{key}' is not a number: "
+                f"'{text.strip()}'") from None
+    return run
+
+
+def read_runs(results_dir):
+    """All rows of DIR/runs.csv as dicts with typed values.
+
+    Adds `method` ("nlp/dae/coupling"), a `run_id` when the column is
+    missing, and nan for absent optional numeric columns.
+    """
+    path = os.path.join(results_dir, "runs.csv")
+    header, body = _read_csv_rows(path, "runs.csv")
+    _check_columns(header, REQUIRED_COLUMNS, "runs.csv")
+    if not body:
+        raise ReportError("runs.csv has a header but no runs")
+    runs = []
+    for index, fields in enumerate(body):
+        record = {name: (fields[i] if i < len(fields) else "")
+                  for i, name in enumerate(header) if name}
+        run = _typed_run(record, index + 2)
+        if not run["status"]:
+            raise ReportError(f"runs.csv line {index + 2}: empty status")
+        run.setdefault("run_id", f"row{index + 1}")
+        if not run["run_id"]:
+            run["run_id"] = f"row{index + 1}"
+        for column in OPTIONAL_NUMERIC_COLUMNS:
+            run.setdefault(column, math.nan)
+        run["method"] = method_name(run)
+        run["row"] = index + 1
+        runs.append(run)
+    return runs, header
+
+
+def has_column(header, name):
+    return name in header
+
+
+def trajectory_path(results_dir, run):
+    return os.path.join(results_dir, "trajectories", f"{run['run_id']}.csv")
+
+
+def read_trajectory(path):
+    """A trajectory CSV as {column: numpy array}; `nlp_status` stays strings."""
+    label = "trajectories/" + os.path.basename(path)
+    header, body = _read_csv_rows(path, label)
+    _check_columns(header, TRAJECTORY_COLUMNS, label)
+    columns = {name: [] for name in header}
+    for line_no, fields in enumerate(body, start=2):
+        for i, name in enumerate(header):
+            columns[name].append(fields[i] if i < len(fields) else "")
+    table = {}
+    for name, values in columns.items():
+        if name == "nlp_status":
+            table[name] = [v.strip() for v in values]
+            continue
+        try:
+            table[name] = np.array([parse_number(v) for v in values], float)
+        except ValueError:
+            raise ReportError(f"{label}: column '{name}' has a non-number") from None
+    return table
+
+
+class TrajectoryStore:
+    """Loads trajectories on demand and remembers them."""
+
+    def __init__(self, results_dir):
+        self.results_dir = results_dir
+        self._cache = {}
+
+    def has(self, run):
+        return os.path.isfile(trajectory_path(self.results_dir, run))
+
+    def get(self, run):
+        key = run["run_id"]
+        if key not in self._cache:
+            table = read_trajectory(trajectory_path(self.results_dir, run))
+            self._cache[key] = table if len(table["t"]) else None
+        return self._cache[key]
+
+
+def read_meta(results_dir):
+    """DIR/meta.json as a dict ({} if missing or not a JSON object)."""
+    path = os.path.join(results_dir, "meta.json")
+    if not os.path.isfile(path):
+        return {}
+    try:
+        with open(path, encoding="utf-8") as handle:
+            meta = json.load(handle)
+    except (OSError, ValueError):
+        return {"_warning": "meta.json is not valid JSON"}
+    return meta if isinstance(meta, dict) else {}
+
+
+def read_terrain(results_dir, scene):
+    """DIR/terrains/<scene>.json as a dict, or None when absent/unusable."""
+    path = os.path.join(results_dir, "terrains", f"{scene}.json")
+    if not os.path.isfile(path):
+        return None
+    try:
+        with open(path, encoding="utf-8") as handle:
+            spec = json.load(handle)
+    except (OSError, ValueError):
+        return None
+    if not isinstance(spec, dict) or spec.get("type") not in (
+            "gaussians", "plane", "incline"):
+        return None
+    return spec

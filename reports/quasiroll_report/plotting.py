@@ -1,0 +1,156 @@
+"""Matplotlib set-up, the fixed style, saving PNG+SVG pairs."""
+
+import math
+import os
+from dataclasses import dataclass, field
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .data import ReportError  # noqa: E402
+
+DPI = 100
+
+STYLE = {
+    "font.size": 9,
+    "axes.titlesize": 10,
+    "axes.labelsize": 9,
+    "legend.fontsize": 8,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "grid.linestyle": "-",
+    "lines.linewidth": 1.4,
+    "lines.markersize": 5,
+    "figure.dpi": DPI,
+    "savefig.dpi": DPI,
+    "svg.fonttype": "path",
+    "svg.hashsalt": "quasiroll",
+    "figure.constrained_layout.use": True,
+    "axes.formatter.useoffset": False,
+}
+
+# Per-wheel and per-component styles (paper figures show one run, not methods).
+WHEEL_STYLES = [("#1b9e77", "-"), ("#d95f02", "--"), ("#7570b3", "-.")]
+COMPONENT_STYLES = [("#1b9e77", "-"), ("#d95f02", "--"), ("#7570b3", "-.")]
+
+STATUS_COLOURS = {
+    "success": "#2ca02c",
+    "INFEASIBLE_FRICTION": "#d62728",
+    "LIFT_OFF": "#ff7f0e",
+    "DEGENERATE_CONTACT": "#9467bd",
+    "SINGULAR": "#8c564b",
+    "SOLVER_FAILURE": "#e377c2",
+    "step_size_too_small": "#1f77b4",
+    "convergence_failure": "#17becf",
+    "constraint_failure": "#bcbd22",
+    "rhs_failure": "#7f7f7f",
+    "invalid_input": "#393b79",
+}
+_EXTRA_STATUS_COLOURS = ["#843c39", "#637939", "#7b4173", "#3182bd",
+                         "#e6550d", "#31a354", "#756bb1", "#636363"]
+NOT_RUN_COLOUR = "#f0f0f0"
+
+
+class MissingData(ReportError):
+    """A figure has nothing to draw."""
+
+
+def apply_style():
+    plt.style.use("default")
+    plt.rcParams.update(STYLE)
+
+
+def status_colours(statuses):
+    """{status: colour}: fixed colours for known statuses, then extras."""
+    colours, extra = {}, 0
+    for status in statuses:
+        if status in STATUS_COLOURS:
+            colours[status] = STATUS_COLOURS[status]
+        else:
+            colours[status] = _EXTRA_STATUS_COLOURS[extra % len(_EXTRA_STATUS_COLOURS)]
+            extra += 1
+    return colours
+
+
+@dataclass
+class Figure:
+    name: str
+    title: str
+    caption: str
+    width_in: float
+    height_in: float
+    dpi: int = DPI
+    png: str = ""
+    svg: str = ""
+    notes: list = field(default_factory=list)
+
+    @property
+    def width_px(self):
+        return int(round(self.width_in * self.dpi))
+
+    @property
+    def height_px(self):
+        return int(round(self.height_in * self.dpi))
+
+
+def new_figure(width_in, height_in, **kwargs):
+    return plt.figure(figsize=(width_in, height_in), dpi=DPI, **kwargs)
+
+
+def save_figure(fig, out_dir, name, title, caption):
+    """Write <name>.png and <name>.svg, close the figure, return a Figure."""
+    width_in, height_in = fig.get_size_inches()
+    record = Figure(name, title, caption, float(width_in), float(height_in))
+    record.png = f"{name}.png"
+    record.svg = f"{name}.svg"
+    fig.savefig(os.path.join(out_dir, record.png), dpi=DPI, format="png",
+                metadata={"Software": "quasiroll make_report"})
+    fig.savefig(os.path.join(out_dir, record.svg), format="svg",
+                metadata={"Date": None})
+    plt.close(fig)
+    return record
+
+
+def placeholder_figure(out_dir, name, title, reason):
+    fig = new_figure(6, 2.5)
+    ax = fig.add_subplot()
+    ax.axis("off")
+    ax.text(0.5, 0.5, f"{title}\n\nnot drawn: {reason}", ha="center",
+            va="center", wrap=True, transform=ax.transAxes)
+    return save_figure(fig, out_dir, name, title, f"Not drawn: {reason}.")
+
+
+def positive(values):
+    """Copy of values with non-positive entries replaced by nan (log axes)."""
+    values = np.array(values, dtype=float)
+    values[~(values > 0)] = np.nan
+    return values
+
+
+def spans_decades(values, decades=1.5):
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values) & (values > 0)]
+    if values.size < 2:
+        return False
+    return math.log10(values.max() / values.min()) >= decades
+
+
+def no_data(ax, text="no data"):
+    ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes,
+            color="#555555")
+
+
+def fmt(value, digits=3):
+    """Short number for captions: 2.1e-05, 0.31, nan → 'n/a'."""
+    if value is None or not isinstance(value, (int, float)) or not math.isfinite(value):
+        return "n/a"
+    if value != 0 and (abs(value) < 1e-3 or abs(value) >= 1e4):
+        return f"{value:.{digits - 1}e}"
+    return f"{value:.{digits}g}"
+
+
+def method_label(method):
+    return method

@@ -1,0 +1,332 @@
+#!/usr/bin/python3
+"""Tests of the report generator: /usr/bin/python3 reports/test_report.py
+
+Builds a synthetic results directory (make_fixture.py) in a temp dir, runs
+make_report.py on it as a subprocess and checks the page, the PNG/SVG files
+and the bad-input behaviour. Last line printed: "N passed, N failed".
+"""
+
+import csv
+import json
+import os
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+import unittest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+os.environ["MPLBACKEND"] = "Agg"
+
+import make_fixture  # noqa: E402
+from quasiroll_report import selection as sel  # noqa: E402
+from quasiroll_report.data import read_runs  # noqa: E402
+from quasiroll_report.report import FIGURE_NAMES  # noqa: E402
+
+PYTHON = "/usr/bin/python3"
+MAKE_REPORT = os.path.join(HERE, "make_report.py")
+FAILED_ONLY = "ceres/rk-baumgarte/coupled"
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def run_report(results_dir, *extra):
+    env = dict(os.environ, MPLBACKEND="Agg")
+    env.pop("QUASIROLL_REPORT_DEBUG", None)
+    return subprocess.run([PYTHON, MAKE_REPORT, results_dir, *extra],
+                          capture_output=True, text=True, env=env, timeout=300)
+
+
+def png_size(path):
+    """(width, height) from the IHDR chunk; raises if not a PNG."""
+    with open(path, "rb") as handle:
+        head = handle.read(33)
+    if head[:8] != PNG_MAGIC or head[12:16] != b"IHDR":
+        raise ValueError(f"{path} is not a PNG")
+    return struct.unpack(">II", head[16:24])
+
+
+def read_csv(path):
+    with open(path, newline="") as handle:
+        rows = list(csv.reader(handle))
+    return rows[0], rows[1:]
+
+
+def write_csv(path, header, rows):
+    with open(path, "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        writer.writerows(rows)
+
+
+class Fixture:
+    """One fixture + report shared by the tests, and copies to mutate."""
+    root = None
+    good = None
+    result = None
+
+    @classmethod
+    def setup(cls):
+        cls.root = tempfile.mkdtemp(prefix="quasiroll_report_test_")
+        cls.good = make_fixture.build_fixture(os.path.join(cls.root, "good"), seed=7)
+        cls.result = run_report(cls.good)
+
+    @classmethod
+    def copy(cls, name):
+        target = os.path.join(cls.root, name)
+        shutil.copytree(cls.good, target, ignore=shutil.ignore_patterns("report"))
+        return target
+
+    @classmethod
+    def teardown(cls):
+        if cls.root:
+            shutil.rmtree(cls.root, ignore_errors=True)
+
+
+def setUpModule():
+    Fixture.setup()
+
+
+def tearDownModule():
+    Fixture.teardown()
+
+
+class GoodReportTest(unittest.TestCase):
+    def setUp(self):
+        self.result = Fixture.result
+        self.report_dir = os.path.join(Fixture.good, "report")
+
+    def html(self):
+        with open(os.path.join(self.report_dir, "index.html"), encoding="utf-8") as handle:
+            return handle.read()
+
+    def manifest(self):
+        with open(os.path.join(self.report_dir, "figures.json")) as handle:
+            return {entry["name"]: entry for entry in json.load(handle)}
+
+    def test_exit_code_and_last_line_is_index_path(self):
+        self.assertEqual(self.result.returncode, 0, self.result.stderr)
+        last = self.result.stdout.strip().splitlines()[-1]
+        self.assertEqual(last, os.path.abspath(os.path.join(self.report_dir, "index.html")))
+        self.assertTrue(os.path.isabs(last))
+        self.assertNotIn("Traceback", self.result.stderr)
+
+    def test_index_references_every_figure(self):
+        html = self.html()
+        for name in FIGURE_NAMES:
+            self.assertIn(f'src="{name}.png"', html, name)
+            self.assertIn(f'href="{name}.svg"', html, name)
+        self.assertNotIn("<script", html.lower())
+
+    def test_pngs_are_valid_with_expected_size(self):
+        import matplotlib.image
+        manifest = self.manifest()
+        self.assertEqual(sorted(manifest), sorted(FIGURE_NAMES))
+        for name, entry in manifest.items():
+            path = os.path.join(self.report_dir, f"{name}.png")
+            self.assertGreater(os.path.getsize(path), 5000, name)
+            width, height = png_size(path)
+            want_w = entry["figsize_in"][0] * entry["dpi"]
+            want_h = entry["figsize_in"][1] * entry["dpi"]
+            self.assertLessEqual(abs(width - want_w), 3, name)
+            self.assertLessEqual(abs(height - want_h), 3, name)
+            pixels = matplotlib.image.imread(path)
+            self.assertGreater(float(pixels[..., :3].std()), 0.02, f"{name} looks blank")
+
+    def test_fixed_figure_sizes(self):
+        manifest = self.manifest()
+        width, height = png_size(os.path.join(self.report_dir, "fig_work_precision.png"))
+        self.assertLessEqual(abs(width - 1100), 2)   # figsize 11 x 4.6 in at 100 dpi
+        self.assertLessEqual(abs(height - 460), 2)
+        self.assertEqual(manifest["fig09_normal_forces"]["figsize_in"], [8.0, 4.2])
+
+    def test_svgs_exist(self):
+        for name in FIGURE_NAMES:
+            path = os.path.join(self.report_dir, f"{name}.svg")
+            self.assertTrue(os.path.isfile(path), name)
+            with open(path, encoding="utf-8") as handle:
+                self.assertIn("<svg", handle.read(2000), name)
+
+    def test_summary_lists_failed_only_method(self):
+        html = self.html()
+        summary = html.split("<h2>Summary per method</h2>")[1].split("<h2>")[0]
+        self.assertIn(FAILED_ONLY, summary)
+        self.assertIn("all runs failed", summary)
+        self.assertIn("SOLVER_FAILURE", summary)
+
+    def test_failed_only_method_noted_in_accuracy_caption(self):
+        html = self.html()
+        block = html.split('id="fig_work_precision"')[1].split("</figure>")[0]
+        self.assertIn("Omitted because all their runs failed: " + FAILED_ONLY, block)
+
+    def test_metadata_and_failure_table(self):
+        html = self.html()
+        for text in ("0123abc (fixture)", "fixture-host", "ipopt 3.14.10",
+                     "2024-01-01T00:05:00Z", "INFEASIBLE_FRICTION", "μ_min"):
+            self.assertIn(text, html)
+        self.assertIn('<table class="map">', html)
+
+
+class SelectionTest(unittest.TestCase):
+    def runs(self):
+        return read_runs(Fixture.good)[0]
+
+    def test_failed_only_method_not_in_work_precision_data(self):
+        runs = self.runs()
+        self.assertEqual(sel.failed_only_methods(runs), [FAILED_ONLY])
+        self.assertIn(FAILED_ONLY, [row["method"] for row in sel.method_summary(runs)])
+        for metric in ("err_pos_rms", "err_force_rms"):
+            series = sel.work_precision_series(runs, metric)
+            self.assertNotIn(FAILED_ONLY, series)
+            self.assertEqual(len(series), 3)
+            for points in series.values():
+                self.assertEqual(len(points), 3)
+
+    def test_work_precision_rows_only_work_precision_group(self):
+        rows = sel.work_precision_rows(self.runs())
+        self.assertTrue(rows)
+        self.assertEqual({r["suite_group"] for r in rows}, {"work_precision"})
+        self.assertTrue(all(r["status"] == "success" for r in rows))
+
+    def test_pareto_front(self):
+        points = [(1e-3, 1.0), (1e-4, 2.0), (1e-3, 0.5), (1e-2, 0.6), (1e-5, 10.0)]
+        self.assertEqual(sel.pareto_front(points), [(1e-5, 10.0), (1e-4, 2.0), (1e-3, 0.5)])
+
+    def test_method_styles_unique_and_stable(self):
+        runs = self.runs()
+        styles = sel.method_styles(runs)
+        self.assertEqual(list(styles), sorted(styles))
+        self.assertEqual(len(set(styles.values())), len(styles))
+        self.assertEqual(styles, sel.method_styles(list(reversed(runs))))
+
+    def test_stability_map_marks_mu_min(self):
+        smap = sel.stability_map(self.runs())
+        x, mu_min = sel.mu_min_position(smap["columns"], "mu_sweep")
+        self.assertAlmostEqual(mu_min, 0.27)
+        self.assertIsNotNone(x)
+        self.assertIn("INFEASIBLE_FRICTION", smap["statuses"])
+        self.assertEqual(smap["statuses"][0], "success")
+
+    def test_paper_run_is_most_accurate_at_mu_half(self):
+        run = sel.paper_run(self.runs(), lambda r: True)
+        self.assertEqual(run["scene"], "paper")
+        self.assertAlmostEqual(run["mu"], 0.5)
+        self.assertEqual(run["status"], "success")
+
+
+class BadInputTest(unittest.TestCase):
+    def assert_one_line_error(self, result, *needles):
+        self.assertEqual(result.returncode, 2, result.stderr)
+        lines = result.stderr.strip().splitlines()
+        self.assertEqual(len(lines), 1, result.stderr)
+        self.assertTrue(lines[0].startswith("make_report: "), lines[0])
+        for needle in needles:
+            self.assertIn(needle, lines[0])
+        self.assertNotIn("Traceback", result.stderr)
+
+    def test_missing_column(self):
+        target = Fixture.copy("missing_column")
+        path = os.path.join(target, "runs.csv")
+        header, rows = read_csv(path)
+        drop = header.index("err_pos_rms")
+        write_csv(path, [h for i, h in enumerate(header) if i != drop],
+                  [[v for i, v in enumerate(r) if i != drop] for r in rows])
+        result = run_report(target)
+        self.assert_one_line_error(result, "runs.csv is missing column 'err_pos_rms'")
+
+    def test_missing_runs_csv(self):
+        target = Fixture.copy("no_runs")
+        os.remove(os.path.join(target, "runs.csv"))
+        self.assert_one_line_error(run_report(target), "runs.csv not found")
+
+    def test_empty_runs_csv(self):
+        target = Fixture.copy("empty_runs")
+        open(os.path.join(target, "runs.csv"), "w").close()
+        self.assert_one_line_error(run_report(target), "runs.csv is empty")
+
+    def test_header_only(self):
+        target = Fixture.copy("header_only")
+        path = os.path.join(target, "runs.csv")
+        header, _ = read_csv(path)
+        write_csv(path, header, [])
+        self.assert_one_line_error(run_report(target), "no runs")
+
+    def test_no_successful_run(self):
+        target = Fixture.copy("all_failed")
+        path = os.path.join(target, "runs.csv")
+        header, rows = read_csv(path)
+        status = header.index("status")
+        for row in rows:
+            row[status] = "SOLVER_FAILURE"
+        write_csv(path, header, rows)
+        self.assert_one_line_error(run_report(target), "no successful run")
+
+    def test_non_numeric_field(self):
+        target = Fixture.copy("bad_number")
+        path = os.path.join(target, "runs.csv")
+        header, rows = read_csv(path)
+        rows[0][header.index("dt")] = "fast"
+        write_csv(path, header, rows)
+        self.assert_one_line_error(run_report(target), "'dt'", "fast")
+
+    def test_missing_results_dir(self):
+        self.assert_one_line_error(run_report(os.path.join(Fixture.root, "nope")),
+                                   "not found")
+
+    def test_trajectory_missing_column(self):
+        target = Fixture.copy("bad_trajectory")
+        traj_dir = os.path.join(target, "trajectories")
+        for name in os.listdir(traj_dir):
+            path = os.path.join(traj_dir, name)
+            header, rows = read_csv(path)
+            drop = header.index("drift")
+            write_csv(path, [h for i, h in enumerate(header) if i != drop],
+                      [[v for i, v in enumerate(r) if i != drop] for r in rows])
+        self.assert_one_line_error(run_report(target), "missing column 'drift'")
+
+    def test_missing_mu_sweep_fails_unless_allowed(self):
+        target = Fixture.copy("no_mu_sweep")
+        path = os.path.join(target, "runs.csv")
+        header, rows = read_csv(path)
+        group = header.index("suite_group")
+        write_csv(path, header, [r for r in rows if r[group] != "mu_sweep"])
+        self.assert_one_line_error(run_report(target), "figures 13-14")
+        allowed = run_report(target, "--allow-missing")
+        self.assertEqual(allowed.returncode, 0, allowed.stderr)
+        self.assertNotIn("Traceback", allowed.stderr)
+
+
+class OptionalInputTest(unittest.TestCase):
+    def test_without_terrain_meta_and_optional_columns(self):
+        target = Fixture.copy("minimal")
+        shutil.rmtree(os.path.join(target, "terrains"))
+        os.remove(os.path.join(target, "meta.json"))
+        out = os.path.join(Fixture.root, "minimal_out")
+        result = run_report(target, "--out", out)
+        self.assertEqual(result.returncode, 0, result.stderr)
+        self.assertEqual(result.stdout.strip().splitlines()[-1],
+                         os.path.join(out, "index.html"))
+        with open(os.path.join(out, "index.html"), encoding="utf-8") as handle:
+            html = handle.read()
+        self.assertIn("without a terrain surface", html)
+        self.assertIn("unknown", html)
+
+    def test_quoted_stop_reason_with_commas(self):
+        runs = read_runs(Fixture.good)[0]
+        reasons = [r["stop_reason"] for r in runs if r["status"] == "INFEASIBLE_FRICTION"]
+        self.assertTrue(reasons)
+        self.assertIn(",", reasons[0])
+
+
+def main():
+    suite = unittest.defaultTestLoader.loadTestsFromModule(sys.modules[__name__])
+    result = unittest.TextTestRunner(verbosity=2, stream=sys.stdout).run(suite)
+    failed = len(result.failures) + len(result.errors) + len(result.unexpectedSuccesses)
+    passed = result.testsRun - failed - len(result.skipped)
+    print(f"{passed} passed, {failed} failed")
+    return 0 if failed == 0 and result.testsRun > 0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# Renders DIR/report/index.html once in headless Chromium and checks the
+# screenshot is not blank.
+#   scripts/screenshot_report.sh DIR [OUT.png]
+# OUT.png defaults to DIR/report/screenshot.png. Exit codes: 0 rendered and
+# not blank, 1 blank or failed render, 2 bad usage / no index.html,
+# 77 skipped (no chromium installed).
+set -euo pipefail
+
+if [ $# -lt 1 ] || [ $# -gt 2 ]; then
+  echo "usage: $0 DIR [OUT.png]" >&2
+  exit 2
+fi
+dir=$1
+index="$dir/report/index.html"
+if [ ! -f "$index" ]; then
+  echo "screenshot_report: $index not found (run reports/make_report.py $dir first)" >&2
+  exit 2
+fi
+index=$(cd "$(dirname "$index")" && pwd)/index.html
+out=${2:-$(dirname "$index")/screenshot.png}
+
+browser=""
+for candidate in chromium chromium-browser; do
+  if command -v "$candidate" > /dev/null 2>&1; then
+    browser=$(command -v "$candidate")
+    break
+  fi
+done
+if [ -z "$browser" ]; then
+  echo "screenshot_report: chromium not installed, skipping" >&2
+  exit 77
+fi
+
+profile=$(mktemp -d)
+trap 'rm -rf "$profile"' EXIT
+rm -f "$out"
+timeout 120 "$browser" --headless --no-sandbox --disable-gpu --no-first-run \
+  --disable-background-networking --disable-component-update --disable-sync \
+  --user-data-dir="$profile" --screenshot="$out" --window-size=1280,2000 \
+  "file://$index" > "$profile/chromium.log" 2>&1 || {
+  echo "screenshot_report: chromium failed: $(tail -n 1 "$profile/chromium.log")" >&2
+  exit 1
+}
+if [ ! -s "$out" ]; then
+  echo "screenshot_report: chromium wrote no screenshot" >&2
+  exit 1
+fi
+
+MPLBACKEND=Agg /usr/bin/python3 - "$out" <<'EOF'
+import sys
+import matplotlib.image
+
+pixels = matplotlib.image.imread(sys.argv[1])
+std = float(pixels[..., :3].std())
+if std < 0.02:
+    print(f"screenshot_report: {sys.argv[1]} looks blank (pixel std {std:.4f})",
+          file=sys.stderr)
+    sys.exit(1)
+print(f"screenshot_report: {sys.argv[1]} {pixels.shape[1]}x{pixels.shape[0]}, "
+      f"pixel std {std:.3f}")
+EOF
+echo "$out"
