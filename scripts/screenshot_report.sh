@@ -2,6 +2,9 @@
 # Renders DIR/report/index.html once in headless Chromium and checks the
 # screenshot is not blank.
 #   scripts/screenshot_report.sh DIR [OUT.png]
+#   scripts/screenshot_report.sh --fixture    (self-contained, for ctest: builds
+#       a synthetic DIR with reports/make_fixture.py and its report in a temp
+#       dir first)
 # OUT.png defaults to DIR/report/screenshot.png. Exit codes: 0 rendered and
 # not blank, 1 blank or failed render, 2 bad usage / no index.html,
 # 77 skipped (no chromium installed).
@@ -12,6 +15,18 @@ if [ $# -lt 1 ] || [ $# -gt 2 ]; then
   exit 2
 fi
 dir=$1
+tmp_fixture=""
+if [ "$dir" = "--fixture" ]; then
+  if ! command -v chromium > /dev/null 2>&1 && ! command -v chromium-browser > /dev/null 2>&1; then
+    echo "screenshot_report: chromium not installed, skipping" >&2
+    exit 77
+  fi
+  root=$(cd "$(dirname "$0")/.." && pwd)
+  tmp_fixture=$(mktemp -d)
+  dir="$tmp_fixture/results"
+  /usr/bin/python3 "$root/reports/make_fixture.py" "$dir" > /dev/null
+  /usr/bin/python3 "$root/reports/make_report.py" "$dir" > /dev/null
+fi
 index="$dir/report/index.html"
 if [ ! -f "$index" ]; then
   echo "screenshot_report: $index not found (run reports/make_report.py $dir first)" >&2
@@ -33,7 +48,7 @@ if [ -z "$browser" ]; then
 fi
 
 profile=$(mktemp -d)
-trap 'rm -rf "$profile"' EXIT
+trap 'rm -rf "$profile" ${tmp_fixture:+"$tmp_fixture"}' EXIT
 rm -f "$out"
 timeout 120 "$browser" --headless --no-sandbox --disable-gpu --no-first-run \
   --disable-background-networking --disable-component-update --disable-sync \
