@@ -61,6 +61,8 @@ void Commands::Register(CLI::App& app) {
   CLI::App* list = app.add_subcommand(
       "list", "List the registered NLP backends and integrators");
   list->callback([this] { selected_ = [] { return RunList(); }; });
+
+  bench_.Register(app, &selected_);
 }
 
 int Commands::Run() { return selected_ ? selected_() : 2; }

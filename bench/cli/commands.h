@@ -5,6 +5,8 @@
 #include <functional>
 #include <string>
 
+#include "bench/cli/bench_command.h"
+
 namespace quasiroll::cli {
 
 struct PoseArgs {
@@ -45,6 +47,7 @@ class Commands {
   PoseArgs pose_;
   SolveArgs solve_;
   RunArgs run_;
+  BenchCommands bench_;
 };
 
 int RunPose(const PoseArgs& args);

@@ -1,0 +1,616 @@
+#include "bench/harness.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <numbers>
+#include <optional>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "bench/json_writer.h"
+#include "bench/metrics.h"
+#include "bench/run_output.h"
+
+namespace quasiroll::bench {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+const std::vector<std::string>& RunsCsvColumns() {
+  static const std::vector<std::string> columns = {
+      "run_id", "suite_group", "scene", "terrain", "nlp", "dae", "coupling",
+      "rk_method", "dt", "tol", "atol", "nlp_tol", "sigma", "eps", "dae_index",
+      "substeps", "mu", "seed", "roughness", "t_end", "repeats",
+      "status", "stop_reason", "t_reached", "mu_min", "critical_wheel",
+      "wall_s", "nlp_solves", "nlp_iters", "rhs_evals", "jac_evals", "steps",
+      "rejected_steps", "samples",
+      "ref_kind", "ref_status", "ref_hash", "common_samples",
+      "err_pos_rms", "err_pos_max", "err_final", "err_final_rot", "err_rot_max",
+      "err_force_rms", "err_slip", "drift_max", "drift_final", "gap_max"};
+  return columns;
+}
+
+std::string CsvField(const std::string& value) {
+  if (value.find_first_of(",\"\r\n") == std::string::npos) return value;
+  std::string out = "\"";
+  for (char c : value) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+namespace {
+
+std::string OneLine(std::string s) {
+  for (char& c : s)
+    if (c == '\n' || c == '\r') c = ' ';
+  return s;
+}
+
+std::string JoinRow(const std::vector<std::string>& values) {
+  std::string line;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (i) line += ',';
+    line += CsvField(values[i]);
+  }
+  return line;
+}
+
+std::string Header() { return JoinRow(RunsCsvColumns()); }
+
+class RowBuilder {
+ public:
+  RowBuilder() : values_(RunsCsvColumns().size(), "") {}
+  void Set(const std::string& column, const std::string& value) {
+    const auto& cols = RunsCsvColumns();
+    const auto it = std::find(cols.begin(), cols.end(), column);
+    if (it == cols.end()) throw std::logic_error("unknown column " + column);
+    values_[it - cols.begin()] = value;
+  }
+  void Set(const std::string& column, double v) { Set(column, Num(v)); }
+  void SetInt(const std::string& column, long long v) { Set(column, std::to_string(v)); }
+  std::vector<std::string> values() const { return values_; }
+
+ private:
+  std::vector<std::string> values_;
+};
+
+void SetParameters(const RunSpec& run, const std::string& terrain_id, RowBuilder* b) {
+  b->Set("run_id", run.run_id);
+  b->Set("suite_group", run.group);
+  b->Set("scene", run.scene);
+  b->Set("terrain", terrain_id);
+  b->Set("nlp", run.nlp);
+  b->Set("dae", run.dae);
+  b->Set("coupling", ToString(run.coupling));
+  b->Set("rk_method", ToString(run.rk_method));
+  b->Set("dt", run.dt);
+  b->Set("tol", run.tol);
+  b->Set("atol", run.atol);
+  b->Set("nlp_tol", run.nlp_tol);
+  b->Set("sigma", run.sigma);
+  b->Set("eps", run.eps);
+  b->SetInt("dae_index", run.dae_index);
+  b->SetInt("substeps", run.substeps);
+  b->Set("mu", run.mu);
+  b->Set("seed", run.seed ? std::to_string(*run.seed) : "");
+  b->Set("roughness", run.roughness);
+  b->Set("t_end", run.t_end);
+  b->SetInt("repeats", run.repeats);
+}
+
+void SetReference(const Reference* ref, const std::string& error, RowBuilder* b) {
+  if (ref) {
+    b->Set("ref_kind", ref->kind);
+    b->Set("ref_status", ref->status);
+    b->Set("ref_hash", ref->hash);
+  } else {
+    b->Set("ref_kind", "none");
+    b->Set("ref_status", error.empty() ? "none" : "error");
+  }
+}
+
+void SetNanMetrics(RowBuilder* b) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const char* c : {"err_pos_rms", "err_pos_max", "err_final", "err_final_rot",
+                        "err_rot_max", "err_force_rms", "err_slip", "drift_max",
+                        "drift_final", "gap_max"})
+    b->Set(c, nan);
+  b->SetInt("common_samples", 0);
+}
+
+}  // namespace
+
+std::vector<std::string> MakeRow(const RunSpec& run, const std::string& terrain_id,
+                                 const SimulationResult& result,
+                                 double min_wall_seconds, const Reference* reference,
+                                 const std::string& reference_error) {
+  RowBuilder b;
+  SetParameters(run, terrain_id, &b);
+  b.Set("status", result.status);
+  b.Set("stop_reason", OneLine(result.stop_reason));
+  b.Set("t_reached", result.t_reached);
+  b.Set("mu_min", result.status == "INFEASIBLE_FRICTION" ? Num(result.mu_min_at_stop)
+                                                          : std::string());
+  b.Set("critical_wheel",
+        result.critical_contact > 0 ? std::to_string(result.critical_contact) : "");
+  b.Set("wall_s", min_wall_seconds);
+  b.SetInt("nlp_solves", result.nlp_solves);
+  b.SetInt("nlp_iters", result.nlp_iterations);
+  b.SetInt("rhs_evals", result.rhs_evaluations);
+  b.SetInt("jac_evals", result.jacobian_evaluations);
+  b.SetInt("steps", result.steps);
+  b.SetInt("rejected_steps", result.rejected_steps);
+  b.SetInt("samples", static_cast<long long>(result.samples.size()));
+  SetReference(reference, reference_error, &b);
+  SetNanMetrics(&b);
+  if (reference) {
+    std::vector<double> times;
+    times.reserve(result.samples.size());
+    for (const TrajectorySample& s : result.samples) times.push_back(s.t);
+    const AccuracyMetrics a = CompareTrajectories(
+        result.samples, reference->ForTimes(times), result.success());
+    b.SetInt("common_samples", a.common_samples);
+    b.Set("err_pos_rms", a.pos_rms);
+    b.Set("err_pos_max", a.pos_max);
+    b.Set("err_final", a.final_pos);
+    b.Set("err_final_rot", a.final_rot);
+    b.Set("err_rot_max", a.rot_max);
+    b.Set("err_force_rms", a.force_rms);
+    b.Set("err_slip", a.slip_rms);
+  }
+  const DriftMetrics d = ComputeDrift(result.samples);
+  b.Set("drift_max", d.drift_max);
+  b.Set("drift_final", d.drift_final);
+  b.Set("gap_max", d.gap_max);
+  return b.values();
+}
+
+std::vector<std::string> ErrorRow(const RunSpec& run, const std::string& terrain_id,
+                                  const std::string& message,
+                                  const Reference* reference) {
+  RowBuilder b;
+  SetParameters(run, terrain_id, &b);
+  b.Set("status", "error");
+  b.Set("stop_reason", OneLine(message));
+  b.Set("t_reached", std::numeric_limits<double>::quiet_NaN());
+  b.Set("wall_s", std::numeric_limits<double>::quiet_NaN());
+  for (const char* c : {"nlp_solves", "nlp_iters", "rhs_evals", "jac_evals", "steps",
+                        "rejected_steps", "samples"})
+    b.SetInt(c, 0);
+  SetReference(reference, "", &b);
+  SetNanMetrics(&b);
+  return b.values();
+}
+
+std::string ReportScriptPath() {
+#ifdef QUASIROLL_SOURCE_DIR_FOR_GIT
+  return std::string(QUASIROLL_SOURCE_DIR_FOR_GIT) + "/reports/make_report.py";
+#else
+  return "reports/make_report.py";
+#endif
+}
+
+std::string TerrainJson(const TerrainSpec& spec) {
+  JsonWriter w;
+  w.BeginObject();
+  switch (spec.type) {
+    case TerrainSpec::Type::kPlane:
+      w.Key("type").Value("plane");
+      w.Key("height").Value(spec.height);
+      break;
+    case TerrainSpec::Type::kIncline:
+      w.Key("type").Value("incline");
+      w.Key("slope_deg").Value(spec.slope_rad * 180 / std::numbers::pi);
+      w.Key("azimuth_deg").Value(spec.azimuth_rad * 180 / std::numbers::pi);
+      w.Key("height").Value(spec.height);
+      break;
+    case TerrainSpec::Type::kGaussians: {
+      std::vector<GaussianBump> bumps = spec.bumps;
+      if (spec.random) {
+        const auto& r = *spec.random;
+        bumps = GaussianTerrain::Random(r.seed, r.count, r.amplitude, r.sigma, r.x, r.y)
+                    .bumps();
+      }
+      w.Key("type").Value("gaussians");
+      w.Key("bumps").BeginArray();
+      for (const GaussianBump& b : bumps) {
+        w.BeginArray();
+        w.Value(b.amplitude).Value(b.x).Value(b.y).Value(b.sigma);
+        w.EndArray();
+      }
+      w.EndArray();
+      break;
+    }
+    default:
+      return "";
+  }
+  w.EndObject();
+  return w.str() + "\n";
+}
+
+// ---------------------------------------------------------------- runner ----
+
+namespace {
+
+// Backends whose libraries are not safe to run in two threads at once
+// (Ipopt 3.11 with sequential MUMPS keeps global state; NLopt is kept serial
+// too as a precaution). Runs using one are never executed concurrently with
+// another run using the same backend.
+int ExclusiveClass(const std::string& nlp) {
+  if (nlp == "ipopt") return 1;
+  if (nlp == "slsqp") return 2;
+  return 0;
+}
+
+std::string ReadFileOr(const std::string& path, bool* ok) {
+  std::ifstream in(path, std::ios::binary);
+  *ok = static_cast<bool>(in);
+  if (!in) return "";
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string FormatDuration(double s) {
+  if (!std::isfinite(s) || s < 0) return "--:--";
+  const long total = std::lround(s);
+  char buf[32];
+  if (total >= 3600)
+    std::snprintf(buf, sizeof(buf), "%ld:%02ld:%02ld", total / 3600, (total / 60) % 60,
+                  total % 60);
+  else
+    std::snprintf(buf, sizeof(buf), "%ld:%02ld", total / 60, total % 60);
+  return buf;
+}
+
+// A pool of `jobs` threads taking tasks in order, except that a task of a
+// non-zero exclusive class waits while another task of its class runs (and
+// is preferred when its class is free, so that serial chains start early).
+class Scheduler {
+ public:
+  Scheduler(std::vector<int> classes, int jobs)
+      : classes_(std::move(classes)), jobs_(std::max(1, jobs)),
+        taken_(classes_.size(), false),
+        remaining_(static_cast<int>(classes_.size())) {}
+
+  // Runs fn(task) for every task; the first exception thrown by fn is
+  // rethrown after all threads have finished.
+  template <typename Fn>
+  void Run(Fn fn) {
+    std::vector<std::thread> threads;
+    const int n = std::min<int>(jobs_, static_cast<int>(classes_.size()));
+    for (int i = 0; i < n; ++i) threads.emplace_back([this, &fn] { Work(fn); });
+    for (std::thread& t : threads) t.join();
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  template <typename Fn>
+  void Work(Fn& fn) {
+    for (;;) {
+      int task = -1;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [&] {
+          task = Pick();
+          return task >= 0 || remaining_ == 0;
+        });
+        if (task < 0) {
+          if (remaining_ == 0) return;
+          continue;
+        }
+        taken_[task] = true;
+        --remaining_;
+        if (classes_[task]) busy_.insert(classes_[task]);
+      }
+      std::exception_ptr error;
+      try {
+        fn(task);
+      } catch (...) {
+        error = std::current_exception();
+      }
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (classes_[task]) busy_.erase(classes_[task]);
+        if (error && !error_) error_ = error;
+      }
+      cv_.notify_all();
+    }
+  }
+  // First untaken task, preferring a free exclusive class; -1 if none is
+  // runnable now.
+  int Pick() const {
+    int first_plain = -1;
+    for (std::size_t i = 0; i < classes_.size(); ++i) {
+      if (taken_[i]) continue;
+      const int c = classes_[i];
+      if (c == 0) {
+        if (first_plain < 0) first_plain = static_cast<int>(i);
+      } else if (!busy_.count(c)) {
+        return static_cast<int>(i);
+      }
+    }
+    return first_plain;
+  }
+  std::vector<int> classes_;
+  int jobs_;
+  std::vector<bool> taken_;
+  int remaining_;
+  std::set<int> busy_;
+  std::exception_ptr error_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+};
+
+class Progress {
+ public:
+  Progress(std::FILE* log, int mode, int total)
+      : log_(log), mode_(mode), total_(total), start_(Clock::now()) {
+    if (mode_ < 0) mode_ = (log_ && ::isatty(::fileno(log_))) ? 2 : 1;
+    if (!log_) mode_ = 0;
+  }
+  void Done(const std::string& run_id, const std::string& status, double t_reached,
+            double wall) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++done_;
+    if (status != "success") ++failed_;
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start_).count();
+    const double eta = done_ > 0 ? elapsed / done_ * (total_ - done_) : NAN;
+    if (mode_ == 1) {
+      std::fprintf(log_, "[%d/%d] %s: %s (t=%s s, %.3f s wall)\n", done_, total_,
+                   run_id.c_str(), status.c_str(), Num(t_reached).c_str(), wall);
+    } else if (mode_ == 2) {
+      std::fprintf(log_, "\r\033[K%d/%d runs, %d failed, elapsed %s, ETA %s", done_,
+                   total_, failed_, FormatDuration(elapsed).c_str(),
+                   FormatDuration(eta).c_str());
+      if (done_ == total_) std::fprintf(log_, "\n");
+    }
+    if (mode_) std::fflush(log_);
+  }
+  void Message(const std::string& text) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!log_ || mode_ == 0) return;
+    std::fprintf(log_, "%s\n", text.c_str());
+    std::fflush(log_);
+  }
+
+ private:
+  std::mutex mutex_;
+  std::FILE* log_;
+  int mode_;
+  int total_;
+  int done_ = 0, failed_ = 0;
+  Clock::time_point start_;
+};
+
+struct RefJob {
+  Scene scene;
+  TerrainSpec terrain;
+  std::string digest, label, key;
+  std::optional<Reference> reference;
+  std::string error;
+  std::string nlp;
+};
+
+void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
+               const std::string& start, const std::string& end,
+               const HarnessSummary* summary) {
+  JsonWriter w;
+  w.BeginObject();
+  w.Key("suite").BeginObject();
+  w.Key("name").Value(suite.name);
+  w.Key("path").Value(suite.path);
+  w.Key("absolute_path")
+      .Value(suite.path.empty() ? std::string() : fs::absolute(suite.path).string());
+  w.Key("hash").Value(Hex64(suite.text_hash));
+  w.Key("groups").BeginArray();
+  for (const std::string& g : suite.groups) w.Value(g);
+  w.EndArray();
+  w.Key("runs_total").Value(static_cast<int>(suite.runs.size()));
+  w.EndObject();
+  w.Key("reference").Value(suite.reference.Canonical());
+  w.Key("commit").Value(GitCommit());
+  w.Key("libraries");
+  WriteLibraryVersions(&w);
+  w.Key("machine");
+  WriteMachine(&w);
+  w.Key("jobs").Value(jobs);
+  w.Key("filter").Value(options.filter);
+  w.Key("resume").Value(options.resume);
+  w.Key("start_time").Value(start);
+  if (summary) {
+    w.Key("end_time").Value(end);
+    w.Key("wall_s").Value(summary->wall_seconds);
+    w.Key("runs_selected").Value(summary->selected);
+    w.Key("runs_executed").Value(summary->executed);
+    w.Key("runs_resumed").Value(summary->resumed);
+    w.Key("failures").Value(summary->failures);
+    w.Key("complete").Value(true);
+  } else {
+    w.Key("complete").Value(false);
+  }
+  w.EndObject();
+  AtomicWriteFile(options.out_dir + "/meta.json", w.str() + "\n");
+}
+
+}  // namespace
+
+HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
+  const auto t_start = Clock::now();
+  const std::string start_time = IsoTimeNow();
+  const std::string& dir = options.out_dir;
+  int jobs = options.jobs > 0 ? options.jobs
+                              : static_cast<int>(std::thread::hardware_concurrency());
+  if (jobs <= 0) jobs = 1;
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+
+  HarnessSummary summary;
+  summary.total = static_cast<int>(suite.runs.size());
+
+  // Selection.
+  std::vector<const RunSpec*> selected;
+  {
+    std::optional<std::regex> re;
+    if (!options.filter.empty()) {
+      try {
+        re.emplace(options.filter, std::regex::ECMAScript);
+      } catch (const std::regex_error& e) {
+        throw SceneError("--filter: invalid regular expression (" +
+                         std::string(e.what()) + "), got \"" + options.filter + "\"");
+      }
+    }
+    for (const RunSpec& r : suite.runs)
+      if (!re || std::regex_search(r.run_id, *re)) selected.push_back(&r);
+  }
+  summary.selected = static_cast<int>(selected.size());
+  fs::create_directories(dir);
+  WriteMeta(suite, options, jobs, start_time, "", nullptr);
+
+  const std::string header = Header();
+  std::vector<std::string> rows(selected.size());
+  std::vector<std::string> terrain_ids(selected.size());
+  std::vector<int> pending;
+  for (std::size_t i = 0; i < selected.size(); ++i) {
+    const RunSpec& r = *selected[i];
+    terrain_ids[i] = TerrainId(r, suite.scenes[r.scene_index]);
+    if (options.resume) {
+      bool ok_row = false, ok_traj = false;
+      const std::string text = ReadFileOr(dir + "/runs/" + r.run_id + ".csv", &ok_row);
+      ReadFileOr(dir + "/trajectories/" + r.run_id + ".csv", &ok_traj);
+      const std::string prefix = header + "\n" + r.run_id + ",";
+      if (ok_row && ok_traj && text.rfind(prefix, 0) == 0 && text.back() == '\n') {
+        std::string row = text.substr(header.size() + 1);
+        row.pop_back();
+        if (row.find('\n') == std::string::npos) {
+          rows[i] = row;
+          ++summary.resumed;
+          continue;
+        }
+      }
+    }
+    pending.push_back(static_cast<int>(i));
+  }
+
+  // Terrains for the report (one file per terrain id).
+  {
+    std::set<std::string> written;
+    for (std::size_t i = 0; i < selected.size(); ++i) {
+      if (!written.insert(terrain_ids[i]).second) continue;
+      const RunSpec& r = *selected[i];
+      const std::string json =
+          TerrainJson(SweptTerrain(suite.scenes[r.scene_index], r.seed, r.roughness));
+      if (!json.empty()) AtomicWriteFile(dir + "/terrains/" + terrain_ids[i] + ".json", json);
+    }
+  }
+
+  Progress progress(options.log, options.progress, static_cast<int>(pending.size()));
+  if (summary.resumed > 0)
+    progress.Message("resume: " + std::to_string(summary.resumed) + " of " +
+                     std::to_string(selected.size()) + " runs already done");
+
+  // References needed by the pending runs, computed once each.
+  std::vector<RefJob> refs;
+  std::map<std::string, int> ref_index;  // key -> refs index
+  std::vector<int> run_ref(selected.size(), -1);
+  for (int i : pending) {
+    const RunSpec& r = *selected[i];
+    const SuiteScene& sc = suite.scenes[r.scene_index];
+    RefJob job;
+    job.scene = ReferenceScene(suite, r);
+    job.terrain = SweptTerrain(sc, r.seed, r.roughness);
+    job.digest = sc.heightmap_digest;
+    job.label = sc.name;
+    job.nlp = suite.reference.nlp;
+    job.key = ReferenceKey(job.scene, job.terrain, job.digest, suite.reference);
+    auto [it, inserted] = ref_index.emplace(job.key, static_cast<int>(refs.size()));
+    if (inserted) refs.push_back(std::move(job));
+    run_ref[i] = it->second;
+  }
+  {
+    std::vector<int> classes;
+    for (const RefJob& j : refs) classes.push_back(ExclusiveClass(j.nlp));
+    Scheduler(classes, jobs).Run([&](int k) {
+      RefJob& j = refs[k];
+      try {
+        j.reference = LoadOrComputeReference(dir, j.scene, j.terrain, j.digest,
+                                             suite.reference, j.label);
+      } catch (const std::exception& e) {
+        j.error = e.what();
+        progress.Message("reference for scene " + j.label + " failed: " + j.error);
+      }
+    });
+  }
+
+  // Runs.
+  {
+    std::vector<int> classes;
+    for (int i : pending) classes.push_back(ExclusiveClass(selected[i]->nlp));
+    Scheduler(classes, jobs).Run([&](int k) {
+      const int i = pending[k];
+      const RunSpec& r = *selected[i];
+      const RefJob& rj = refs[run_ref[i]];
+      const Reference* ref = rj.reference ? &*rj.reference : nullptr;
+      std::vector<std::string> row;
+      SimulationResult result;
+      try {
+        const Scene scene = RunScene(suite, r);
+        Simulator sim(scene, r.Options());
+        result = sim.Run();
+        double wall = result.wall_seconds;
+        for (int rep = 1; rep < r.repeats; ++rep)
+          wall = std::min(wall, sim.Run().wall_seconds);
+        row = MakeRow(r, terrain_ids[i], result, wall, ref, rj.error);
+      } catch (const std::exception& e) {
+        result = SimulationResult{};
+        result.status = "error";
+        row = ErrorRow(r, terrain_ids[i], e.what(), ref);
+      }
+      const std::string line = JoinRow(row);
+      AtomicWriteFile(dir + "/trajectories/" + r.run_id + ".csv", TrajectoryCsv(result));
+      AtomicWriteFile(dir + "/runs/" + r.run_id + ".csv", header + "\n" + line + "\n");
+      rows[i] = line;
+      progress.Done(r.run_id, row[std::find(RunsCsvColumns().begin(),
+                                            RunsCsvColumns().end(), "status") -
+                                  RunsCsvColumns().begin()],
+                    result.t_reached, result.wall_seconds);
+    });
+  }
+  summary.executed = static_cast<int>(pending.size());
+
+  // runs.csv in grid order.
+  std::string csv = header + "\n";
+  const std::size_t status_col =
+      std::find(RunsCsvColumns().begin(), RunsCsvColumns().end(), "status") -
+      RunsCsvColumns().begin();
+  for (const std::string& row : rows) {
+    csv += row + "\n";
+    // The status field never needs quoting; find it by counting fields up to
+    // it (earlier fields never contain commas either: names and numbers).
+    std::size_t pos = 0;
+    for (std::size_t c = 0; c < status_col && pos != std::string::npos; ++c)
+      pos = row.find(',', pos) + 1;
+    const std::string status = row.substr(pos, row.find(',', pos) - pos);
+    if (status != "success") ++summary.failures;
+  }
+  AtomicWriteFile(dir + "/runs.csv", csv);
+  summary.wall_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
+  WriteMeta(suite, options, jobs, start_time, IsoTimeNow(), &summary);
+  return summary;
+}
+
+}  // namespace quasiroll::bench

@@ -1,0 +1,115 @@
+// Reference trajectories of the benchmark harness (docs/harness.md):
+// closed-form solutions where the scene admits one (model-notes §9, oracles
+// O1, O2, O3), otherwise the most accurate numerical configuration; cached on
+// disk under DIR/references/<hash>.csv keyed by FNV-1a 64 of a canonical text
+// of the scene's effective parameters and the reference settings.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bench/suite.h"
+#include "core/scene.h"
+#include "core/simulator.h"
+#include "core/terrains.h"
+
+namespace quasiroll::bench {
+
+enum class AnalyticCase {
+  kNone,
+  kFlatStraight,  // O1: plane, steer 0, equal spin rates
+  kCircle,        // O2: plane, steer locked at phi1 != 0, consistent rates
+  kIncline,       // O3: incline, straight up or down the gradient
+};
+const char* ToString(AnalyticCase c);  // "none", "flat", "circle", "incline"
+
+// Decides whether `scene` (terrain built from `terrain`) has a closed-form
+// quasi-static trajectory, and which. All conditions must hold exactly (up to
+// 1e-12 relative rounding on the rates):
+//  * common: camber_offset = 0; initial cambers delta2 = delta3 = 0; steer
+//    rate 0; in paper mode camber rates 0 (pvc ignores the passive rates
+//    alpha1', delta2', delta3');
+//  * kFlatStraight: plane terrain, phi1 = 0, equal driven spin rates
+//    (paper: alpha1' = alpha2' = alpha3'; pvc: alpha2' = alpha3'). Motion:
+//    straight along the initial heading at v = rho alpha', height h + h_c;
+//  * kCircle: plane terrain, 0 < |phi1| < pi/2 and the rates of O2: with
+//    v = rho (alpha2' + alpha3')/2 and omega = v tan(phi1)/L,
+//    rho (alpha3' - alpha2') = omega t and (paper mode) alpha1' =
+//    v / (rho cos phi1). Motion: the rear-axle centre turns about the fixed
+//    point L/tan(phi1) to its left at yaw rate omega (COM radius
+//    sqrt((L/tan phi1)^2 + b^2));
+//  * kIncline: incline terrain (slope beta != 0), phi1 = 0, heading along
+//    the gradient (yaw = azimuth or azimuth + pi), equal driven spin rates,
+//    and friction sufficient for rolling (paper: mu > tan beta; pvc:
+//    mu > L sin beta / (a cos beta +- h_c sin beta), + nose up). Motion:
+//    straight along the slope at v = rho alpha'.
+// `why_not` (optional) receives the first failed condition.
+AnalyticCase DetectAnalyticCase(const Scene& scene, const TerrainSpec& terrain,
+                                std::string* why_not = nullptr);
+
+// The closed-form trajectory of a detected case (throws std::logic_error
+// for kNone). Sample(t) fills pose, velocities, joints, contact points,
+// normal forces (static load distribution), tractions, creep slip
+// eps q / sqrt(1 - q^2) with q = |f_t| / (mu f_n), drift 0, gap 0.
+class AnalyticSolution {
+ public:
+  AnalyticSolution(const Scene& scene, const TerrainSpec& terrain,
+                   AnalyticCase kind);
+  AnalyticCase kind() const { return kind_; }
+  TrajectorySample Sample(double t) const;
+
+ private:
+  Scene scene_;
+  AnalyticCase kind_;
+  double rho_ = 0, h_c_ = 0, L_ = 0, mg_ = 0;
+  double v_ = 0, omega_ = 0;  // speed of the reference point, yaw rate
+  std::array<double, 6> rates_{};  // effective joint rates
+  Mat3 R0_ = Mat3::Identity();     // initial orientation
+  Vec3 p0_ = Vec3::Zero();         // initial COM
+  Vec3 icr_ = Vec3::Zero();        // circle: fixed turning centre
+  double rear_radius_ = 0;         // circle: signed L / tan(phi1)
+  std::array<double, 3> normal_{}, traction_{}, slip_{};
+};
+
+struct Reference {
+  std::string hash;         // 16 hex digits of FNV-1a 64 of `key`
+  std::string key;          // canonical text (scene + settings)
+  std::string kind;         // "analytic:flat" ... or "numerical"
+  std::string status;       // "success" or the numerical run's status
+  std::string stop_reason;
+  std::string scene;        // suite scene name (informational)
+  std::vector<TrajectorySample> samples;  // on the reference output grid
+  std::optional<AnalyticSolution> analytic;
+
+  // Samples to compare a run against: the exact solution at `times` if
+  // analytic, else `samples` (interpolated by the metrics).
+  std::vector<TrajectorySample> ForTimes(const std::vector<double>& times) const;
+};
+
+// Canonical key text of the reference of `scene`.
+std::string ReferenceKey(const Scene& scene, const TerrainSpec& terrain,
+                         const std::string& heightmap_digest,
+                         const ReferenceSettings& settings);
+
+// Numerical reference: coupled mode, rk-projection with RK4 at step
+// scene.dt / (dt_divisor * substeps), output every scene.dt / dt_divisor,
+// settings.nlp at settings.residual_tolerance.
+SimulationResult ComputeNumericalReference(const Scene& scene,
+                                           const ReferenceSettings& settings);
+
+// Returns the reference of a scene, from DIR/references/<hash>.{csv,json}
+// if present with the same key, else computed (analytic if allowed and
+// detected) and written there atomically. `dir` empty = no cache. Exceptions
+// of the computation propagate.
+Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
+                                 const TerrainSpec& terrain,
+                                 const std::string& heightmap_digest,
+                                 const ReferenceSettings& settings,
+                                 const std::string& scene_label);
+
+// Parses a trajectory.csv (TrajectoryCsv format; columns located by name).
+// Throws std::runtime_error naming the line on malformed input.
+std::vector<TrajectorySample> ParseTrajectoryCsv(const std::string& text);
+
+}  // namespace quasiroll::bench

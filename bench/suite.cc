@@ -1,0 +1,592 @@
+#include "bench/suite.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "core/nlp.h"
+#include "core/yaml_util.h"
+
+namespace quasiroll::bench {
+
+namespace fs = std::filesystem;
+using yaml::Bounds;
+using yaml::Child;
+using yaml::Fail;
+using yaml::JoinIndex;
+using yaml::JoinKey;
+
+std::uint64_t Fnv1a64(std::string_view text) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+std::string Hex64(std::uint64_t value) {
+  char buf[17];
+  std::snprintf(buf, sizeof(buf), "%016llx",
+                static_cast<unsigned long long>(value));
+  return buf;
+}
+
+std::string Num(double v) { return yaml::FormatNumber(v); }
+
+std::string ReferenceSettings::Canonical() const {
+  std::ostringstream os;
+  os << "reference{analytic=" << (analytic ? 1 : 0)
+     << ";dt_divisor=" << dt_divisor << ";substeps=" << substeps
+     << ";nlp=" << nlp << ";residual_tolerance=" << Num(residual_tolerance)
+     << ";coupling=coupled;dae=rk-projection;rk=rk4}";
+  return os.str();
+}
+
+SimulationOptions RunSpec::Options() const {
+  SimulationOptions o;
+  o.nlp = nlp;
+  o.dae = dae;
+  o.coupling = coupling;
+  o.dt = dt;
+  o.t_end = t_end;
+  o.integrator.rk_method = rk_method;
+  o.integrator.step = dt / substeps;
+  o.integrator.rtol = tol;
+  o.integrator.atol = atol;
+  o.integrator.baumgarte_sigma = sigma;
+  o.integrator.dae_index = dae_index;
+  o.quasi_static.residual_tolerance = nlp_tol;
+  return o;
+}
+
+namespace {
+
+std::string ReadFileOrEmpty(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "";
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+bool IsSafeName(const std::string& s) {
+  if (s.empty() || s.size() > 64) return false;
+  for (char c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.'))
+      return false;
+  return s != "." && s != "..";
+}
+
+std::string ReadSafeName(const YAML::Node& node, const std::string& path) {
+  const std::string s = yaml::ReadString(node, path);
+  if (!IsSafeName(s))
+    Fail(path, "must be 1-64 characters of [A-Za-z0-9_.], got \"" + s + "\"");
+  return s;
+}
+
+// A scalar or a sequence of scalars, each read by `read`; an empty sequence
+// is an error ("empty grid").
+template <typename T, typename Reader>
+std::vector<T> ReadAxis(const YAML::Node& node, const std::string& path,
+                        Reader read) {
+  std::vector<T> out;
+  if (node.IsSequence()) {
+    if (node.size() == 0) Fail(path, "empty grid axis, got []");
+    for (std::size_t i = 0; i < node.size(); ++i)
+      out.push_back(read(node[i], JoinIndex(path, i)));
+  } else if (node.IsScalar()) {
+    out.push_back(read(node, path));
+  } else {
+    Fail(path, "expected a value or a non-empty sequence, got " +
+                   yaml::DescribeNode(node));
+  }
+  return out;
+}
+
+void CheckNoDuplicates(const std::vector<std::string>& canon,
+                       const std::string& path) {
+  std::set<std::string> seen;
+  for (std::size_t i = 0; i < canon.size(); ++i)
+    if (!seen.insert(canon[i]).second)
+      Fail(JoinIndex(path, i), "duplicate grid value, got " + canon[i]);
+}
+
+std::vector<double> ReadDoubleAxis(const YAML::Node& map,
+                                   const std::string& path,
+                                   std::string_view key, const Bounds& b,
+                                   std::vector<double> fallback) {
+  auto n = Child(map, key);
+  if (!n) return fallback;
+  const std::string p = JoinKey(path, key);
+  std::vector<double> v = ReadAxis<double>(
+      *n, p, [&b](const YAML::Node& x, const std::string& xp) {
+        return yaml::ReadDouble(x, xp, b);
+      });
+  std::vector<std::string> canon;
+  for (double d : v) canon.push_back(Num(d));
+  if (n->IsSequence()) CheckNoDuplicates(canon, p);
+  return v;
+}
+
+std::vector<std::string> ReadNameAxis(
+    const YAML::Node& map, const std::string& path, std::string_view key,
+    const std::vector<std::string>& known, std::vector<std::string> fallback) {
+  auto n = Child(map, key);
+  if (!n) return fallback;
+  const std::string p = JoinKey(path, key);
+  std::vector<std::string> v = ReadAxis<std::string>(
+      *n, p, [&known](const YAML::Node& x, const std::string& xp) {
+        const std::string s = yaml::ReadString(x, xp);
+        bool ok = false;
+        for (const std::string& k : known) ok = ok || k == s;
+        if (!ok) {
+          std::string list;
+          for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+          Fail(xp, "unknown name (known: " + list + "), got \"" + s + "\"");
+        }
+        return s;
+      });
+  if (n->IsSequence()) CheckNoDuplicates(v, p);
+  return v;
+}
+
+std::vector<std::int64_t> ReadIntAxis(const YAML::Node& map,
+                                      const std::string& path,
+                                      std::string_view key, std::int64_t lo,
+                                      std::int64_t hi,
+                                      std::vector<std::int64_t> fallback) {
+  auto n = Child(map, key);
+  if (!n) return fallback;
+  const std::string p = JoinKey(path, key);
+  std::vector<std::int64_t> v = ReadAxis<std::int64_t>(
+      *n, p, [lo, hi](const YAML::Node& x, const std::string& xp) {
+        return yaml::ReadInt(x, xp, lo, hi);
+      });
+  std::vector<std::string> canon;
+  for (auto d : v) canon.push_back(std::to_string(d));
+  if (n->IsSequence()) CheckNoDuplicates(canon, p);
+  return v;
+}
+
+SuiteScene ReadSuiteScene(const YAML::Node& node, const std::string& path,
+                          const std::string& base_dir) {
+  yaml::CheckKeys(node, path, {"name", "file", "overrides"});
+  SuiteScene s;
+  s.entry_path = path;
+  const YAML::Node file_node = yaml::Require(node, path, "file");
+  const std::string file_path = JoinKey(path, "file");
+  const std::string rel = yaml::ReadString(file_node, file_path);
+  s.file = fs::path(rel).is_absolute() || base_dir.empty()
+               ? rel
+               : (fs::path(base_dir) / rel).lexically_normal().string();
+  const std::string text = ReadFileOrEmpty(s.file);
+  {
+    std::ifstream probe(s.file);
+    if (!probe) Fail(file_path, "cannot open scene file, got \"" + s.file + "\"");
+  }
+  const std::string file_dir = fs::path(s.file).parent_path().string();
+  // The file, parsed once as a node so that its terrain spec is available.
+  YAML::Node root;
+  try {
+    root = yaml::ParseYaml(text, s.file);
+    s.scene.source_path = s.file;
+    s.scene.name = fs::path(s.file).stem().string();
+    yaml::ReadSceneNode(root, "", file_dir, &s.scene);
+    s.terrain = TerrainSpec{};
+    if (auto t = Child(root, "terrain"))
+      s.terrain = yaml::ReadTerrainSpec(*t, "terrain", file_dir);
+  } catch (const SceneError& e) {
+    Fail(file_path, std::string("in \"") + s.file + "\": " + e.what());
+  }
+  if (auto ov = Child(node, "overrides")) {
+    const std::string op = JoinKey(path, "overrides");
+    yaml::ReadSceneNode(*ov, op, base_dir, &s.scene);
+    if (auto t = Child(*ov, "terrain"))
+      s.terrain = yaml::ReadTerrainSpec(*t, JoinKey(op, "terrain"), base_dir);
+  }
+  if (auto n = Child(node, "name")) {
+    s.name = ReadSafeName(*n, JoinKey(path, "name"));
+  } else {
+    s.name = s.scene.name;
+    if (!IsSafeName(s.name))
+      Fail(JoinKey(path, "name"),
+           "required when the scene's name is not of [A-Za-z0-9_.], got \"" +
+               s.name + "\"");
+  }
+  if (s.terrain.type == TerrainSpec::Type::kHeightmap)
+    s.heightmap_digest = Hex64(Fnv1a64(ReadFileOrEmpty(s.terrain.file)));
+  return s;
+}
+
+ReferenceSettings ReadReference(const YAML::Node& node, const std::string& path) {
+  yaml::CheckKeys(node, path,
+                  {"analytic", "dt_divisor", "substeps", "nlp", "residual_tolerance"});
+  ReferenceSettings r;
+  if (auto n = Child(node, "analytic"))
+    r.analytic = yaml::ReadEnum(*n, JoinKey(path, "analytic"), {"true", "false"}) == "true";
+  if (auto n = Child(node, "dt_divisor"))
+    r.dt_divisor = static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "dt_divisor"), 1, 1000));
+  if (auto n = Child(node, "substeps"))
+    r.substeps = static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "substeps"), 1, 1000));
+  if (auto n = Child(node, "nlp")) {
+    r.nlp = yaml::ReadString(*n, JoinKey(path, "nlp"));
+    if (!NlpSolverRegistry::Has(r.nlp))
+      Fail(JoinKey(path, "nlp"), "unknown NLP backend, got \"" + r.nlp + "\"");
+  }
+  yaml::ReadOptionalDouble(node, path, "residual_tolerance", &r.residual_tolerance,
+                           Bounds::Positive());
+  return r;
+}
+
+std::string CanonicalRunKey(const RunSpec& r) {
+  std::ostringstream os;
+  os << "group=" << r.group << ";scene=" << r.scene << ";nlp=" << r.nlp
+     << ";dae=" << r.dae << ";coupling=" << ToString(r.coupling)
+     << ";rk=" << ToString(r.rk_method) << ";dt=" << Num(r.dt)
+     << ";tol=" << Num(r.tol) << ";atol=" << Num(r.atol)
+     << ";nlp_tol=" << Num(r.nlp_tol) << ";sigma=" << Num(r.sigma)
+     << ";eps=" << Num(r.eps) << ";dae_index=" << r.dae_index
+     << ";substeps=" << r.substeps << ";mu=" << Num(r.mu)
+     << ";seed=" << (r.seed ? std::to_string(*r.seed) : "-")
+     << ";roughness=" << Num(r.roughness) << ";t_end=" << Num(r.t_end)
+     << ";repeats=" << r.repeats;
+  return os.str();
+}
+
+void ExpandGroup(const YAML::Node& node, const std::string& path,
+                 const std::string& group, Suite* suite) {
+  yaml::CheckKeys(node, path,
+                  {"description", "scenes", "nlp", "dae", "coupling", "rk_method",
+                   "dt", "tol", "atol_ratio", "nlp_tol", "sigma", "eps", "mu",
+                   "seed", "roughness", "dae_index", "substeps", "t_end",
+                   "repeats"});
+  if (auto n = Child(node, "description"))
+    yaml::ReadString(*n, JoinKey(path, "description"));
+
+  // Scenes of the group (default: all of the suite's).
+  std::vector<int> scene_idx;
+  if (auto n = Child(node, "scenes")) {
+    std::vector<std::string> names;
+    for (const SuiteScene& s : suite->scenes) names.push_back(s.name);
+    for (const std::string& s :
+         ReadNameAxis(node, path, "scenes", names, {})) {
+      for (std::size_t i = 0; i < names.size(); ++i)
+        if (names[i] == s) scene_idx.push_back(static_cast<int>(i));
+    }
+  } else {
+    for (std::size_t i = 0; i < suite->scenes.size(); ++i)
+      scene_idx.push_back(static_cast<int>(i));
+  }
+  if (scene_idx.empty()) Fail(JoinKey(path, "scenes"), "no scenes, got none");
+
+  const std::vector<std::string> nlps =
+      ReadNameAxis(node, path, "nlp", NlpSolverRegistry::Names(), {"newton"});
+  const std::vector<std::string> daes = ReadNameAxis(
+      node, path, "dae", IntegratorRegistry::Names(), {"rk-projection"});
+  const std::vector<std::string> couplings =
+      ReadNameAxis(node, path, "coupling", {"zoh", "coupled"}, {"zoh"});
+  const std::vector<std::string> rks =
+      ReadNameAxis(node, path, "rk_method", {"rk4", "dp54", "bs32"}, {"rk4"});
+  const std::vector<double> tols =
+      ReadDoubleAxis(node, path, "tol", Bounds::Positive(), {1e-8});
+  double atol_ratio = 1e-2;
+  yaml::ReadOptionalDouble(node, path, "atol_ratio", &atol_ratio, Bounds::Positive());
+  const std::vector<double> nlp_tols =
+      ReadDoubleAxis(node, path, "nlp_tol", Bounds::Positive(), {1e-12});
+  const std::vector<double> sigmas =
+      ReadDoubleAxis(node, path, "sigma", Bounds::NonNegative(), {5.0});
+  const std::vector<std::int64_t> dae_indices =
+      ReadIntAxis(node, path, "dae_index", 1, 2, {2});
+  const std::vector<std::int64_t> substeps =
+      ReadIntAxis(node, path, "substeps", 1, 100000, {1});
+  const std::vector<double> roughness =
+      ReadDoubleAxis(node, path, "roughness", Bounds::NonNegative(), {1.0});
+  // Optional axes whose default depends on the scene: empty = scene's.
+  const std::vector<double> dts =
+      ReadDoubleAxis(node, path, "dt", Bounds::Positive(), {});
+  const std::vector<double> epss =
+      ReadDoubleAxis(node, path, "eps", Bounds::Positive(), {});
+  const std::vector<double> mus =
+      ReadDoubleAxis(node, path, "mu", Bounds::Positive(), {});
+  std::vector<std::uint64_t> seeds;
+  if (auto n = Child(node, "seed")) {
+    const std::string p = JoinKey(path, "seed");
+    seeds = ReadAxis<std::uint64_t>(*n, p, [](const YAML::Node& x, const std::string& xp) {
+      return yaml::ReadUint64(x, xp);
+    });
+    std::vector<std::string> canon;
+    for (auto s : seeds) canon.push_back(std::to_string(s));
+    if (n->IsSequence()) CheckNoDuplicates(canon, p);
+  }
+  double t_end_override = 0;
+  yaml::ReadOptionalDouble(node, path, "t_end", &t_end_override, Bounds::Positive());
+  int repeats = 1;
+  if (auto n = Child(node, "repeats"))
+    repeats = static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "repeats"), 1, 1000));
+
+  for (int si : scene_idx) {
+    const SuiteScene& sc = suite->scenes[si];
+    const std::string scene_ref = "scene \"" + sc.name + "\"";
+    if (!seeds.empty() && !sc.random_terrain())
+      Fail(JoinKey(path, "seed"), scene_ref +
+                                      " has no random gaussian terrain, got " +
+                                      std::to_string(seeds.front()));
+    for (double r : roughness)
+      if (r != 1.0 && !sc.gaussian_terrain())
+        Fail(JoinKey(path, "roughness"),
+             scene_ref + " has no gaussian terrain (roughness must be 1), got " + Num(r));
+    const double t_end = t_end_override > 0 ? t_end_override : sc.scene.t_end;
+    std::vector<double> sc_dts = dts.empty() ? std::vector<double>{sc.scene.dt} : dts;
+    for (std::size_t i = 0; i < sc_dts.size(); ++i)
+      if (sc_dts[i] > t_end)
+        Fail(dts.empty() ? JoinKey(path, "t_end")
+                         : JoinIndex(JoinKey(path, "dt"), i),
+             "dt must be <= t_end (" + Num(t_end) + ") of " + scene_ref + ", got " +
+                 Num(sc_dts[i]));
+    const std::vector<double> sc_eps =
+        epss.empty() ? std::vector<double>{sc.scene.epsilon} : epss;
+    const std::vector<double> sc_mu =
+        mus.empty() ? std::vector<double>{sc.scene.mu} : mus;
+    std::vector<std::optional<std::uint64_t>> sc_seeds;
+    if (!seeds.empty()) {
+      for (auto s : seeds) sc_seeds.emplace_back(s);
+    } else if (sc.random_terrain()) {
+      sc_seeds.emplace_back(sc.terrain.random->seed);
+    } else {
+      sc_seeds.emplace_back(std::nullopt);
+    }
+
+    for (double mu : sc_mu)
+      for (const auto& seed : sc_seeds)
+        for (double rough : roughness)
+          for (double eps : sc_eps)
+            for (const std::string& nlp : nlps)
+              for (const std::string& dae : daes)
+                for (const std::string& coupling : couplings)
+                  for (const std::string& rk : rks)
+                    for (std::int64_t di : dae_indices)
+                      for (double sigma : sigmas)
+                        for (double tol : tols)
+                          for (double nlp_tol : nlp_tols)
+                            for (double dt : sc_dts)
+                              for (std::int64_t sub : substeps) {
+                                RunSpec r;
+                                r.index = static_cast<int>(suite->runs.size());
+                                r.group = group;
+                                r.scene_index = si;
+                                r.scene = sc.name;
+                                r.nlp = nlp;
+                                r.dae = dae;
+                                r.coupling = CouplingFromString(coupling);
+                                r.rk_method = RkMethodFromString(rk);
+                                r.dt = dt;
+                                r.tol = tol;
+                                r.atol = tol * atol_ratio;
+                                r.nlp_tol = nlp_tol;
+                                r.sigma = sigma;
+                                r.eps = eps;
+                                r.dae_index = static_cast<int>(di);
+                                r.substeps = static_cast<int>(sub);
+                                r.mu = mu;
+                                r.seed = seed;
+                                r.roughness = rough;
+                                r.t_end = t_end;
+                                r.repeats = repeats;
+                                r.key = CanonicalRunKey(r);
+                                r.run_id = group + "-" + sc.name + "-" + nlp + "-" +
+                                           dae + "-" + coupling + "-" +
+                                           Hex64(Fnv1a64(r.key)).substr(0, 8);
+                                std::string why;
+                                if (!r.Options().IsValid(&why))
+                                  Fail(path, "invalid method options (" + why +
+                                                 ") for " + scene_ref + ", got " + r.key);
+                                suite->runs.push_back(std::move(r));
+                              }
+  }
+}
+
+}  // namespace
+
+Suite LoadSuiteFromString(const std::string& text, const std::string& origin,
+                          const std::string& base_dir) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  Suite suite;
+  suite.path = origin;
+  suite.text_hash = Fnv1a64(text);
+  const YAML::Node root = yaml::ParseYaml(text, origin);
+  yaml::CheckKeys(root, "", {"name", "description", "reference", "scenes", "groups"});
+  suite.name = origin.empty() ? "suite" : fs::path(origin).stem().string();
+  if (auto n = Child(root, "name")) suite.name = yaml::ReadString(*n, "name");
+  if (auto n = Child(root, "description"))
+    suite.description = yaml::ReadString(*n, "description");
+  if (auto n = Child(root, "reference")) suite.reference = ReadReference(*n, "reference");
+
+  const YAML::Node scenes = yaml::Require(root, "", "scenes");
+  if (!scenes.IsSequence() || scenes.size() == 0)
+    Fail("scenes", "expected a non-empty sequence of scene entries, got " +
+                       yaml::DescribeNode(scenes));
+  std::set<std::string> scene_names;
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const std::string p = JoinIndex("scenes", i);
+    SuiteScene s = ReadSuiteScene(scenes[i], p, base_dir);
+    if (!scene_names.insert(s.name).second)
+      Fail(JoinKey(p, "name"), "duplicate scene name, got \"" + s.name + "\"");
+    suite.scenes.push_back(std::move(s));
+  }
+
+  const YAML::Node groups = yaml::Require(root, "", "groups");
+  if (!groups.IsMap() || groups.size() == 0)
+    Fail("groups", "expected a non-empty mapping of named groups, got " +
+                       yaml::DescribeNode(groups));
+  std::set<std::string> run_ids, group_names;
+  for (auto it = groups.begin(); it != groups.end(); ++it) {
+    const std::string raw = it->first.as<std::string>();
+    const std::string p = JoinKey("groups", raw);
+    if (!IsSafeName(raw))
+      Fail(p, "group names must be 1-64 characters of [A-Za-z0-9_.], got \"" + raw + "\"");
+    if (!group_names.insert(raw).second) Fail(p, "duplicate group, got \"" + raw + "\"");
+    suite.groups.push_back(raw);
+    const std::size_t first = suite.runs.size();
+    ExpandGroup(it->second, p, raw, &suite);
+    if (suite.runs.size() == first) Fail(p, "empty grid, got 0 runs");
+    for (std::size_t k = first; k < suite.runs.size(); ++k)
+      if (!run_ids.insert(suite.runs[k].run_id).second)
+        Fail(p, "duplicate grid point (run id collision), got " + suite.runs[k].run_id);
+  }
+  return suite;
+}
+
+Suite LoadSuite(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(path + ": cannot open suite file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  Suite s = LoadSuiteFromString(ss.str(), path, fs::path(path).parent_path().string());
+  s.path = path;
+  return s;
+}
+
+// --------------------------------------------------- effective scenes ----
+
+TerrainSpec SweptTerrain(const SuiteScene& scene,
+                         std::optional<std::uint64_t> seed, double roughness) {
+  TerrainSpec spec = scene.terrain;
+  if (seed && (!spec.random || spec.random->seed != *seed)) {
+    if (!scene.random_terrain())
+      throw SceneError("seed: scene \"" + scene.name +
+                       "\" has no random gaussian terrain, got " + std::to_string(*seed));
+    spec.random->seed = *seed;
+  }
+  if (roughness != 1.0) {
+    if (!scene.gaussian_terrain())
+      throw SceneError("roughness: scene \"" + scene.name +
+                       "\" has no gaussian terrain, got " + Num(roughness));
+    if (spec.random) {
+      const auto& r = *spec.random;
+      spec.bumps = GaussianTerrain::Random(r.seed, r.count, r.amplitude, r.sigma, r.x, r.y)
+                       .bumps();
+      spec.random.reset();
+    }
+    for (GaussianBump& b : spec.bumps) b.amplitude *= roughness;
+  }
+  return spec;
+}
+
+namespace {
+Scene SweptScene(const Suite& suite, const RunSpec& run) {
+  const SuiteScene& sc = suite.scenes.at(run.scene_index);
+  Scene s = sc.scene;
+  s.mu = run.mu;
+  s.t_end = run.t_end;
+  if (s.dt > s.t_end) s.dt = run.dt;
+  const TerrainSpec spec = SweptTerrain(sc, run.seed, run.roughness);
+  if (run.roughness != 1.0 || (run.seed && sc.random_terrain() &&
+                               *run.seed != sc.terrain.random->seed))
+    s.terrain = MakeTerrain(spec);
+  return s;
+}
+}  // namespace
+
+Scene ReferenceScene(const Suite& suite, const RunSpec& run) {
+  return SweptScene(suite, run);
+}
+
+Scene RunScene(const Suite& suite, const RunSpec& run) {
+  Scene s = SweptScene(suite, run);
+  s.epsilon = run.eps;
+  return s;
+}
+
+std::string SceneCanonicalText(const Scene& scene, const TerrainSpec& t,
+                               const std::string& heightmap_digest) {
+  std::ostringstream os;
+  const RobotGeometry& g = scene.geometry;
+  os << "robot{a=" << Num(g.a) << ";b=" << Num(g.b) << ";track=" << Num(g.track)
+     << ";z_h=" << Num(g.z_h) << ";R=" << Num(g.major_radius)
+     << ";r=" << Num(g.tube_radius) << ";e=" << Num(g.camber_offset) << "}";
+  os << ";mass=" << Num(scene.mass) << ";gravity=" << Num(scene.gravity)
+     << ";mu=" << Num(scene.mu) << ";epsilon=" << Num(scene.epsilon)
+     << ";mode=" << ToString(scene.mode) << ";rates=[";
+  for (double r : scene.joint_rates) os << Num(r) << ",";
+  os << "];initial{x=" << Num(scene.x0) << ";y=" << Num(scene.y0)
+     << ";yaw=" << Num(scene.yaw0) << ";joints=[";
+  for (double a : scene.joint_angles) os << Num(a) << ",";
+  os << "]};time{t_end=" << Num(scene.t_end) << ";dt=" << Num(scene.dt) << "}";
+  os << ";terrain{type=" << ToString(t.type);
+  switch (t.type) {
+    case TerrainSpec::Type::kPlane:
+      os << ";height=" << Num(t.height);
+      break;
+    case TerrainSpec::Type::kIncline:
+      os << ";slope=" << Num(t.slope_rad) << ";azimuth=" << Num(t.azimuth_rad)
+         << ";height=" << Num(t.height);
+      break;
+    case TerrainSpec::Type::kGaussians:
+      if (t.random) {
+        const auto& r = *t.random;
+        os << ";random{seed=" << r.seed << ";count=" << r.count << ";A=["
+           << Num(r.amplitude.lo) << "," << Num(r.amplitude.hi) << "];s=["
+           << Num(r.sigma.lo) << "," << Num(r.sigma.hi) << "];x=[" << Num(r.x.lo)
+           << "," << Num(r.x.hi) << "];y=[" << Num(r.y.lo) << "," << Num(r.y.hi)
+           << "]}";
+      } else {
+        os << ";bumps=[";
+        for (const GaussianBump& b : t.bumps)
+          os << "(" << Num(b.amplitude) << "," << Num(b.x) << "," << Num(b.y)
+             << "," << Num(b.sigma) << ")";
+        os << "]";
+      }
+      break;
+    case TerrainSpec::Type::kSinusoid:
+      os << ";height=" << Num(t.height) << ";components=[";
+      for (const SinusoidComponent& c : t.components)
+        os << "(" << Num(c.amplitude) << "," << Num(c.wavelength_x) << ","
+           << Num(c.wavelength_y) << "," << Num(c.phase_x) << "," << Num(c.phase_y)
+           << ")";
+      os << "]";
+      break;
+    case TerrainSpec::Type::kHeightmap:
+      os << ";file=" << t.file << ";digest=" << heightmap_digest;
+      break;
+  }
+  os << "}";
+  return os.str();
+}
+
+std::string TerrainId(const RunSpec& run, const SuiteScene& scene) {
+  const bool seeded = run.seed && scene.random_terrain() &&
+                      *run.seed != scene.terrain.random->seed;
+  if (!seeded && run.roughness == 1.0) return scene.name;
+  std::string id = scene.name;
+  if (run.seed && scene.random_terrain()) id += "_s" + std::to_string(*run.seed);
+  if (run.roughness != 1.0) id += "_r" + Num(run.roughness);
+  return id;
+}
+
+}  // namespace quasiroll::bench

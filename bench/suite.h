@@ -1,0 +1,143 @@
+// Benchmark suites (docs/harness.md): loading and validating a suite YAML file
+// and expanding it into the ordered list of runs (grid points).
+//
+// A suite names scenes (scene files + partial overrides) and named groups;
+// each group is a Cartesian grid over method parameters (NLP backend, DAE
+// backend, coupling, RK scheme, dt, tolerances, Baumgarte sigma, epsilon, IDA
+// index, substeps) and scene sweeps (mu, terrain seed, roughness). Everything
+// is checked before anything runs: every problem is a SceneError whose
+// message is one line "<entry.path>: <problem>, got <value>".
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/dae.h"
+#include "core/scene.h"
+#include "core/simulator.h"
+#include "core/terrains.h"
+
+namespace quasiroll::bench {
+
+// ------------------------------------------------------------- hashing ----
+
+// FNV-1a, 64 bit, of the bytes of `text`.
+std::uint64_t Fnv1a64(std::string_view text);
+// 16 lower-case hex digits.
+std::string Hex64(std::uint64_t value);
+// Shortest round-trip decimal of v ("0.05", "1e-08", "nan", "inf").
+std::string Num(double v);
+
+// ------------------------------------------------------------- schema ----
+
+// One entry of the suite's `scenes:` list.
+struct SuiteScene {
+  std::string name;        // label used in run ids and runs.csv (`scene`)
+  std::string file;        // scene file as resolved (relative to the suite)
+  std::string entry_path;  // "scenes[2]", for messages
+  Scene scene;             // file + overrides applied
+  TerrainSpec terrain;     // effective terrain spec (file, then overrides)
+  std::string heightmap_digest;  // FNV of the heightmap CSV ("" otherwise)
+  bool random_terrain() const {
+    return terrain.type == TerrainSpec::Type::kGaussians &&
+           terrain.random.has_value();
+  }
+  bool gaussian_terrain() const {
+    return terrain.type == TerrainSpec::Type::kGaussians;
+  }
+};
+
+// How reference trajectories are computed (suite key `reference`).
+struct ReferenceSettings {
+  // Use the closed-form trajectory when the scene admits one.
+  bool analytic = true;
+  // Output interval of the numerical reference = scene dt / dt_divisor.
+  int dt_divisor = 4;
+  // RK4 steps per output interval (step = scene dt / (dt_divisor * substeps)).
+  int substeps = 4;
+  std::string nlp = "newton";
+  double residual_tolerance = 1e-12;
+  // Canonical text (part of every reference key).
+  std::string Canonical() const;
+};
+
+// One grid point: everything needed to run it, in physical units.
+struct RunSpec {
+  int index = 0;  // position in grid order
+  std::string group;
+  int scene_index = 0;  // into Suite::scenes
+  std::string scene;    // SuiteScene::name
+  // Method.
+  std::string nlp, dae;
+  Coupling coupling = Coupling::kZoh;
+  RkMethod rk_method = RkMethod::kRk4;
+  double dt = 0;        // hold / output interval [s]
+  double tol = 0;       // integrator rtol (adaptive RK, IDA)
+  double atol = 0;      // integrator atol = tol * atol_ratio
+  double nlp_tol = 0;   // quasi-static residual tolerance
+  double sigma = 0;     // Baumgarte gain [1/s]
+  double eps = 0;       // regularisation velocity epsilon [m/s]
+  int dae_index = 2;
+  int substeps = 1;     // integrator steps per dt (step = dt / substeps)
+  // Scene sweeps.
+  double mu = 0;
+  std::optional<std::uint64_t> seed;  // only for random gaussian terrains
+  double roughness = 1.0;             // gaussian amplitude scale factor
+  double t_end = 0;
+  int repeats = 1;
+
+  std::string key;     // canonical text of every parameter above
+  std::string run_id;  // <group>-<scene>-<nlp>-<dae>-<coupling>-<8 hex>
+
+  SimulationOptions Options() const;
+};
+
+struct Suite {
+  std::string path;         // as given ("" when loaded from a string)
+  std::string name;
+  std::string description;
+  std::uint64_t text_hash = 0;  // FNV-1a of the suite file's text
+  ReferenceSettings reference;
+  std::vector<SuiteScene> scenes;
+  std::vector<std::string> groups;  // in file order
+  std::vector<RunSpec> runs;        // grid order
+};
+
+// Loads, validates and expands a suite. Registers the built-in NLP solvers and
+// integrators (backend names are checked against the registries). Throws
+// SceneError naming the entry path and value on any problem.
+Suite LoadSuite(const std::string& path);
+// Same from text; relative scene files resolve against `base_dir`.
+Suite LoadSuiteFromString(const std::string& text, const std::string& origin,
+                          const std::string& base_dir);
+
+// ------------------------------------------------- effective scenes ----
+
+// The terrain spec of `scene` with the run's sweeps applied: a seed replaces
+// the random generator's seed; a roughness != 1 turns the bumps (generated or
+// explicit) into an explicit list with every amplitude scaled. Throws
+// SceneError if a sweep does not apply to the terrain.
+TerrainSpec SweptTerrain(const SuiteScene& scene,
+                         std::optional<std::uint64_t> seed, double roughness);
+
+// The scene a run's reference is computed on: scene + mu, seed, roughness and
+// t_end of the run (not the method parameters: epsilon stays the scene's).
+Scene ReferenceScene(const Suite& suite, const RunSpec& run);
+// The scene the run itself simulates: ReferenceScene + the run's epsilon.
+Scene RunScene(const Suite& suite, const RunSpec& run);
+
+// Canonical text of every parameter of a scene that affects its motion
+// (geometry, mass, gravity, mu, mode, rates, initial pose, time span,
+// epsilon and the terrain with all its parameters). `terrain` must be the
+// spec the scene's terrain was built from.
+std::string SceneCanonicalText(const Scene& scene, const TerrainSpec& terrain,
+                               const std::string& heightmap_digest);
+
+// Filename-safe id of a run's terrain ("<scene>", or "<scene>_s<seed>_r<roughness>"
+// when swept).
+std::string TerrainId(const RunSpec& run, const SuiteScene& scene);
+
+}  // namespace quasiroll::bench
