@@ -486,7 +486,12 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
     } else {
       problem_.ColdStartGuess(z0_);
     }
+    // result_ still holds the previous solve's multipliers: backends that use
+    // them (Ipopt) start from the previous primal-dual point.
+    nlp_options_.warm_start_multipliers =
+        have_warm_ && options_.warm_start_multipliers;
     ok = TrySolve(z0_, out);
+    nlp_options_.warm_start_multipliers = false;
     if (!ok && options_.homotopy) {
       // Epsilon homotopy from a well-conditioned creep law down to epsilon.
       const double eps = problem_.parameters().epsilon;

@@ -6,6 +6,7 @@ PACKAGES=(
   libeigen3-dev coinor-libipopt-dev libnlopt-cxx-dev libceres-dev
   libsundials-dev libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev
   libcli11-dev python3 python3-matplotlib python3-numpy
+  chromium
 )
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
