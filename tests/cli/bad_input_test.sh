@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Every malformed input is rejected with exit code 2 and ONE line on stderr
+# naming the key (and value); never a signal or an uncaught exception.
+#   tests/cli/bad_input_test.sh QUASIROLL_BINARY
+# Scene corpus: tests/bad_scenes/*.yaml, each with a first-line comment
+# "# expect: <text the message must contain>".
+set -u
+bin=$1
+cd "$(dirname "$0")/../.."
+pass=0
+fail=0
+check() {  # check NAME EXPECTED_TEXT COMMAND...
+  local name=$1 expect=$2
+  shift 2
+  local err rc lines
+  err=$("$@" 2>&1 >/dev/null)
+  rc=$?
+  lines=$(printf '%s' "$err" | grep -c '')
+  if [ "$rc" -ne 2 ]; then
+    echo "FAIL $name: exit code $rc (want 2): $err"; fail=$((fail + 1)); return
+  fi
+  if [ "$lines" -ne 1 ]; then
+    echo "FAIL $name: $lines lines on stderr (want 1): $err"; fail=$((fail + 1)); return
+  fi
+  case "$err" in
+    *"$expect"*) pass=$((pass + 1)) ;;
+    *) echo "FAIL $name: message lacks '$expect': $err"; fail=$((fail + 1)) ;;
+  esac
+}
+for f in tests/bad_scenes/*.yaml; do
+  expect=$(sed -n 's/^# expect: //p' "$f" | head -n 1)
+  check "pose $(basename "$f")" "$expect" "$bin" pose --scene "$f"
+done
+# A few through the other subcommands, and bad command-line values.
+check "run mu_nan" "mu" "$bin" run --scene tests/bad_scenes/mu_nan.yaml --out /tmp/quasiroll-bad-run
+check "solve unknown key" "foo" "$bin" solve --scene tests/bad_scenes/unknown_top_key.yaml
+check "missing file" "no_such_scene.yaml" "$bin" pose --scene tests/bad_scenes/no_such_scene.yaml
+check "--mu negative" "--mu" "$bin" solve --scene bench/scenes/flat.yaml --mu -1
+check "unknown nlp" "nope" "$bin" solve --scene bench/scenes/flat.yaml --nlp nope
+check "unknown dae" "nope" "$bin" run --scene bench/scenes/flat.yaml --dae nope --out /tmp/quasiroll-bad-run
+check "bad coupling" "coupling" "$bin" run --scene bench/scenes/flat.yaml --coupling sometimes
+check "bad rk" "rk" "$bin" run --scene bench/scenes/flat.yaml --rk rk9 --out /tmp/quasiroll-bad-run
+check "negative sigma" "sigma" "$bin" run --scene bench/scenes/flat.yaml --dae rk-baumgarte --sigma -1 --out /tmp/quasiroll-bad-run
+check "dt > t_end" "dt" "$bin" run --scene bench/scenes/flat.yaml --dt 5 --t-end 1 --out /tmp/quasiroll-bad-run
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]
