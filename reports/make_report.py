@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Comparison report for a quasiroll results directory.
 
-    /usr/bin/python3 reports/make_report.py DIR [--out OUTDIR] [--allow-missing]
+    /usr/bin/python3 reports/make_report.py DIR [--out OUTDIR] [--strict]
 
 Writes DIR/report/index.html (or OUTDIR/index.html) with every figure as PNG
 and SVG beside it, and prints the absolute path of index.html last. Exit
@@ -39,9 +39,11 @@ def parse_args(argv):
                         help="results directory holding runs.csv, trajectories/, meta.json")
     parser.add_argument("--out", metavar="OUTDIR",
                         help="output directory (default DIR/report)")
+    parser.add_argument("--strict", action="store_true",
+                        help="fail (exit 2) when a figure has no data, instead of "
+                             "drawing a placeholder and listing a warning")
     parser.add_argument("--allow-missing", action="store_true",
-                        help="draw a placeholder instead of failing when a figure "
-                             "has no data")
+                        help=argparse.SUPPRESS)  # the default; kept for scripts
     return parser.parse_args(argv)
 
 
@@ -57,7 +59,7 @@ def main(argv=None):
     from quasiroll_report.report import build_report
     warnings.simplefilter("ignore")
     try:
-        index = build_report(args.results_dir, args.out, args.allow_missing)
+        index = build_report(args.results_dir, args.out, not args.strict)
     except ReportError as exc:
         return fail(str(exc), 2)
     except Exception as exc:  # noqa: BLE001 - one line, never a traceback

@@ -285,14 +285,14 @@ class BadInputTest(unittest.TestCase):
                       [[v for i, v in enumerate(r) if i != drop] for r in rows])
         self.assert_one_line_error(run_report(target), "missing column 'drift'")
 
-    def test_missing_mu_sweep_fails_unless_allowed(self):
+    def test_missing_mu_sweep_placeholder_unless_strict(self):
         target = Fixture.copy("no_mu_sweep")
         path = os.path.join(target, "runs.csv")
         header, rows = read_csv(path)
         group = header.index("suite_group")
         write_csv(path, header, [r for r in rows if r[group] != "mu_sweep"])
-        self.assert_one_line_error(run_report(target), "figures 13-14")
-        allowed = run_report(target, "--allow-missing")
+        self.assert_one_line_error(run_report(target, "--strict"), "figures 13-14")
+        allowed = run_report(target)
         self.assertEqual(allowed.returncode, 0, allowed.stderr)
         self.assertNotIn("Traceback", allowed.stderr)
 

@@ -84,7 +84,13 @@ def _check_columns(header, required, label):
             raise ReportError(f"{label} is missing column '{column}'")
 
 
+NUMERIC_COLUMNS = ({c for c in REQUIRED_COLUMNS if c not in STRING_COLUMNS}
+                   | set(OPTIONAL_NUMERIC_COLUMNS))
+
+
 def _typed_run(record, line_no):
+    """Known numeric columns must parse; extra columns (runs.csv only grows
+    additively) stay strings unless they look like numbers."""
     run = {}
     for key, text in record.items():
         if key in STRING_COLUMNS:
@@ -93,6 +99,9 @@ def _typed_run(record, line_no):
         try:
             run[key] = parse_number(text)
         except ValueError:
+            if key not in NUMERIC_COLUMNS:
+                run[key] = (text or "").strip()
+                continue
             raise ReportError(
                 f"runs.csv line {line_no}: column '{key}' is not a number: "
                 f"'{text.strip()}'") from None
