@@ -59,6 +59,30 @@ class ConstrainedOde {
   virtual void Roots(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
                      Eigen::Ref<Eigen::VectorXd> /*g*/) const {}
 
+  // Optional residual form F(t, y, y') = 0 of the whole state, for implicit
+  // backends (`ida`): when HasResidualForm() is true they integrate this
+  // residual directly instead of building the GGL residual from Rhs, H and J.
+  // DifferentialIds() marks each component differential (1) or algebraic
+  // (0, excluded from the error test); ConsistentDerivative() supplies y'
+  // at t0 with F(t0, y, y') = 0 (y itself must already be consistent; use
+  // MakeConsistent). Residual() returns false where F cannot be evaluated
+  // (-> kRhsFailure). Explicit backends ignore the residual form.
+  virtual bool HasResidualForm() const { return false; }
+  virtual bool Residual(double /*t*/,
+                        const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
+                        const Eigen::Ref<const Eigen::VectorXd>& /*ydot*/,
+                        Eigen::Ref<Eigen::VectorXd> /*r*/) {
+    return false;
+  }
+  virtual void DifferentialIds(Eigen::Ref<Eigen::VectorXd> ids) const {
+    ids.setOnes();
+  }
+  virtual bool ConsistentDerivative(double /*t*/,
+                                    const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
+                                    Eigen::Ref<Eigen::VectorXd> /*ydot*/) {
+    return false;
+  }
+
   // Hook called by integrators before they start on [t0, t1] so the problem can
   // make y consistent (e.g. project onto H = 0). Default: nothing.
   virtual void MakeConsistent(double /*t0*/, Eigen::Ref<Eigen::VectorXd> /*y*/) {}

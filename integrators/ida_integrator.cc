@@ -84,6 +84,8 @@ struct IdaIntegrator::Impl {
   IntegratorResult* result = nullptr;
   int dae_index = 2;
   double sigma = 0.0;
+  bool residual_form = false;  // ode supplies F(t, y, y') itself
+  VectorXd r0, r_pert, yp_pert;
   bool rhs_failed = false;
   double rhs_failure_time = 0.0;
   std::string last_error;
@@ -138,6 +140,13 @@ int IdaIntegrator::Impl::Residual(double t, N_Vector yy, N_Vector yp,
   const int n = s.n, m = s.m;
   Map<const VectorXd> y(NV_DATA_S(yy), n + m), ydot(NV_DATA_S(yp), n + m);
   Map<VectorXd> r(NV_DATA_S(rr), n + m);
+  if (s.residual_form) {
+    ++s.result->rhs_evaluations;
+    if (s.ode->Residual(t, y, ydot, r)) return 0;
+    s.rhs_failed = true;
+    s.rhs_failure_time = t;
+    return -1;
+  }
   // Unrecoverable (-1): kRhsFailure as for the RK backends.
   if (!s.CallRhs(t, y.head(n), s.f)) return -1;
   r.head(n) = ydot.head(n) - s.f;
@@ -168,7 +177,7 @@ int IdaIntegrator::Impl::Residual(double t, N_Vector yy, N_Vector yp,
 // never the converged solution. dF/dx comes from ode.RhsJacobian, or from
 // forward differences of Rhs with increment sqrt(eps) * max(1, |x_j|).
 int IdaIntegrator::Impl::Jacobian(double t, double cj, N_Vector yy,
-                                  N_Vector /*yp*/, N_Vector /*rr*/,
+                                  N_Vector yp, N_Vector /*rr*/,
                                   SUNMatrix jac_matrix, void* user_data,
                                   N_Vector /*tmp1*/, N_Vector /*tmp2*/,
                                   N_Vector /*tmp3*/) {
@@ -178,6 +187,34 @@ int IdaIntegrator::Impl::Jacobian(double t, double cj, N_Vector yy,
   // SUNDenseMatrix stores column-major with leading dimension n + m.
   Map<MatrixXd> a(SUNDenseMatrix_Data(jac_matrix), n + m, n + m);
   ++s.result->jacobian_evaluations;
+  if (s.residual_form) {
+    // dF/dy + cj dF/dy' by forward differences of the user residual.
+    Map<const VectorXd> yd(NV_DATA_S(yp), n);
+    const double sqrt_eps = std::sqrt(std::numeric_limits<double>::epsilon());
+    s.result->rhs_evaluations += 1 + 2 * n;
+    auto failed = [&s, t] {
+      s.rhs_failed = true;
+      s.rhs_failure_time = t;
+      return -1;
+    };
+    if (!s.ode->Residual(t, y, yd, s.r0)) return failed();
+    s.x_pert = y;
+    s.yp_pert = yd;
+    for (int j = 0; j < n; ++j) {
+      const double xj = s.x_pert(j), vj = s.yp_pert(j);
+      const double dx = sqrt_eps * std::max(1.0, std::abs(xj));
+      s.x_pert(j) = xj + dx;
+      if (!s.ode->Residual(t, s.x_pert, yd, s.r_pert)) return failed();
+      a.col(j) = (s.r_pert - s.r0) / (s.x_pert(j) - xj);
+      s.x_pert(j) = xj;
+      const double dv = sqrt_eps * std::max(1.0, std::abs(vj));
+      s.yp_pert(j) = vj + dv;
+      if (!s.ode->Residual(t, y, s.yp_pert, s.r_pert)) return failed();
+      a.col(j) += cj * (s.r_pert - s.r0) / (s.yp_pert(j) - vj);
+      s.yp_pert(j) = vj;
+    }
+    return 0;
+  }
   if (!s.ode->RhsJacobian(t, y.head(n), s.dfdx)) {
     if (!s.CallRhs(t, y.head(n), s.f)) return -1;
     const double sqrt_eps = std::sqrt(std::numeric_limits<double>::epsilon());
@@ -237,12 +274,96 @@ std::string FlagName(int flag) {
 
 }  // namespace
 
+// Runs IDASolve to t1 (IDA memory prepared, initial values set) and maps the
+// outcome; shared by the GGL form and the user residual form.
+void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
+                           Eigen::Ref<Eigen::VectorXd> y,
+                           const IntegratorOptions& options,
+                           IntegratorResult* result) {
+  const int n = s.n, m = s.m;
+  const int nr = s.registered_roots;
+  bool moved = false;
+  Map<VectorXd> yy_now(NV_DATA_S(s.yy), n + m);
+  // --- integrate ---
+  double t_ret = 0.0;
+  IDAGetCurrentTime(s.mem, &t_ret);
+  int flag = IDASolve(s.mem, t1, &t_ret, s.yy, s.yp, IDA_NORMAL);
+  long steps = 0, error_test_failures = 0;
+  IDAGetNumSteps(s.mem, &steps);
+  IDAGetNumErrTestFails(s.mem, &error_test_failures);
+  result->steps += static_cast<int>(steps);
+  result->rejected_steps += static_cast<int>(error_test_failures);
+  y = yy_now.head(n);
+  result->t_reached = t_ret;
+
+  IntegratorStatus status = IntegratorStatus::kSuccess;
+  if (flag == IDA_ROOT_RETURN) {
+    status = IntegratorStatus::kEvent;
+    IDAGetRootInfo(s.mem, s.roots_found.data());
+    for (int i = 0; i < nr; ++i) {
+      if (s.roots_found[i] != 0) {
+        result->root_index = i;
+        break;
+      }
+    }
+  } else if (flag < 0) {
+    switch (flag) {
+      case IDA_TOO_MUCH_WORK:   // max_steps reached
+      case IDA_TOO_MUCH_ACC:    // tolerances below machine precision
+      case IDA_ERR_FAIL:        // repeated error test failures / h < hmin
+        status = IntegratorStatus::kStepSizeTooSmall;
+        break;
+      case IDA_RES_FAIL:
+      case IDA_REP_RES_ERR:
+      case IDA_FIRST_RES_FAIL:
+      case IDA_CONV_FAIL:
+      case IDA_LSETUP_FAIL:
+      case IDA_LSOLVE_FAIL:
+      case IDA_CONSTR_FAIL:
+      case IDA_LINESEARCH_FAIL:
+      case IDA_NO_RECOVERY:
+      case IDA_NLS_INIT_FAIL:
+      case IDA_NLS_SETUP_FAIL:
+      case IDA_NLS_FAIL:
+      case IDA_RTFUNC_FAIL:
+        status = IntegratorStatus::kConvergenceFailure;
+        break;
+      default:  // IDA_ILL_INPUT, IDA_MEM_NULL, IDA_BAD_T, ...
+        status = IntegratorStatus::kInvalidInput;
+        break;
+    }
+    // A failing Rhs aborts IDA through the residual / Jacobian callbacks.
+    if (s.rhs_failed) status = IntegratorStatus::kRhsFailure;
+    std::ostringstream os;
+    os << FlagName(flag) << " at t = " << t_ret;
+    if (s.rhs_failed) os << " (Rhs returned false at t = " << s.rhs_failure_time << ")";
+    if (!s.last_error.empty()) os << ": " << s.last_error;
+    result->message = os.str();
+  }
+
+  // --- polish: IDA enforces H = 0 only to its Newton tolerance ---
+  if ((status == IntegratorStatus::kSuccess || status == IntegratorStatus::kEvent) &&
+      options.dae_index == 2 && m > 0) {
+    const IntegratorStatus projected =
+        s.correction.Project(ode, y, options.projection_tolerance,
+                             options.max_projection_iterations, result, &moved);
+    if (projected != IntegratorStatus::kSuccess) {
+      status = projected;
+      result->message = "final projection: " + result->message;
+    }
+  }
+  result->status = status;
+}
+
 void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
                                 Eigen::Ref<Eigen::VectorXd> y,
                                 const IntegratorOptions& options,
                                 IntegratorResult* result) {
   Impl& s = *impl_;
-  const int n = ode.state_size(), m = ode.num_constraints();
+  s.residual_form = ode.HasResidualForm();
+  const int n = ode.state_size();
+  // In residual form the user's F(t, y, y') already encodes any constraints.
+  const int m = s.residual_form ? 0 : ode.num_constraints();
   const int nr = ode.num_roots();
   s.ode = &ode;
   s.result = result;
@@ -270,6 +391,47 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
 
   // --- consistent initial values (x, nu, x') ---
   bool moved = false;
+  if (s.residual_form) {
+    if (s.r0.size() != n) {
+      s.r0.resize(n);
+      s.r_pert.resize(n);
+      s.yp_pert.resize(n);
+    }
+    if (s.yy == nullptr || NV_LENGTH_S(s.yy) != n) {
+      s.Free();
+      s.yy = N_VNew_Serial(n, s.ctx);
+      s.yp = N_VNew_Serial(n, s.ctx);
+      if (s.yy == nullptr || s.yp == nullptr)
+        throw std::runtime_error("ida: cannot allocate vectors");
+    }
+    Map<VectorXd> yy0(NV_DATA_S(s.yy), n), yp0(NV_DATA_S(s.yp), n);
+    yy0 = y;
+    if (!ode.ConsistentDerivative(t0, y, yp0))
+      return fail(IntegratorStatus::kInvalidInput,
+                  "residual form: ConsistentDerivative() gave no y' at t0");
+    int flag = s.Prepare(n, 0, t0);
+    if (flag == IDA_SUCCESS) {
+      VectorXd ids(n);
+      ode.DifferentialIds(ids);
+      for (int i = 0; i < n; ++i) NV_Ith_S(s.id, i) = ids(i) != 0 ? 1.0 : 0.0;
+      flag = IDASetId(s.mem, s.id);
+    }
+    if (flag == IDA_SUCCESS) flag = IDASStolerances(s.mem, options.rtol, options.atol);
+    if (flag == IDA_SUCCESS) flag = IDASetMaxNumSteps(s.mem, options.max_steps);
+    if (flag == IDA_SUCCESS) flag = IDASetMinStep(s.mem, options.min_step);
+    if (flag == IDA_SUCCESS && options.step > 0) flag = IDASetInitStep(s.mem, options.step);
+    if (flag == IDA_SUCCESS) flag = IDASetStopTime(s.mem, t1);
+    if (flag == IDA_SUCCESS && nr != s.registered_roots) {
+      flag = IDARootInit(s.mem, nr, nr > 0 ? &Impl::RootFunction : nullptr);
+      s.registered_roots = nr;
+      s.roots_found.resize(nr);
+    }
+    if (flag != IDA_SUCCESS)
+      return fail(IntegratorStatus::kInvalidInput,
+                  "ida setup: " + FlagName(flag) + " " + s.last_error);
+    Finish(s, ode, t1, y, options, result);
+    return;
+  }
   if (options.dae_index == 2 && m > 0) {
     const IntegratorStatus status =
         s.correction.Project(ode, y, options.projection_tolerance,
@@ -339,74 +501,7 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
     return fail(IntegratorStatus::kInvalidInput,
                 "ida setup: " + FlagName(flag) + " " + s.last_error);
 
-  // --- integrate ---
-  double t_ret = t0;
-  flag = IDASolve(s.mem, t1, &t_ret, s.yy, s.yp, IDA_NORMAL);
-  long steps = 0, error_test_failures = 0;
-  IDAGetNumSteps(s.mem, &steps);
-  IDAGetNumErrTestFails(s.mem, &error_test_failures);
-  result->steps += static_cast<int>(steps);
-  result->rejected_steps += static_cast<int>(error_test_failures);
-  y = yy_now.head(n);
-  result->t_reached = t_ret;
-
-  IntegratorStatus status = IntegratorStatus::kSuccess;
-  if (flag == IDA_ROOT_RETURN) {
-    status = IntegratorStatus::kEvent;
-    IDAGetRootInfo(s.mem, s.roots_found.data());
-    for (int i = 0; i < nr; ++i) {
-      if (s.roots_found[i] != 0) {
-        result->root_index = i;
-        break;
-      }
-    }
-  } else if (flag < 0) {
-    switch (flag) {
-      case IDA_TOO_MUCH_WORK:   // max_steps reached
-      case IDA_TOO_MUCH_ACC:    // tolerances below machine precision
-      case IDA_ERR_FAIL:        // repeated error test failures / h < hmin
-        status = IntegratorStatus::kStepSizeTooSmall;
-        break;
-      case IDA_RES_FAIL:
-      case IDA_REP_RES_ERR:
-      case IDA_FIRST_RES_FAIL:
-      case IDA_CONV_FAIL:
-      case IDA_LSETUP_FAIL:
-      case IDA_LSOLVE_FAIL:
-      case IDA_CONSTR_FAIL:
-      case IDA_LINESEARCH_FAIL:
-      case IDA_NO_RECOVERY:
-      case IDA_NLS_INIT_FAIL:
-      case IDA_NLS_SETUP_FAIL:
-      case IDA_NLS_FAIL:
-      case IDA_RTFUNC_FAIL:
-        status = IntegratorStatus::kConvergenceFailure;
-        break;
-      default:  // IDA_ILL_INPUT, IDA_MEM_NULL, IDA_BAD_T, ...
-        status = IntegratorStatus::kInvalidInput;
-        break;
-    }
-    // A failing Rhs aborts IDA through the residual / Jacobian callbacks.
-    if (s.rhs_failed) status = IntegratorStatus::kRhsFailure;
-    std::ostringstream os;
-    os << FlagName(flag) << " at t = " << t_ret;
-    if (s.rhs_failed) os << " (Rhs returned false at t = " << s.rhs_failure_time << ")";
-    if (!s.last_error.empty()) os << ": " << s.last_error;
-    result->message = os.str();
-  }
-
-  // --- polish: IDA enforces H = 0 only to its Newton tolerance ---
-  if ((status == IntegratorStatus::kSuccess || status == IntegratorStatus::kEvent) &&
-      options.dae_index == 2 && m > 0) {
-    const IntegratorStatus projected =
-        s.correction.Project(ode, y, options.projection_tolerance,
-                             options.max_projection_iterations, result, &moved);
-    if (projected != IntegratorStatus::kSuccess) {
-      status = projected;
-      result->message = "final projection: " + result->message;
-    }
-  }
-  result->status = status;
+  Finish(s, ode, t1, y, options, result);
 }
 
 }  // namespace quasiroll

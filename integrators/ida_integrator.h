@@ -53,6 +53,9 @@ class IdaIntegrator final : public Integrator {
                    IntegratorResult* result) override;
 
   struct Impl;
+  static void Finish(Impl& s, ConstrainedOde& ode, double t1,
+                     Eigen::Ref<Eigen::VectorXd> y,
+                     const IntegratorOptions& options, IntegratorResult* result);
   std::unique_ptr<Impl> impl_;
 };
 
