@@ -32,7 +32,7 @@ const std::vector<std::string>& RunsCsvColumns() {
   static const std::vector<std::string> columns = {
       "run_id", "suite_group", "scene", "terrain", "nlp", "dae", "coupling",
       "rk_method", "dt", "tol", "atol", "nlp_tol", "sigma", "eps", "dae_index",
-      "substeps", "mu", "seed", "roughness", "t_end", "repeats",
+      "substeps", "contact_check", "mu", "seed", "roughness", "t_end", "repeats",
       "status", "stop_reason", "t_reached", "mu_min", "critical_wheel",
       "wall_s", "nlp_solves", "nlp_iters", "rhs_evals", "jac_evals", "steps",
       "rejected_steps", "samples",
@@ -105,6 +105,7 @@ void SetParameters(const RunSpec& run, const std::string& terrain_id, RowBuilder
   b->Set("eps", run.eps);
   b->SetInt("dae_index", run.dae_index);
   b->SetInt("substeps", run.substeps);
+  b->SetInt("contact_check", run.contact_check);
   b->Set("mu", run.mu);
   b->Set("seed", run.seed ? std::to_string(*run.seed) : "");
   b->Set("roughness", run.roughness);
@@ -181,7 +182,8 @@ std::vector<std::string> MakeRow(const RunSpec& run, const std::string& terrain_
 
 std::vector<std::string> ErrorRow(const RunSpec& run, const std::string& terrain_id,
                                   const std::string& message,
-                                  const Reference* reference) {
+                                  const Reference* reference,
+                                  const std::string& reference_error) {
   RowBuilder b;
   SetParameters(run, terrain_id, &b);
   b.Set("status", "error");
@@ -191,7 +193,7 @@ std::vector<std::string> ErrorRow(const RunSpec& run, const std::string& terrain
   for (const char* c : {"nlp_solves", "nlp_iters", "rhs_evals", "jac_evals", "steps",
                         "rejected_steps", "samples"})
     b.SetInt(c, 0);
-  SetReference(reference, "", &b);
+  SetReference(reference, reference_error, &b);
   SetNanMetrics(&b);
   return b.values();
 }
@@ -578,7 +580,7 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
       } catch (const std::exception& e) {
         result = SimulationResult{};
         result.status = "error";
-        row = ErrorRow(r, terrain_ids[i], e.what(), ref);
+        row = ErrorRow(r, terrain_ids[i], e.what(), ref, rj.error);
       }
       const std::string line = JoinRow(row);
       AtomicWriteFile(dir + "/trajectories/" + r.run_id + ".csv", TrajectoryCsv(result));

@@ -150,6 +150,9 @@ AnalyticSolution::AnalyticSolution(const Scene& scene, const TerrainSpec& t,
     const double qf = std::abs(traction_[i]) / (scene.mu * normal_[i]);
     slip_[i] = scene.epsilon * qf / std::sqrt(1 - qf * qf);
   }
+  // The driven rear wheels creep downhill (the slip opposes the uphill
+  // traction): the platform advances at rho alpha' - up |s|.
+  v_ -= up * slip_[1];
 
   // Initial pose.
   switch (kind) {
@@ -184,7 +187,7 @@ AnalyticSolution::AnalyticSolution(const Scene& scene, const TerrainSpec& t,
     icr_ = p0_ - g.b * xp + rear_radius_ * yp;
     rates_[1] = v_ / (rho_ * std::cos(q[0]));
   } else {
-    rates_[1] = alpha;  // straight: the front wheel rolls like the rear ones
+    rates_[1] = v_ / rho_;  // straight: the passive front wheel rolls freely
   }
   if (!pvc) rates_[1] = r[1];
 }
@@ -247,8 +250,16 @@ std::string ReferenceKey(const Scene& scene, const TerrainSpec& terrain,
          settings.Canonical();
 }
 
+namespace {
+bool PhysicalStop(const std::string& status) {
+  return status == "INFEASIBLE_FRICTION" || status == "LIFT_OFF" ||
+         status == "DEGENERATE_CONTACT";
+}
+}  // namespace
+
 SimulationResult ComputeNumericalReference(const Scene& scene,
-                                           const ReferenceSettings& settings) {
+                                           const ReferenceSettings& settings,
+                                           std::string* method) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
   SimulationOptions o;
@@ -262,7 +273,22 @@ SimulationResult ComputeNumericalReference(const Scene& scene,
   o.integrator.max_steps = 100000000;
   o.quasi_static.residual_tolerance = settings.residual_tolerance;
   Simulator sim(scene, o);
-  return sim.Run();
+  SimulationResult result = sim.Run();
+  if (method) *method = "rk4";
+  if (result.success() || PhysicalStop(result.status)) return result;
+  // A numerical breakdown (solver or integrator failure) of the primary
+  // configuration: try DP5(4) at rtol 1e-10 (other stage points) and keep
+  // whichever gets further.
+  o.integrator.rk_method = RkMethod::kDormandPrince54;
+  o.integrator.rtol = 1e-10;
+  o.integrator.atol = 1e-12;
+  Simulator alt(scene, o);
+  SimulationResult second = alt.Run();
+  if (second.success() || second.t_reached > result.t_reached) {
+    if (method) *method = "dp54";
+    return second;
+  }
+  return result;
 }
 
 // ------------------------------------------------------------- parsing ----
@@ -429,8 +455,9 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
     result.status = "success";
     result.t_reached = n * dt;
   } else {
-    ref.kind = "numerical";
-    result = ComputeNumericalReference(scene, settings);
+    std::string method;
+    result = ComputeNumericalReference(scene, settings, &method);
+    ref.kind = method == "rk4" ? "numerical" : "numerical:" + method;
   }
   ref.status = result.status;
   ref.stop_reason = result.stop_reason;

@@ -75,7 +75,7 @@ class AnalyticSolution {
 struct Reference {
   std::string hash;         // 16 hex digits of FNV-1a 64 of `key`
   std::string key;          // canonical text (scene + settings)
-  std::string kind;         // "analytic:flat" ... or "numerical"
+  std::string kind;         // "analytic:flat" ..., "numerical", "numerical:dp54"
   std::string status;       // "success" or the numerical run's status
   std::string stop_reason;
   std::string scene;        // suite scene name (informational)
@@ -94,9 +94,14 @@ std::string ReferenceKey(const Scene& scene, const TerrainSpec& terrain,
 
 // Numerical reference: coupled mode, rk-projection with RK4 at step
 // scene.dt / (dt_divisor * substeps), output every scene.dt / dt_divisor,
-// settings.nlp at settings.residual_tolerance.
+// settings.nlp at settings.residual_tolerance. If that run breaks down
+// numerically (a status other than success, INFEASIBLE_FRICTION, LIFT_OFF,
+// DEGENERATE_CONTACT), it is repeated with DP5(4) at rtol 1e-10, atol 1e-12
+// and the run that gets further is returned; *method (optional) receives
+// "rk4" or "dp54".
 SimulationResult ComputeNumericalReference(const Scene& scene,
-                                           const ReferenceSettings& settings);
+                                           const ReferenceSettings& settings,
+                                           std::string* method = nullptr);
 
 // Returns the reference of a scene, from DIR/references/<hash>.{csv,json}
 // if present with the same key, else computed (analytic if allowed and

@@ -61,6 +61,7 @@ SimulationOptions RunSpec::Options() const {
   o.integrator.baumgarte_sigma = sigma;
   o.integrator.dae_index = dae_index;
   o.quasi_static.residual_tolerance = nlp_tol;
+  o.second_contact_check_every = contact_check;
   return o;
 }
 
@@ -251,7 +252,8 @@ std::string CanonicalRunKey(const RunSpec& r) {
      << ";tol=" << Num(r.tol) << ";atol=" << Num(r.atol)
      << ";nlp_tol=" << Num(r.nlp_tol) << ";sigma=" << Num(r.sigma)
      << ";eps=" << Num(r.eps) << ";dae_index=" << r.dae_index
-     << ";substeps=" << r.substeps << ";mu=" << Num(r.mu)
+     << ";substeps=" << r.substeps << ";contact_check=" << r.contact_check
+     << ";mu=" << Num(r.mu)
      << ";seed=" << (r.seed ? std::to_string(*r.seed) : "-")
      << ";roughness=" << Num(r.roughness) << ";t_end=" << Num(r.t_end)
      << ";repeats=" << r.repeats;
@@ -263,7 +265,7 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
   yaml::CheckKeys(node, path,
                   {"description", "scenes", "nlp", "dae", "coupling", "rk_method",
                    "dt", "tol", "atol_ratio", "nlp_tol", "sigma", "eps", "mu",
-                   "seed", "roughness", "dae_index", "substeps", "t_end",
+                   "seed", "roughness", "dae_index", "substeps", "contact_check", "t_end",
                    "repeats"});
   if (auto n = Child(node, "description"))
     yaml::ReadString(*n, JoinKey(path, "description"));
@@ -304,6 +306,8 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
       ReadIntAxis(node, path, "dae_index", 1, 2, {2});
   const std::vector<std::int64_t> substeps =
       ReadIntAxis(node, path, "substeps", 1, 100000, {1});
+  const std::vector<std::int64_t> contact_checks =
+      ReadIntAxis(node, path, "contact_check", 0, 1000000, {0});
   const std::vector<double> roughness =
       ReadDoubleAxis(node, path, "roughness", Bounds::NonNegative(), {1.0});
   // Optional axes whose default depends on the scene: empty = scene's.
@@ -374,7 +378,8 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
                         for (double tol : tols)
                           for (double nlp_tol : nlp_tols)
                             for (double dt : sc_dts)
-                              for (std::int64_t sub : substeps) {
+                              for (std::int64_t sub : substeps)
+                               for (std::int64_t cc : contact_checks) {
                                 RunSpec r;
                                 r.index = static_cast<int>(suite->runs.size());
                                 r.group = group;
@@ -392,6 +397,7 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
                                 r.eps = eps;
                                 r.dae_index = static_cast<int>(di);
                                 r.substeps = static_cast<int>(sub);
+                                r.contact_check = static_cast<int>(cc);
                                 r.mu = mu;
                                 r.seed = seed;
                                 r.roughness = rough;

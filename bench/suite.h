@@ -82,6 +82,9 @@ struct RunSpec {
   double eps = 0;       // regularisation velocity epsilon [m/s]
   int dae_index = 2;
   int substeps = 1;     // integrator steps per dt (step = dt / substeps)
+  // Sampled second-contact (single-point contact) check every N samples,
+  // 0 = never (SimulationOptions::second_contact_check_every).
+  int contact_check = 0;
   // Scene sweeps.
   double mu = 0;
   std::optional<std::uint64_t> seed;  // only for random gaussian terrains

@@ -1,0 +1,186 @@
+// Accuracy and drift metrics on synthetic trajectories with known
+// differences.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <numbers>
+
+#include "bench/metrics.h"
+#include "core/so3.h"
+
+namespace quasiroll::bench {
+namespace {
+
+// A smooth synthetic trajectory: a curve with changing attitude and forces.
+std::vector<TrajectorySample> Curve(double dt, double t_end) {
+  std::vector<TrajectorySample> out;
+  const int n = static_cast<int>(std::llround(t_end / dt));
+  for (int k = 0; k <= n; ++k) {
+    TrajectorySample s;
+    s.t = k * dt;
+    s.position = Vec3(0.06 * s.t, 0.01 * std::sin(s.t), 0.15 + 0.001 * s.t);
+    s.rpy = Vec3(0.01 * std::sin(s.t), -0.02 * std::cos(s.t), 0.05 * s.t);
+    for (int i = 0; i < 3; ++i) {
+      s.contacts[i].normal_force = 12.25 + i + std::sin(s.t);
+      s.contacts[i].slip = 1e-5 * (i + 1);
+    }
+    s.drift = 1e-12 * (k + 1);
+    s.gap_max = 1e-10 * k;
+    s.nlp_status = "OK";
+    out.push_back(s);
+  }
+  return out;
+}
+
+TEST(Metrics, IdenticalTrajectoriesHaveZeroError) {
+  const auto ref = Curve(0.05, 2.0);
+  const AccuracyMetrics m = CompareTrajectories(ref, ref, true);
+  EXPECT_EQ(m.common_samples, 41);
+  EXPECT_EQ(m.pos_rms, 0);
+  EXPECT_EQ(m.pos_max, 0);
+  EXPECT_EQ(m.final_pos, 0);
+  EXPECT_NEAR(m.rot_max, 0, 1e-15);
+  EXPECT_EQ(m.force_rms, 0);
+  EXPECT_EQ(m.slip_rms, 0);
+}
+
+TEST(Metrics, ConstantOffsetGivesRmsEqualMaxEqualOffset) {
+  const auto ref = Curve(0.05, 2.0);
+  auto run = ref;
+  for (auto& s : run) s.position += Vec3(0.003, -0.004, 0.0);  // |d| = 0.005
+  const AccuracyMetrics m = CompareTrajectories(run, ref, true);
+  EXPECT_NEAR(m.pos_rms, 0.005, 1e-15);
+  EXPECT_NEAR(m.pos_max, 0.005, 1e-15);
+  EXPECT_NEAR(m.final_pos, 0.005, 1e-15);
+}
+
+TEST(Metrics, LinearlyGrowingErrorHasKnownRmsAndMax) {
+  // e(t) = c t on t_k = k h, k = 0..n: max = c t_n, rms^2 = c^2 h^2 sum k^2/(n+1).
+  const auto ref = Curve(0.1, 1.0);
+  auto run = ref;
+  const double c = 1e-3;
+  for (auto& s : run) s.position.x() += c * s.t;
+  const AccuracyMetrics m = CompareTrajectories(run, ref, true);
+  double sum = 0;
+  for (int k = 0; k <= 10; ++k) sum += std::pow(c * 0.1 * k, 2);
+  EXPECT_NEAR(m.pos_max, c * 1.0, 1e-15);
+  EXPECT_NEAR(m.pos_rms, std::sqrt(sum / 11), 1e-15);
+  EXPECT_NEAR(m.final_pos, c, 1e-15);
+}
+
+TEST(Metrics, RotationByKnownAngleAboutArbitraryAxis) {
+  const auto ref = Curve(0.05, 1.0);
+  auto run = ref;
+  const double angle = 0.123;
+  const Vec3 axis = Vec3(1, -2, 0.5).normalized();
+  const Mat3 delta = Eigen::AngleAxisd(angle, axis).toRotationMatrix();
+  for (auto& s : run) {
+    const Mat3 r = RotationFromRpy(s.rpy(0), s.rpy(1), s.rpy(2)) * delta;
+    s.rpy = RpyFromRotation(r);
+  }
+  const AccuracyMetrics m = CompareTrajectories(run, ref, true);
+  EXPECT_NEAR(m.rot_max, angle, 1e-12);
+  EXPECT_NEAR(m.final_rot, angle, 1e-12);
+  EXPECT_NEAR(m.pos_max, 0, 1e-15);
+}
+
+TEST(Metrics, RotationAngleNearPi) {
+  const Mat3 a = Mat3::Identity();
+  const Mat3 b = Eigen::AngleAxisd(3.1, Vec3::UnitZ()).toRotationMatrix();
+  EXPECT_NEAR(RotationAngle(a, b), 3.1, 1e-12);
+}
+
+TEST(Metrics, ForceAndSlipOffsets) {
+  const auto ref = Curve(0.05, 1.0);
+  auto run = ref;
+  for (auto& s : run) {
+    s.contacts[0].normal_force += 0.3;
+    s.contacts[1].normal_force -= 0.3;
+    s.contacts[2].normal_force += 0.3;
+    for (auto& c : s.contacts) c.slip += 2e-6;
+  }
+  const AccuracyMetrics m = CompareTrajectories(run, ref, true);
+  EXPECT_NEAR(m.force_rms, 0.3, 1e-12);
+  EXPECT_NEAR(m.slip_rms, 2e-6, 1e-15);
+}
+
+TEST(Metrics, ReferenceOnFinerGridIsInterpolatedLinearly) {
+  // Reference on dt/4; run on dt with positions exactly linear in t between
+  // the reference samples: interpolation reproduces them exactly.
+  auto ref = Curve(0.0125, 1.0);
+  for (auto& s : ref) s.position = Vec3(0.06 * s.t, -0.02 * s.t, 0.15);
+  std::vector<TrajectorySample> run;
+  for (int k = 0; k <= 9; ++k) {
+    TrajectorySample s = ref[0];
+    s.t = 0.1 * k + 0.003;  // off the reference grid
+    s.position = Vec3(0.06 * s.t, -0.02 * s.t, 0.15) + Vec3(0, 0, 1e-3);
+    s.rpy = InterpolateSample(ref, s.t).rpy;
+    run.push_back(s);
+  }
+  const AccuracyMetrics m = CompareTrajectories(run, ref, true);
+  EXPECT_EQ(m.common_samples, 10);
+  EXPECT_NEAR(m.pos_rms, 1e-3, 1e-14);
+  EXPECT_NEAR(m.pos_max, 1e-3, 1e-14);
+  EXPECT_NEAR(m.rot_max, 0, 1e-12);
+}
+
+TEST(Metrics, SlerpInterpolatesYawAcrossPi) {
+  std::vector<TrajectorySample> ref(2);
+  ref[0].t = 0;
+  ref[0].rpy = Vec3(0, 0, 3.1);
+  ref[1].t = 1;
+  ref[1].rpy = Vec3(0, 0, -3.1);  // 3.1 + (2 pi - 6.2) = the short way round
+  const TrajectorySample mid = InterpolateSample(ref, 0.5);
+  EXPECT_NEAR(std::abs(mid.rpy(2)), std::numbers::pi, 1e-12);
+}
+
+TEST(Metrics, FailedRunIsMeasuredOverTheTimeReachedOnly) {
+  const auto ref = Curve(0.05, 2.0);
+  std::vector<TrajectorySample> run(ref.begin(), ref.begin() + 21);  // to t = 1
+  for (auto& s : run) s.position.y() += 0.01;
+  // The failing sample carries NaN forces (a failed quasi-static solve).
+  run.back().contacts[0].normal_force = std::nan("");
+  const AccuracyMetrics m = CompareTrajectories(run, ref, false);
+  EXPECT_EQ(m.common_samples, 21);
+  EXPECT_NEAR(m.t_common, 1.0, 1e-12);
+  EXPECT_NEAR(m.pos_max, 0.01, 1e-15);
+  EXPECT_TRUE(std::isnan(m.final_pos));  // did not complete
+  EXPECT_TRUE(std::isnan(m.final_rot));
+  EXPECT_EQ(m.force_rms, 0);  // NaN sample skipped
+}
+
+TEST(Metrics, ReferenceEndingEarlyLimitsTheCommonTimes) {
+  const auto full = Curve(0.05, 2.0);
+  std::vector<TrajectorySample> ref(full.begin(), full.begin() + 11);  // to 0.5 s
+  const AccuracyMetrics m = CompareTrajectories(full, ref, true);
+  EXPECT_EQ(m.common_samples, 11);
+  EXPECT_TRUE(std::isnan(m.final_pos));  // run end not covered
+}
+
+TEST(Metrics, EmptyInputsGiveNaN) {
+  const auto ref = Curve(0.05, 1.0);
+  const AccuracyMetrics m = CompareTrajectories({}, ref, false);
+  EXPECT_EQ(m.common_samples, 0);
+  EXPECT_TRUE(std::isnan(m.pos_rms));
+  EXPECT_TRUE(std::isnan(m.rot_max));
+  const DriftMetrics d = ComputeDrift({});
+  EXPECT_TRUE(std::isnan(d.drift_max));
+}
+
+TEST(Metrics, DriftAndGap) {
+  auto run = Curve(0.05, 1.0);  // drift = 1e-12 (k + 1), gap = 1e-10 k
+  DriftMetrics d = ComputeDrift(run);
+  EXPECT_DOUBLE_EQ(d.drift_max, 21e-12);
+  EXPECT_DOUBLE_EQ(d.drift_final, 21e-12);
+  EXPECT_DOUBLE_EQ(d.gap_max, 20e-10);
+  run[5].drift = 1e-3;
+  d = ComputeDrift(run);
+  EXPECT_DOUBLE_EQ(d.drift_max, 1e-3);
+  EXPECT_DOUBLE_EQ(d.drift_final, 21e-12);
+  run[7].drift = std::nan("");
+  EXPECT_TRUE(std::isnan(ComputeDrift(run).drift_max));  // NaN is not hidden
+}
+
+}  // namespace
+}  // namespace quasiroll::bench

@@ -1,0 +1,228 @@
+// Suite loading: grid expansion, defaults, run ids, and rejection of bad
+// suites with the entry path and value in the message.
+#include <gtest/gtest.h>
+
+#include <set>
+#include <string>
+
+#include "bench/suite.h"
+#include "core/scene.h"
+
+namespace quasiroll::bench {
+namespace {
+
+const std::string kScenes = std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes";
+
+Suite Load(const std::string& text) {
+  return LoadSuiteFromString(text, "test.yaml", kScenes);
+}
+
+// Expects a SceneError whose message contains every fragment.
+void ExpectRejected(const std::string& text,
+                    std::initializer_list<std::string> fragments) {
+  try {
+    Load(text);
+    ADD_FAILURE() << "suite accepted:\n" << text;
+  } catch (const SceneError& e) {
+    const std::string msg = e.what();
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    for (const std::string& f : fragments)
+      EXPECT_NE(msg.find(f), std::string::npos) << "'" << f << "' not in: " << msg;
+  }
+}
+
+const char* kBase = R"(
+scenes:
+  - {file: paper.yaml, overrides: {time: {t_end: 2}}}
+  - {name: flat5, file: flat.yaml, overrides: {time: {t_end: 5}, mu: 0.8}}
+)";
+
+TEST(Suite, ExpandsTheGridInOrderWithDefaults) {
+  const Suite s = Load(std::string(kBase) + R"(
+groups:
+  wp:
+    scenes: [paper]
+    nlp: [newton, ceres]
+    dae: [rk-projection, ida]
+    coupling: [zoh, coupled]
+    dt: [0.1, 0.05]
+  sweep:
+    mu: [0.3, 0.5]
+)");
+  ASSERT_EQ(s.scenes.size(), 2u);
+  EXPECT_EQ(s.scenes[0].name, "paper");
+  EXPECT_EQ(s.scenes[1].name, "flat5");
+  EXPECT_EQ(s.scenes[1].scene.mu, 0.8);
+  ASSERT_EQ(s.runs.size(), 16u + 4u);
+  // Innermost axis is dt.
+  EXPECT_EQ(s.runs[0].dt, 0.1);
+  EXPECT_EQ(s.runs[1].dt, 0.05);
+  EXPECT_EQ(s.runs[0].nlp, "newton");
+  EXPECT_EQ(s.runs[15].nlp, "ceres");
+  EXPECT_EQ(s.runs[15].dae, "ida");
+  EXPECT_EQ(s.runs[15].coupling, Coupling::kCoupled);
+  // Defaults of the sweep group: scene dt, scene epsilon, newton +
+  // rk-projection + zoh, every scene.
+  const RunSpec& r = s.runs[16];
+  EXPECT_EQ(r.group, "sweep");
+  EXPECT_EQ(r.scene, "paper");
+  EXPECT_EQ(r.mu, 0.3);
+  EXPECT_EQ(r.dt, 0.05);
+  EXPECT_EQ(r.t_end, 2);
+  EXPECT_EQ(r.eps, 1e-8);
+  EXPECT_EQ(r.nlp, "newton");
+  EXPECT_EQ(r.dae, "rk-projection");
+  EXPECT_EQ(s.runs[18].scene, "flat5");
+  EXPECT_EQ(s.runs[18].t_end, 5);
+  std::set<std::string> ids;
+  for (const RunSpec& run : s.runs) {
+    EXPECT_TRUE(ids.insert(run.run_id).second) << run.run_id;
+    for (char c : run.run_id)
+      EXPECT_TRUE(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' ||
+                  c == '.')
+          << run.run_id;
+  }
+  EXPECT_EQ(s.runs[16].run_id.rfind("sweep-paper-newton-rk-projection-zoh-", 0), 0u)
+      << s.runs[16].run_id;
+}
+
+TEST(Suite, RunIdsAreDeterministic) {
+  const std::string text = std::string(kBase) + "groups:\n  g:\n    dt: [0.1, 0.05]\n";
+  const Suite a = Load(text), b = Load(text);
+  ASSERT_EQ(a.runs.size(), b.runs.size());
+  for (std::size_t i = 0; i < a.runs.size(); ++i)
+    EXPECT_EQ(a.runs[i].run_id, b.runs[i].run_id);
+}
+
+TEST(Suite, ToleranceLadderSetsRtolAtolAndNlpTolerance) {
+  const Suite s = Load(std::string(kBase) + R"(
+groups:
+  tol:
+    scenes: [paper]
+    dae: [ida]
+    tol: [1.0e-4, 1.0e-6]
+    atol_ratio: 0.1
+    nlp_tol: 1.0e-10
+)");
+  ASSERT_EQ(s.runs.size(), 2u);
+  const SimulationOptions o = s.runs[1].Options();
+  EXPECT_EQ(o.integrator.rtol, 1e-6);
+  EXPECT_DOUBLE_EQ(o.integrator.atol, 1e-7);
+  EXPECT_EQ(o.quasi_static.residual_tolerance, 1e-10);
+}
+
+TEST(Suite, SeedAndRoughnessSweepsChangeTheTerrain) {
+  const Suite s = Load(R"(
+scenes:
+  - name: rnd
+    file: flat.yaml
+    overrides:
+      time: {t_end: 1}
+      terrain: {type: gaussians, random: {seed: 7, count: 5}}
+groups:
+  g:
+    seed: [1, 2]
+    roughness: [1, 0.5]
+)");
+  ASSERT_EQ(s.runs.size(), 4u);
+  EXPECT_EQ(*s.runs[0].seed, 1u);
+  const TerrainSpec a = SweptTerrain(s.scenes[0], 1, 1.0);
+  const TerrainSpec b = SweptTerrain(s.scenes[0], 1, 0.5);
+  ASSERT_TRUE(a.random.has_value());
+  EXPECT_EQ(a.random->seed, 1u);
+  ASSERT_FALSE(b.random.has_value());
+  const auto bumps = GaussianTerrain::Random(1, 5, a.random->amplitude, a.random->sigma,
+                                             a.random->x, a.random->y)
+                         .bumps();
+  ASSERT_EQ(b.bumps.size(), 5u);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(b.bumps[i].amplitude, 0.5 * bumps[i].amplitude);
+  EXPECT_NE(SceneCanonicalText(ReferenceScene(s, s.runs[0]), a, ""),
+            SceneCanonicalText(ReferenceScene(s, s.runs[1]), b, ""));
+  EXPECT_EQ(TerrainId(s.runs[1], s.scenes[0]), "rnd_s1_r0.5");
+}
+
+TEST(Suite, RejectsUnknownBackend) {
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    nlp: [newton, foo]\n",
+                 {"groups.g.nlp[1]", "\"foo\"", "newton"});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dae: rk5\n",
+                 {"groups.g.dae", "\"rk5\""});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    rk_method: [rk45]\n",
+                 {"groups.g.rk_method[0]", "\"rk45\""});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    coupling: [full]\n",
+                 {"groups.g.coupling[0]", "\"full\""});
+}
+
+TEST(Suite, RejectsEmptyGrids) {
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dt: []\n",
+                 {"groups.g.dt", "empty"});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    nlp: []\n",
+                 {"groups.g.nlp", "empty"});
+  ExpectRejected(std::string(kBase) + "groups: {}\n", {"groups", "non-empty"});
+  ExpectRejected("scenes: []\ngroups:\n  g: {}\n", {"scenes", "non-empty"});
+}
+
+TEST(Suite, RejectsUnknownKeys) {
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dtt: [0.1]\n",
+                 {"groups.g.dtt", "unknown key"});
+  ExpectRejected(std::string(kBase) + "group:\n  g: {}\n", {"group", "unknown key"});
+  ExpectRejected(R"(
+scenes:
+  - {file: paper.yaml, overrides: {mass2: 3}}
+groups: {g: {}}
+)",
+                 {"scenes[0].overrides.mass2", "unknown key"});
+}
+
+TEST(Suite, RejectsBadNumbers) {
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dt: [0.1, -0.05]\n",
+                 {"groups.g.dt[1]", "-0.05"});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dt: 0\n", {"groups.g.dt", "0"});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    scenes: [paper]\n    dt: [5]\n",
+                 {"groups.g.dt[0]", "t_end", "5"});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    mu: [0.5, .nan]\n",
+                 {"groups.g.mu[1]"});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    tol: [\"1e-6\"]\n",
+                 {"groups.g.tol[0]", "\"1e-6\""});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dt: [0.1, 0.1]\n",
+                 {"groups.g.dt[1]", "duplicate"});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    repeats: 0\n",
+                 {"groups.g.repeats", "0"});
+}
+
+TEST(Suite, RejectsSweepsThatDoNotApply) {
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    seed: [3]\n",
+                 {"groups.g.seed", "random", "3"});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    scenes: [flat5]\n    roughness: 2\n",
+                 {"groups.g.roughness", "flat5", "2"});
+}
+
+TEST(Suite, RejectsBadScenes) {
+  ExpectRejected("scenes:\n  - {file: nope.yaml}\ngroups: {g: {}}\n",
+                 {"scenes[0].file", "nope.yaml"});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    scenes: [paper, hill]\n",
+                 {"groups.g.scenes[1]", "\"hill\""});
+  ExpectRejected("scenes:\n  - {file: paper.yaml}\n  - {file: paper.yaml}\ngroups: {g: {}}\n",
+                 {"scenes[1].name", "duplicate", "paper"});
+  ExpectRejected("scenes:\n  - {name: 'a b', file: paper.yaml}\ngroups: {g: {}}\n",
+                 {"scenes[0].name", "a b"});
+  ExpectRejected(R"(
+scenes:
+  - {file: paper.yaml, overrides: {mu: -1}}
+groups: {g: {}}
+)",
+                 {"scenes[0].overrides.mu", "-1"});
+}
+
+TEST(Suite, ShippedSuitesLoad) {
+  for (const char* name : {"smoke", "default", "analytic"}) {
+    const std::string path =
+        std::string(QUASIROLL_SOURCE_DIR) + "/bench/suites/" + name + ".yaml";
+    EXPECT_NO_THROW({
+      const Suite s = LoadSuite(path);
+      EXPECT_FALSE(s.runs.empty()) << name;
+    }) << name;
+  }
+}
+
+}  // namespace
+}  // namespace quasiroll::bench
