@@ -54,7 +54,8 @@ std::vector<std::string> MakeRow(const RunSpec& run, const std::string& terrain_
 // Row of a run that threw (status "error", the message as stop_reason).
 std::vector<std::string> ErrorRow(const RunSpec& run, const std::string& terrain_id,
                                   const std::string& message,
-                                  const Reference* reference);
+                                  const Reference* reference,
+                                  const std::string& reference_error = "");
 
 // Runs the suite. Throws SceneError for a bad filter; I/O errors propagate
 // as std::runtime_error. Failing runs never stop the suite.
