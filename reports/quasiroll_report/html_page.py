@@ -50,12 +50,16 @@ def _num(value, unit=""):
 
 
 def metadata_table(meta):
+    suite = meta.get("suite")
+    suite_hash = meta.get("suite_hash")
+    if suite_hash is None and isinstance(suite, dict):
+        suite_hash = suite.get("hash")  # the harness nests it in "suite"
     rows = [("commit", meta.get("commit")), ("machine", meta.get("machine")),
-            ("suite", meta.get("suite")), ("suite hash", meta.get("suite_hash")),
+            ("suite", suite), ("suite hash", suite_hash),
             ("start time", meta.get("start_time")), ("end time", meta.get("end_time"))]
     out = ["<table>"]
     out += [f"<tr><th>{escape(k)}</th><td>{escape(_text(v))}</td></tr>" for k, v in rows]
-    versions = meta.get("library_versions")
+    versions = meta.get("library_versions", meta.get("libraries"))
     if isinstance(versions, dict) and versions:
         cells = "<br>".join(f"{escape(str(k))} {escape(_text(v))}"
                             for k, v in sorted(versions.items()))
