@@ -2,32 +2,43 @@
 
 #include <chrono>
 #include <cmath>
-#include <map>
-#include <mutex>
 #include <sstream>
 #include <stdexcept>
+
+#include "core/registry.h"
 
 namespace quasiroll {
 
 const char* ToString(IntegratorStatus status) {
   switch (status) {
-    case IntegratorStatus::kSuccess: return "success";
-    case IntegratorStatus::kStepSizeTooSmall: return "step_size_too_small";
-    case IntegratorStatus::kConvergenceFailure: return "convergence_failure";
-    case IntegratorStatus::kConstraintFailure: return "constraint_failure";
-    case IntegratorStatus::kEvent: return "event";
-    case IntegratorStatus::kInvalidInput: return "invalid_input";
-    case IntegratorStatus::kRhsFailure: return "rhs_failure";
-    case IntegratorStatus::kNotRun: return "not_run";
+    case IntegratorStatus::kSuccess:
+      return "success";
+    case IntegratorStatus::kStepSizeTooSmall:
+      return "step_size_too_small";
+    case IntegratorStatus::kConvergenceFailure:
+      return "convergence_failure";
+    case IntegratorStatus::kConstraintFailure:
+      return "constraint_failure";
+    case IntegratorStatus::kEvent:
+      return "event";
+    case IntegratorStatus::kInvalidInput:
+      return "invalid_input";
+    case IntegratorStatus::kRhsFailure:
+      return "rhs_failure";
+    case IntegratorStatus::kNotRun:
+      return "not_run";
   }
   return "unknown";
 }
 
 const char* ToString(RkMethod method) {
   switch (method) {
-    case RkMethod::kRk4: return "rk4";
-    case RkMethod::kDormandPrince54: return "dp54";
-    case RkMethod::kBogackiShampine32: return "bs32";
+    case RkMethod::kRk4:
+      return "rk4";
+    case RkMethod::kDormandPrince54:
+      return "dp54";
+    case RkMethod::kBogackiShampine32:
+      return "bs32";
   }
   return "unknown";
 }
@@ -82,27 +93,29 @@ bool IntegratorOptions::IsValid(std::string* why) const {
 }
 
 IntegratorStatus Integrator::Integrate(ConstrainedOde& ode, double t0,
-                                       double t1,
-                                       Eigen::Ref<Eigen::VectorXd> y,
+                                       double t1, Eigen::Ref<Eigen::VectorXd> y,
                                        const IntegratorOptions& options,
                                        IntegratorResult* result) {
   if (result == nullptr)
-    throw std::invalid_argument("Integrator::Integrate: result must not be null");
+    throw std::invalid_argument(
+        "Integrator::Integrate: result must not be null");
   std::string why;
   if (!options.IsValid(&why))
     throw std::invalid_argument("Integrator::Integrate(" + name() +
                                 "): invalid options: " + why);
   const int n = ode.state_size(), m = ode.num_constraints();
   if (n <= 0)
-    throw std::invalid_argument("Integrator::Integrate: state_size must be > 0, got " +
-                                std::to_string(n));
+    throw std::invalid_argument(
+        "Integrator::Integrate: state_size must be > 0, got " +
+        std::to_string(n));
   if (m < 0)
     throw std::invalid_argument(
         "Integrator::Integrate: num_constraints must be >= 0, got " +
         std::to_string(m));
   if (ode.num_roots() < 0)
-    throw std::invalid_argument("Integrator::Integrate: num_roots must be >= 0, got " +
-                                std::to_string(ode.num_roots()));
+    throw std::invalid_argument(
+        "Integrator::Integrate: num_roots must be >= 0, got " +
+        std::to_string(ode.num_roots()));
   if (y.size() != n) {
     std::ostringstream os;
     os << "Integrator::Integrate: y has size " << y.size()
@@ -140,9 +153,9 @@ IntegratorStatus Integrator::Integrate(ConstrainedOde& ode, double t0,
     result->status = IntegratorStatus::kConvergenceFailure;
     result->message = std::string("exception: ") + e.what();
   }
-  result->wall_seconds += std::chrono::duration<double>(
-                              std::chrono::steady_clock::now() - start)
-                              .count();
+  result->wall_seconds +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
 
   if ((result->status == IntegratorStatus::kSuccess ||
        result->status == IntegratorStatus::kEvent) &&
@@ -154,58 +167,33 @@ IntegratorStatus Integrator::Integrate(ConstrainedOde& ode, double t0,
 }
 
 namespace {
-struct Entry {
-  std::string description;
-  IntegratorRegistry::Factory factory;
-};
-std::map<std::string, Entry>& Table() {
-  static std::map<std::string, Entry> table;
-  return table;
-}
-std::mutex& TableMutex() {
-  static std::mutex mutex;
-  return mutex;
+Registry<Integrator>& IntegratorRegistryInstance() {
+  static Registry<Integrator> registry("integrator backend");
+  return registry;
 }
 }  // namespace
 
 void IntegratorRegistry::Register(const std::string& name,
                                   const std::string& description,
                                   Factory factory) {
-  if (name.empty() || !factory)
-    throw std::invalid_argument(
-        "IntegratorRegistry::Register: empty name or factory");
-  std::lock_guard<std::mutex> lock(TableMutex());
-  Table()[name] = Entry{description, std::move(factory)};
+  IntegratorRegistryInstance().Register(name, description, std::move(factory));
 }
 
-std::unique_ptr<Integrator> IntegratorRegistry::Create(const std::string& name) {
-  std::lock_guard<std::mutex> lock(TableMutex());
-  auto it = Table().find(name);
-  if (it == Table().end()) {
-    std::string known;
-    for (const auto& [k, v] : Table()) known += (known.empty() ? "" : ", ") + k;
-    throw std::invalid_argument("unknown integrator backend '" + name +
-                                "' (known: " + known + ")");
-  }
-  return it->second.factory();
+std::unique_ptr<Integrator> IntegratorRegistry::Create(
+    const std::string& name) {
+  return IntegratorRegistryInstance().Create(name);
 }
 
 bool IntegratorRegistry::Has(const std::string& name) {
-  std::lock_guard<std::mutex> lock(TableMutex());
-  return Table().count(name) > 0;
+  return IntegratorRegistryInstance().Has(name);
 }
 
 std::vector<std::string> IntegratorRegistry::Names() {
-  std::lock_guard<std::mutex> lock(TableMutex());
-  std::vector<std::string> names;
-  for (const auto& [k, v] : Table()) names.push_back(k);
-  return names;
+  return IntegratorRegistryInstance().Names();
 }
 
 std::string IntegratorRegistry::Description(const std::string& name) {
-  std::lock_guard<std::mutex> lock(TableMutex());
-  auto it = Table().find(name);
-  return it == Table().end() ? std::string() : it->second.description;
+  return IntegratorRegistryInstance().Description(name);
 }
 
 }  // namespace quasiroll

@@ -2,10 +2,10 @@
 
 #include <chrono>
 #include <cmath>
-#include <map>
-#include <mutex>
 #include <sstream>
 #include <stdexcept>
+
+#include "core/registry.h"
 
 namespace quasiroll {
 
@@ -20,12 +20,18 @@ int NlpProblem::CountEqualities() const {
 
 const char* ToString(NlpStatus status) {
   switch (status) {
-    case NlpStatus::kConverged: return "converged";
-    case NlpStatus::kInfeasible: return "infeasible";
-    case NlpStatus::kIterationLimit: return "iteration_limit";
-    case NlpStatus::kNumericalFailure: return "numerical_failure";
-    case NlpStatus::kInvalidInput: return "invalid_input";
-    case NlpStatus::kNotRun: return "not_run";
+    case NlpStatus::kConverged:
+      return "converged";
+    case NlpStatus::kInfeasible:
+      return "infeasible";
+    case NlpStatus::kIterationLimit:
+      return "iteration_limit";
+    case NlpStatus::kNumericalFailure:
+      return "numerical_failure";
+    case NlpStatus::kInvalidInput:
+      return "invalid_input";
+    case NlpStatus::kNotRun:
+      return "not_run";
   }
   return "unknown";
 }
@@ -81,18 +87,18 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
   if (n <= 0)
     throw std::invalid_argument("NlpSolver::Solve: num_variables must be > 0");
   if (m < 0)
-    throw std::invalid_argument("NlpSolver::Solve: num_constraints must be >= 0");
+    throw std::invalid_argument(
+        "NlpSolver::Solve: num_constraints must be >= 0");
   if (x0.size() != n) {
     std::ostringstream os;
-    os << "NlpSolver::Solve: x0 has size " << x0.size() << ", problem has "
-       << n << " variables";
+    os << "NlpSolver::Solve: x0 has size " << x0.size() << ", problem has " << n
+       << " variables";
     throw std::invalid_argument(os.str());
   }
   for (int i = 0; i < n; ++i) {
     if (!std::isfinite(x0(i))) {
       std::ostringstream os;
-      os << "NlpSolver::Solve: x0[" << i << "] is not finite (" << x0(i)
-         << ")";
+      os << "NlpSolver::Solve: x0[" << i << "] is not finite (" << x0(i) << ")";
       throw std::invalid_argument(os.str());
     }
   }
@@ -146,9 +152,9 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
     result->status = NlpStatus::kNumericalFailure;
     result->backend_status = std::string("exception: ") + e.what();
   }
-  result->wall_seconds = std::chrono::duration<double>(
-                             std::chrono::steady_clock::now() - start)
-                             .count();
+  result->wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
 
   // Independent acceptance check.
   bool finite = result->x.size() == n && result->x.allFinite();
@@ -166,8 +172,7 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
     result->status = NlpStatus::kNumericalFailure;
     result->backend_status += " [non-finite solution]";
   } else if (result->status == NlpStatus::kConverged &&
-             result->max_constraint_violation >
-                 options.feasibility_tolerance) {
+             result->max_constraint_violation > options.feasibility_tolerance) {
     std::ostringstream os;
     os << " [claimed convergence rejected: max violation "
        << result->max_constraint_violation << " > "
@@ -179,57 +184,32 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
 }
 
 namespace {
-struct Entry {
-  std::string description;
-  NlpSolverRegistry::Factory factory;
-};
-std::map<std::string, Entry>& Table() {
-  static std::map<std::string, Entry> table;
-  return table;
-}
-std::mutex& TableMutex() {
-  static std::mutex mutex;
-  return mutex;
+Registry<NlpSolver>& NlpSolverRegistryInstance() {
+  static Registry<NlpSolver> registry("NLP backend");
+  return registry;
 }
 }  // namespace
 
 void NlpSolverRegistry::Register(const std::string& name,
                                  const std::string& description,
                                  Factory factory) {
-  if (name.empty() || !factory)
-    throw std::invalid_argument("NlpSolverRegistry::Register: empty name or factory");
-  std::lock_guard<std::mutex> lock(TableMutex());
-  Table()[name] = Entry{description, std::move(factory)};
+  NlpSolverRegistryInstance().Register(name, description, std::move(factory));
 }
 
 std::unique_ptr<NlpSolver> NlpSolverRegistry::Create(const std::string& name) {
-  std::lock_guard<std::mutex> lock(TableMutex());
-  auto it = Table().find(name);
-  if (it == Table().end()) {
-    std::string known;
-    for (const auto& [k, v] : Table()) known += (known.empty() ? "" : ", ") + k;
-    throw std::invalid_argument("unknown NLP backend '" + name +
-                                "' (known: " + known + ")");
-  }
-  return it->second.factory();
+  return NlpSolverRegistryInstance().Create(name);
 }
 
 bool NlpSolverRegistry::Has(const std::string& name) {
-  std::lock_guard<std::mutex> lock(TableMutex());
-  return Table().count(name) > 0;
+  return NlpSolverRegistryInstance().Has(name);
 }
 
 std::vector<std::string> NlpSolverRegistry::Names() {
-  std::lock_guard<std::mutex> lock(TableMutex());
-  std::vector<std::string> names;
-  for (const auto& [k, v] : Table()) names.push_back(k);
-  return names;
+  return NlpSolverRegistryInstance().Names();
 }
 
 std::string NlpSolverRegistry::Description(const std::string& name) {
-  std::lock_guard<std::mutex> lock(TableMutex());
-  auto it = Table().find(name);
-  return it == Table().end() ? std::string() : it->second.description;
+  return NlpSolverRegistryInstance().Description(name);
 }
 
 }  // namespace quasiroll
