@@ -95,7 +95,7 @@ std::string WithoutTiming(const fs::path& p) {
   return out;
 }
 
-class HarnessTest : public ::testing::Test {
+class BenchHarness : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     root_ = fs::temp_directory_path() / ("quasiroll_harness_test_" +
@@ -146,12 +146,12 @@ class HarnessTest : public ::testing::Test {
   static Suite suite_;
   static HarnessSummary summary_j1_;
 };
-fs::path HarnessTest::root_;
-std::string HarnessTest::suite_path_;
-Suite HarnessTest::suite_;
-HarnessSummary HarnessTest::summary_j1_;
+fs::path BenchHarness::root_;
+std::string BenchHarness::suite_path_;
+Suite BenchHarness::suite_;
+HarnessSummary BenchHarness::summary_j1_;
 
-TEST_F(HarnessTest, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
+TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
   ASSERT_EQ(suite_.runs.size(), 16u + 2u + 1u + 1u);
   EXPECT_EQ(summary_j1_.executed, 20);
   const Table t = ReadTable(root_ / "j1" / "runs.csv");
@@ -190,7 +190,7 @@ TEST_F(HarnessTest, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
     EXPECT_NE(meta.find(k), std::string::npos) << k;
 }
 
-TEST_F(HarnessTest, FailuresAndErrorsAreRowsAndTheSuiteFinishes) {
+TEST_F(BenchHarness, FailuresAndErrorsAreRowsAndTheSuiteFinishes) {
   const Table t = ReadTable(root_ / "j1" / "runs.csv");
   const auto& unstable = t.rows[18];
   EXPECT_EQ(unstable.at("suite_group"), "unstable");
@@ -207,7 +207,7 @@ TEST_F(HarnessTest, FailuresAndErrorsAreRowsAndTheSuiteFinishes) {
   EXPECT_EQ(summary_j1_.failures, 2);
 }
 
-TEST_F(HarnessTest, JobsTwoGivesTheSameRunsCsvExceptTiming) {
+TEST_F(BenchHarness, JobsTwoGivesTheSameRunsCsvExceptTiming) {
   const HarnessSummary s = RunSuite(suite_, Options("j2", 2));
   EXPECT_EQ(s.executed, 20);
   EXPECT_EQ(WithoutTiming(root_ / "j1" / "runs.csv"), WithoutTiming(root_ / "j2" / "runs.csv"));
@@ -218,7 +218,7 @@ TEST_F(HarnessTest, JobsTwoGivesTheSameRunsCsvExceptTiming) {
         << r.run_id;
 }
 
-TEST_F(HarnessTest, ResumeAfterInterruptionGivesTheSameFiles) {
+TEST_F(BenchHarness, ResumeAfterInterruptionGivesTheSameFiles) {
   const fs::path dir = root_ / "resume";
   fs::remove_all(dir);
   fs::copy(root_ / "j1", dir, fs::copy_options::recursive);
@@ -245,7 +245,7 @@ TEST_F(HarnessTest, ResumeAfterInterruptionGivesTheSameFiles) {
   EXPECT_EQ(WithoutTiming(root_ / "j1" / "runs.csv"), WithoutTiming(dir / "runs.csv"));
 }
 
-TEST_F(HarnessTest, FilterKeepsMatchingRunIds) {
+TEST_F(BenchHarness, FilterKeepsMatchingRunIds) {
   HarnessOptions o = Options("filter", 2);
   o.filter = "^wp-flat-newton";
   const HarnessSummary s = RunSuite(suite_, o);
@@ -263,7 +263,7 @@ int RunCli(const std::string& args) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-TEST_F(HarnessTest, CliExitCodes) {
+TEST_F(BenchHarness, CliExitCodes) {
   const fs::path bad = root_ / "bad.yaml";
   std::ofstream(bad) << "scenes:\n  - {file: " << kScenes
                      << "paper.yaml}\ngroups:\n  g:\n    nlp: [newton, nope]\n";

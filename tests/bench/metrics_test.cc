@@ -33,7 +33,7 @@ std::vector<TrajectorySample> Curve(double dt, double t_end) {
   return out;
 }
 
-TEST(Metrics, IdenticalTrajectoriesHaveZeroError) {
+TEST(BenchMetrics, IdenticalTrajectoriesHaveZeroError) {
   const auto ref = Curve(0.05, 2.0);
   const AccuracyMetrics m = CompareTrajectories(ref, ref, true);
   EXPECT_EQ(m.common_samples, 41);
@@ -45,7 +45,7 @@ TEST(Metrics, IdenticalTrajectoriesHaveZeroError) {
   EXPECT_EQ(m.slip_rms, 0);
 }
 
-TEST(Metrics, ConstantOffsetGivesRmsEqualMaxEqualOffset) {
+TEST(BenchMetrics, ConstantOffsetGivesRmsEqualMaxEqualOffset) {
   const auto ref = Curve(0.05, 2.0);
   auto run = ref;
   for (auto& s : run) s.position += Vec3(0.003, -0.004, 0.0);  // |d| = 0.005
@@ -55,7 +55,7 @@ TEST(Metrics, ConstantOffsetGivesRmsEqualMaxEqualOffset) {
   EXPECT_NEAR(m.final_pos, 0.005, 1e-15);
 }
 
-TEST(Metrics, LinearlyGrowingErrorHasKnownRmsAndMax) {
+TEST(BenchMetrics, LinearlyGrowingErrorHasKnownRmsAndMax) {
   // e(t) = c t on t_k = k h, k = 0..n: max = c t_n, rms^2 = c^2 h^2 sum k^2/(n+1).
   const auto ref = Curve(0.1, 1.0);
   auto run = ref;
@@ -69,7 +69,7 @@ TEST(Metrics, LinearlyGrowingErrorHasKnownRmsAndMax) {
   EXPECT_NEAR(m.final_pos, c, 1e-15);
 }
 
-TEST(Metrics, RotationByKnownAngleAboutArbitraryAxis) {
+TEST(BenchMetrics, RotationByKnownAngleAboutArbitraryAxis) {
   const auto ref = Curve(0.05, 1.0);
   auto run = ref;
   const double angle = 0.123;
@@ -85,13 +85,13 @@ TEST(Metrics, RotationByKnownAngleAboutArbitraryAxis) {
   EXPECT_NEAR(m.pos_max, 0, 1e-15);
 }
 
-TEST(Metrics, RotationAngleNearPi) {
+TEST(BenchMetrics, RotationAngleNearPi) {
   const Mat3 a = Mat3::Identity();
   const Mat3 b = Eigen::AngleAxisd(3.1, Vec3::UnitZ()).toRotationMatrix();
   EXPECT_NEAR(RotationAngle(a, b), 3.1, 1e-12);
 }
 
-TEST(Metrics, ForceAndSlipOffsets) {
+TEST(BenchMetrics, ForceAndSlipOffsets) {
   const auto ref = Curve(0.05, 1.0);
   auto run = ref;
   for (auto& s : run) {
@@ -105,7 +105,7 @@ TEST(Metrics, ForceAndSlipOffsets) {
   EXPECT_NEAR(m.slip_rms, 2e-6, 1e-15);
 }
 
-TEST(Metrics, ReferenceOnFinerGridIsInterpolatedLinearly) {
+TEST(BenchMetrics, ReferenceOnFinerGridIsInterpolatedLinearly) {
   // Reference on dt/4; run on dt with positions exactly linear in t between
   // the reference samples: interpolation reproduces them exactly.
   auto ref = Curve(0.0125, 1.0);
@@ -125,7 +125,7 @@ TEST(Metrics, ReferenceOnFinerGridIsInterpolatedLinearly) {
   EXPECT_NEAR(m.rot_max, 0, 1e-12);
 }
 
-TEST(Metrics, SlerpInterpolatesYawAcrossPi) {
+TEST(BenchMetrics, SlerpInterpolatesYawAcrossPi) {
   std::vector<TrajectorySample> ref(2);
   ref[0].t = 0;
   ref[0].rpy = Vec3(0, 0, 3.1);
@@ -135,7 +135,7 @@ TEST(Metrics, SlerpInterpolatesYawAcrossPi) {
   EXPECT_NEAR(std::abs(mid.rpy(2)), std::numbers::pi, 1e-12);
 }
 
-TEST(Metrics, FailedRunIsMeasuredOverTheTimeReachedOnly) {
+TEST(BenchMetrics, FailedRunIsMeasuredOverTheTimeReachedOnly) {
   const auto ref = Curve(0.05, 2.0);
   std::vector<TrajectorySample> run(ref.begin(), ref.begin() + 21);  // to t = 1
   for (auto& s : run) s.position.y() += 0.01;
@@ -150,7 +150,7 @@ TEST(Metrics, FailedRunIsMeasuredOverTheTimeReachedOnly) {
   EXPECT_EQ(m.force_rms, 0);  // NaN sample skipped
 }
 
-TEST(Metrics, ReferenceEndingEarlyLimitsTheCommonTimes) {
+TEST(BenchMetrics, ReferenceEndingEarlyLimitsTheCommonTimes) {
   const auto full = Curve(0.05, 2.0);
   std::vector<TrajectorySample> ref(full.begin(), full.begin() + 11);  // to 0.5 s
   const AccuracyMetrics m = CompareTrajectories(full, ref, true);
@@ -158,7 +158,7 @@ TEST(Metrics, ReferenceEndingEarlyLimitsTheCommonTimes) {
   EXPECT_TRUE(std::isnan(m.final_pos));  // run end not covered
 }
 
-TEST(Metrics, EmptyInputsGiveNaN) {
+TEST(BenchMetrics, EmptyInputsGiveNaN) {
   const auto ref = Curve(0.05, 1.0);
   const AccuracyMetrics m = CompareTrajectories({}, ref, false);
   EXPECT_EQ(m.common_samples, 0);
@@ -168,7 +168,7 @@ TEST(Metrics, EmptyInputsGiveNaN) {
   EXPECT_TRUE(std::isnan(d.drift_max));
 }
 
-TEST(Metrics, DriftAndGap) {
+TEST(BenchMetrics, DriftAndGap) {
   auto run = Curve(0.05, 1.0);  // drift = 1e-12 (k + 1), gap = 1e-10 k
   DriftMetrics d = ComputeDrift(run);
   EXPECT_DOUBLE_EQ(d.drift_max, 21e-12);

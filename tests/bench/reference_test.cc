@@ -33,7 +33,7 @@ Loaded LoadWithSpec(const std::string& file, double t_end) {
   return l;
 }
 
-TEST(Reference, DetectsTheAnalyticCases) {
+TEST(BenchReference, DetectsTheAnalyticCases) {
   EXPECT_EQ(DetectAnalyticCase(LoadWithSpec("flat.yaml", 1).scene,
                                LoadWithSpec("flat.yaml", 1).terrain),
             AnalyticCase::kFlatStraight);
@@ -75,7 +75,7 @@ TEST(Reference, DetectsTheAnalyticCases) {
   }
 }
 
-TEST(Reference, ClosedFormsMatchTheOracleNumbers) {
+TEST(BenchReference, ClosedFormsMatchTheOracleNumbers) {
   {
     const Loaded l = LoadWithSpec("flat.yaml", 20);
     const AnalyticSolution a(l.scene, l.terrain, AnalyticCase::kFlatStraight);
@@ -147,7 +147,7 @@ AccuracyMetrics Agreement(const std::string& file, double t_end, std::string* ki
 // gives creep <= eps = 1e-8 m/s on these oracles; we allow 1e-9 m/s.
 constexpr double kPosTol = 1e-9, kRotTol = 1e-9, kForceTol = 1e-8, kSlipTol = 1e-9;
 
-TEST(Reference, NumericalAgreesWithAnalyticFlat) {
+TEST(BenchReference, NumericalAgreesWithAnalyticFlat) {
   std::string kind;
   const AccuracyMetrics m = Agreement("flat.yaml", 10, &kind);
   RecordProperty("pos_max", std::to_string(m.pos_max));
@@ -159,7 +159,7 @@ TEST(Reference, NumericalAgreesWithAnalyticFlat) {
   EXPECT_LT(m.slip_rms, kSlipTol);
 }
 
-TEST(Reference, NumericalAgreesWithAnalyticCircle) {
+TEST(BenchReference, NumericalAgreesWithAnalyticCircle) {
   for (const char* f : {"circle.yaml", "circle_pvc.yaml"}) {
     std::string kind;
     const AccuracyMetrics m = Agreement(f, 10, &kind);
@@ -172,7 +172,7 @@ TEST(Reference, NumericalAgreesWithAnalyticCircle) {
   }
 }
 
-TEST(Reference, NumericalAgreesWithAnalyticIncline) {
+TEST(BenchReference, NumericalAgreesWithAnalyticIncline) {
   // pvc uphill (the shipped scene), pvc downhill, paper mode uphill/downhill.
   using Modifier = void (*)(Scene*);
   const std::pair<const char*, Modifier> cases[] = {
@@ -197,7 +197,7 @@ TEST(Reference, NumericalAgreesWithAnalyticIncline) {
   }
 }
 
-TEST(Reference, CacheRoundTripIsExact) {
+TEST(BenchReference, CacheRoundTripIsExact) {
   const fs::path dir = fs::temp_directory_path() / "quasiroll_reference_cache_test";
   fs::remove_all(dir);
   Loaded l = LoadWithSpec("paper.yaml", 0.5);

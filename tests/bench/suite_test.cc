@@ -37,7 +37,7 @@ scenes:
   - {name: flat5, file: flat.yaml, overrides: {time: {t_end: 5}, mu: 0.8}}
 )";
 
-TEST(Suite, ExpandsTheGridInOrderWithDefaults) {
+TEST(BenchSuite, ExpandsTheGridInOrderWithDefaults) {
   const Suite s = Load(std::string(kBase) + R"(
 groups:
   wp:
@@ -86,7 +86,7 @@ groups:
       << s.runs[16].run_id;
 }
 
-TEST(Suite, RunIdsAreDeterministic) {
+TEST(BenchSuite, RunIdsAreDeterministic) {
   const std::string text = std::string(kBase) + "groups:\n  g:\n    dt: [0.1, 0.05]\n";
   const Suite a = Load(text), b = Load(text);
   ASSERT_EQ(a.runs.size(), b.runs.size());
@@ -94,7 +94,7 @@ TEST(Suite, RunIdsAreDeterministic) {
     EXPECT_EQ(a.runs[i].run_id, b.runs[i].run_id);
 }
 
-TEST(Suite, ToleranceLadderSetsRtolAtolAndNlpTolerance) {
+TEST(BenchSuite, ToleranceLadderSetsRtolAtolAndNlpTolerance) {
   const Suite s = Load(std::string(kBase) + R"(
 groups:
   tol:
@@ -111,7 +111,7 @@ groups:
   EXPECT_EQ(o.quasi_static.residual_tolerance, 1e-10);
 }
 
-TEST(Suite, SeedAndRoughnessSweepsChangeTheTerrain) {
+TEST(BenchSuite, SeedAndRoughnessSweepsChangeTheTerrain) {
   const Suite s = Load(R"(
 scenes:
   - name: rnd
@@ -141,7 +141,7 @@ groups:
   EXPECT_EQ(TerrainId(s.runs[1], s.scenes[0]), "rnd_s1_r0.5");
 }
 
-TEST(Suite, RejectsUnknownBackend) {
+TEST(BenchSuite, RejectsUnknownBackend) {
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    nlp: [newton, foo]\n",
                  {"groups.g.nlp[1]", "\"foo\"", "newton"});
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dae: rk5\n",
@@ -152,7 +152,7 @@ TEST(Suite, RejectsUnknownBackend) {
                  {"groups.g.coupling[0]", "\"full\""});
 }
 
-TEST(Suite, RejectsEmptyGrids) {
+TEST(BenchSuite, RejectsEmptyGrids) {
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dt: []\n",
                  {"groups.g.dt", "empty"});
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    nlp: []\n",
@@ -161,7 +161,7 @@ TEST(Suite, RejectsEmptyGrids) {
   ExpectRejected("scenes: []\ngroups:\n  g: {}\n", {"scenes", "non-empty"});
 }
 
-TEST(Suite, RejectsUnknownKeys) {
+TEST(BenchSuite, RejectsUnknownKeys) {
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dtt: [0.1]\n",
                  {"groups.g.dtt", "unknown key"});
   ExpectRejected(std::string(kBase) + "group:\n  g: {}\n", {"group", "unknown key"});
@@ -173,7 +173,7 @@ groups: {g: {}}
                  {"scenes[0].overrides.mass2", "unknown key"});
 }
 
-TEST(Suite, RejectsBadNumbers) {
+TEST(BenchSuite, RejectsBadNumbers) {
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dt: [0.1, -0.05]\n",
                  {"groups.g.dt[1]", "-0.05"});
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dt: 0\n", {"groups.g.dt", "0"});
@@ -189,14 +189,14 @@ TEST(Suite, RejectsBadNumbers) {
                  {"groups.g.repeats", "0"});
 }
 
-TEST(Suite, RejectsSweepsThatDoNotApply) {
+TEST(BenchSuite, RejectsSweepsThatDoNotApply) {
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    seed: [3]\n",
                  {"groups.g.seed", "random", "3"});
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    scenes: [flat5]\n    roughness: 2\n",
                  {"groups.g.roughness", "flat5", "2"});
 }
 
-TEST(Suite, RejectsBadScenes) {
+TEST(BenchSuite, RejectsBadScenes) {
   ExpectRejected("scenes:\n  - {file: nope.yaml}\ngroups: {g: {}}\n",
                  {"scenes[0].file", "nope.yaml"});
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    scenes: [paper, hill]\n",
@@ -213,7 +213,7 @@ groups: {g: {}}
                  {"scenes[0].overrides.mu", "-1"});
 }
 
-TEST(Suite, ShippedSuitesLoad) {
+TEST(BenchSuite, ShippedSuitesLoad) {
   for (const char* name : {"smoke", "default", "analytic"}) {
     const std::string path =
         std::string(QUASIROLL_SOURCE_DIR) + "/bench/suites/" + name + ".yaml";
