@@ -1,0 +1,46 @@
+// Backend "levenberg-marquardt" (example plugin): Levenberg-Marquardt on the
+// equality rows of a square system, built against the installed quasiroll
+// package only.
+//
+// Solves  r(x) = g_eq(x) - g_lb_eq = 0  (num_variables() equality rows) by
+//   min_dx |J dx + r|^2 + lambda |D dx|^2,
+// solved by a column-pivoting QR of the stacked matrix [J; sqrt(lambda) D]
+// (no normal equations, so the accuracy is that of J, not J^T J), with Moré's
+// column scaling D and Nielsen's update of lambda from the gain ratio. As
+// lambda -> 0 near the root the step becomes the Newton step, which gives the
+// 1e-12 scaled residual the quasi-static solver asks for.
+//
+// Statuses (docs/plugins.md): kConverged when max|r| <= feasibility_tolerance
+// and the bounds / inequality rows hold at the root; kInfeasible when the
+// root violates them (a root of a nonsingular square system is locally
+// unique); kIterationLimit after max_iterations step attempts;
+// kNumericalFailure for a non-finite residual or Jacobian, or stagnation.
+// Never throws for numerical trouble. The objective is ignored.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "core/nlp.h"
+
+namespace example {
+
+class LevenbergMarquardtSolver final : public quasiroll::NlpSolver {
+ public:
+  LevenbergMarquardtSolver();
+  ~LevenbergMarquardtSolver() override;
+  std::string name() const override { return "levenberg-marquardt"; }
+  // Solve() then rejects non-square problems with std::invalid_argument.
+  bool RequiresSquareSystem() const override { return true; }
+
+ private:
+  void DoSolve(const quasiroll::NlpProblem& problem,
+               const Eigen::Ref<const Eigen::VectorXd>& x0,
+               const quasiroll::NlpOptions& options,
+               quasiroll::NlpResult* result) override;
+
+  struct Workspace;
+  std::unique_ptr<Workspace> ws_;  // per instance: one solver per thread
+};
+
+}  // namespace example

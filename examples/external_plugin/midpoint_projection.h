@@ -1,0 +1,54 @@
+// Integrator "midpoint-projection" (example plugin): the explicit midpoint
+// rule (RK2, fixed step) on y' = F(t, y), each step followed by the Newton
+// projection onto H = 0
+//   y <- y - D J^T (J D J^T)^{-1} H(y)   until ||H||_inf <= projection_tolerance
+// (at most max_projection_iterations corrections, else kConstraintFailure),
+// using only the public ConstrainedOde interface (core/dae.h).
+//
+// Step: options.step (0 = one step over [t0, t1]); the last step ends exactly
+// on t1; more than max_steps steps -> kStepSizeTooSmall. Events: after each
+// step the signs of ode.Roots() are compared with the previous ones; on a
+// change the root is bracketed by bisection on the step fraction (re-stepping
+// from the last accepted state) and y is the (projected) state at the root.
+#pragma once
+
+#include <string>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include "core/dae.h"
+
+namespace example {
+
+class MidpointProjectionIntegrator final : public quasiroll::Integrator {
+ public:
+  std::string name() const override { return "midpoint-projection"; }
+
+ private:
+  void DoIntegrate(quasiroll::ConstrainedOde& ode, double t0, double t1,
+                   Eigen::Ref<Eigen::VectorXd> y,
+                   const quasiroll::IntegratorOptions& options,
+                   quasiroll::IntegratorResult* result) override;
+
+  // One midpoint step of size h from (t, y) into out, then projected.
+  quasiroll::IntegratorStatus Step(quasiroll::ConstrainedOde& ode, double t,
+                                   double h, const Eigen::VectorXd& y,
+                                   Eigen::VectorXd& out,
+                                   const quasiroll::IntegratorOptions& options,
+                                   quasiroll::IntegratorResult* result);
+  quasiroll::IntegratorStatus Project(quasiroll::ConstrainedOde& ode,
+                                      Eigen::VectorXd& y,
+                                      const quasiroll::IntegratorOptions& options,
+                                      quasiroll::IntegratorResult* result);
+  // Index of the first root component whose sign changed from g_old_ to g,
+  // -1 if none (a component exactly 0 at the start does not fire).
+  int Fired(const Eigen::VectorXd& g) const;
+
+  Eigen::VectorXd d_, y0_, y1_, y_mid_, y_hi_, k_, h_, lambda_;
+  Eigen::VectorXd g_old_, g_new_;
+  Eigen::MatrixXd jac_, jd_, a_;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt_;
+};
+
+}  // namespace example
