@@ -424,6 +424,7 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
   w.EndArray();
   w.Key("runs_total").Value(static_cast<int>(suite.runs.size()));
   w.EndObject();
+  w.Key("suite_hash").Value(Hex64(suite.text_hash));
   w.Key("reference").Value(suite.reference.Canonical());
   w.Key("commit").Value(GitCommit());
   w.Key("libraries");
@@ -433,6 +434,12 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
   w.Key("jobs").Value(jobs);
   w.Key("filter").Value(options.filter);
   w.Key("resume").Value(options.resume);
+  w.Key("options").BeginObject();
+  w.Key("out").Value(options.out_dir);
+  w.Key("jobs").Value(jobs);
+  w.Key("filter").Value(options.filter);
+  w.Key("resume").Value(options.resume);
+  w.EndObject();
   w.Key("start_time").Value(start);
   if (summary) {
     w.Key("end_time").Value(end);
