@@ -69,8 +69,12 @@ def scene_with_most_runs(runs):
 
 
 def work_precision_rows(runs):
-    """Rows of the Δt/tolerance ladder (successful ones only)."""
-    rows = in_group(runs, WORK_PRECISION_GROUP) if has_group_column(runs) else []
+    """Rows of the Δt/tolerance ladders (successful ones only): every group
+    whose name starts with "work_precision" (e.g. a separate, shorter ladder
+    for the coupled methods)."""
+    rows = ([run for run in runs
+             if run.get("suite_group", "").startswith(WORK_PRECISION_GROUP)]
+            if has_group_column(runs) else [])
     if not rows:
         ok = successful(runs)
         if not ok:
