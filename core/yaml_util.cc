@@ -1,5 +1,7 @@
 #include "core/yaml_util.h"
 
+#include <yaml-cpp/eventhandler.h>
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -75,25 +77,68 @@ void Fail(const std::string& path, const std::string& problem) {
   throw SceneError(path.empty() ? problem : path + ": " + problem);
 }
 
+namespace {
+// Counts the documents of a stream without building nodes; records where the
+// last one started.
+class DocumentCounter final : public YAML::EventHandler {
+ public:
+  int documents = 0;
+  YAML::Mark last_start;
+  void OnDocumentStart(const YAML::Mark& mark) override {
+    ++documents;
+    last_start = mark;
+  }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+};
+}  // namespace
+
 YAML::Node ParseYaml(const std::string& text, const std::string& origin) {
   const std::string where = origin.empty() ? "<string>" : origin;
-  std::vector<YAML::Node> docs;
-  try {
-    docs = YAML::LoadAll(text);
-  } catch (const YAML::Exception& e) {
+  auto syntax_error = [&where](const YAML::Mark& mark, const std::string& msg) {
     std::string loc = where;
-    if (!e.mark.is_null()) {
-      loc += ":" + std::to_string(e.mark.line + 1) + ":" +
-             std::to_string(e.mark.column + 1);
+    if (!mark.is_null()) {
+      loc += ":" + std::to_string(mark.line + 1) + ":" +
+             std::to_string(mark.column + 1);
     }
-    throw SceneError(loc + ": YAML syntax error: " + e.msg);
+    return SceneError(loc + ": YAML syntax error: " + msg);
+  };
+  // Not YAML::LoadAll(): yaml-cpp 0.7 loops forever, allocating, on streams
+  // with a token no document can start with (",}", ", a: b}";
+  // jbeder/yaml-cpp#1040, fixed upstream after 0.8 by PR #1319): it returns
+  // empty documents that all start at the same token. Found by
+  // tests/fuzz/fuzz_scene. So count documents first, stopping when one starts
+  // where the previous one did, then load the single document.
+  YAML::Node root;
+  try {
+    std::istringstream in(text);
+    YAML::Parser parser(in);
+    DocumentCounter counter;
+    int previous_start = 0;
+    while (parser.HandleNextDocument(counter)) {
+      if (counter.documents > 1 && counter.last_start.pos == previous_start)
+        throw syntax_error(counter.last_start, "unexpected token");
+      previous_start = counter.last_start.pos;
+    }
+    if (counter.documents == 0) return YAML::Node(YAML::NodeType::Null);
+    if (counter.documents > 1) {
+      throw SceneError(where + ": expected a single YAML document, got " +
+                       std::to_string(counter.documents));
+    }
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw syntax_error(e.mark, e.msg);
   }
-  if (docs.empty()) return YAML::Node(YAML::NodeType::Null);
-  if (docs.size() > 1) {
-    throw SceneError(where + ": expected a single YAML document, got " +
-                     std::to_string(docs.size()));
-  }
-  return docs[0];
+  return root;
 }
 
 YAML::Node LoadYamlFile(const std::string& path) {
