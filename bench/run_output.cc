@@ -190,6 +190,7 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.Key("t_reached").Value(r.t_reached);
   j.Key("mu_min_at_stop").Value(r.mu_min_at_stop);
   j.Key("critical_wheel").Value(r.critical_contact);
+  if (!r.success()) j.Key("stop_configuration").Array(r.stop_configuration);
   j.Key("samples").Value(static_cast<int>(r.samples.size()));
   j.Key("counters").BeginObject();
   j.Key("nlp_solves").Value(r.nlp_solves);

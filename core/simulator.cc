@@ -332,6 +332,7 @@ bool Simulator::Interval(SimulationResult* result) {
   result->t_reached = t;
   if (sol.status != QuasiStaticStatus::kOk) {
     result->status = ToString(sol.status);
+    result->stop_configuration = s.theta;
     result->mu_min_at_stop = sol.mu_min;
     result->critical_contact =
         sol.critical_contact >= 0 ? sol.critical_contact + 1 : -1;
@@ -356,6 +357,7 @@ bool Simulator::Interval(SimulationResult* result) {
     if (s.ode.nlp_failed()) {
       const QuasiStaticSolution& f = s.ode.last_solution();
       result->status = ToString(f.status);
+      result->stop_configuration = s.solver.problem().configuration();
       result->mu_min_at_stop = f.mu_min;
       result->critical_contact =
           f.critical_contact >= 0 ? f.critical_contact + 1 : -1;
@@ -364,6 +366,7 @@ bool Simulator::Interval(SimulationResult* result) {
                             f.message;
     } else {
       result->status = ToString(st);
+      result->stop_configuration = s.y;
       result->stop_reason = "t=" + std::to_string(s.ires.t_reached) + " s: " +
                             options_.dae + ": " + ToString(st) + ": " +
                             s.ires.message;

@@ -73,6 +73,11 @@ struct SimulationResult {
   double t_reached = 0;
   double mu_min_at_stop = std::numeric_limits<double>::quiet_NaN();
   int critical_contact = -1;  // 1-based wheel, -1 if none
+  // The configuration at which the run stopped (for a quasi-static failure
+  // inside the integrator, the stage state where the solve failed), so the
+  // failure can be reproduced with the quasi-static solver alone.
+  Configuration stop_configuration = Configuration::Constant(
+      std::numeric_limits<double>::quiet_NaN());
   std::vector<TrajectorySample> samples;
   // Cost counters.
   int nlp_solves = 0;

@@ -52,7 +52,9 @@ PolishStats PolishPass(const NlpProblem& problem, const NlpBounds& b,
          std::isfinite(stats.max_violation)) {
     rows.clear();
     targets.clear();
-    const double band = near_active ? active_tol : 0.0;
+    // Without near_active, only rows violated beyond the tolerance: a row at
+    // -1e-20 is feasible and must not be pulled onto its bound.
+    const double band = near_active ? active_tol : -feasibility_tolerance;
     for (int i = 0; i < m; ++i) {
       if (b.g_lb(i) == b.g_ub(i) || g(i) < b.g_lb(i) + band) {
         rows.push_back(i);
@@ -75,9 +77,13 @@ PolishStats PolishPass(const NlpProblem& problem, const NlpBounds& b,
     if (!ja.allFinite()) break;
     Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(ja);
     dx = cod.solve(r);
-    // Halve the step until the violation decreases.
+    // Halve the step until the violation decreases, or until the simplified
+    // correction pinv(J_A) r_A(x_trial) shrinks (natural monotonicity: on
+    // ill-conditioned systems a step can raise the violation while moving
+    // much closer to the solution, see newton_solver.h).
     bool improved = false;
-    for (double alpha = 1.0; alpha >= 1.0 / 64; alpha *= 0.5) {
+    const double dx_norm = dx.norm();
+    for (double alpha = 1.0; alpha >= 1e-10; alpha *= 0.5) {
       x_trial = x;
       for (int c = 0; c < f; ++c) {
         const int j = free_vars[c];
@@ -87,7 +93,12 @@ PolishStats PolishPass(const NlpProblem& problem, const NlpBounds& b,
       ++stats.constraint_evaluations;
       const double v = MaxConstraintViolation(x_trial, g_trial, b.x_lb, b.x_ub,
                                               b.g_lb, b.g_ub);
-      if (v < stats.max_violation) {
+      bool natural = false;
+      if (std::isfinite(v) && v >= stats.max_violation) {
+        for (int a = 0; a < k; ++a) r(a) = g_trial(rows[a]) - targets[a];
+        natural = cod.solve(r).norm() <= (1.0 - 0.25 * alpha) * dx_norm;
+      }
+      if (v < stats.max_violation || natural) {
         x.swap(x_trial);
         g.swap(g_trial);
         stats.max_violation = v;

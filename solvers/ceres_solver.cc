@@ -319,6 +319,20 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
         return;
       }
       if (square) {
+        // LM's cost-decrease test can stall on ill-conditioned roots (cond
+        // ~1e7-1e8); finish with affine-invariant Newton steps from nearby.
+        if (viol <= 1e-6) {
+          const internal::PolishStats ps = internal::PolishActiveConstraints(
+              problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/20, &x);
+          s.g_evals += ps.constraint_evaluations;
+          s.j_evals += ps.jacobian_evaluations;
+          std::snprintf(msg, sizeof msg, "; polish -> violation %.2e", ps.max_violation);
+          result->backend_status += msg;
+          if (ps.success) {
+            finish(NlpStatus::kConverged);
+            return;
+          }
+        }
         finish(summary.termination_type == ceres::NO_CONVERGENCE
                    ? NlpStatus::kIterationLimit
                    : NlpStatus::kNumericalFailure);
@@ -446,7 +460,7 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
       // a Newton polish instead of driving rho up against round-off.
       s.xa = x;
       const internal::PolishStats ps = internal::PolishActiveConstraints(
-          problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/5, &s.xa);
+          problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/20, &s.xa);
       s.g_evals += ps.constraint_evaluations;
       s.j_evals += ps.jacobian_evaluations;
       if (ps.success) {
@@ -476,7 +490,7 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
   NlpStatus status = converged ? NlpStatus::kConverged : NlpStatus::kIterationLimit;
   if (!converged && viol > feas_tol && viol <= 1e-6) {
     const internal::PolishStats ps = internal::PolishActiveConstraints(
-        problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/5, &x);
+        problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/20, &x);
     s.g_evals += ps.constraint_evaluations;
     s.j_evals += ps.jacobian_evaluations;
     std::snprintf(msg, sizeof msg, "; polish -> violation %.2e", ps.max_violation);

@@ -10,7 +10,7 @@ namespace quasiroll {
 
 struct NewtonSolver::Workspace {
   Eigen::VectorXd x_lb, x_ub, g_lb, g_ub;
-  Eigen::VectorXd g, g_trial, r, r_trial, dx, x_trial;
+  Eigen::VectorXd g, g_trial, r, r_trial, dx, dx_bar, x_trial;
   Eigen::MatrixXd jac, jac_eq;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu;
   std::vector<int> eq_rows;
@@ -25,6 +25,7 @@ struct NewtonSolver::Workspace {
     r.resize(n);
     r_trial.resize(n);
     dx.resize(n);
+    dx_bar.resize(n);
     x_trial.resize(n);
     jac.resize(m, n);
     jac_eq.resize(n, n);
@@ -106,8 +107,16 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
     w.dx = w.lu.solve(w.r);
     w.dx = -w.dx;
 
-    // Backtracking (Armijo) line search on phi = |r|^2.
+    // Damping: accept x + alpha dx when either
+    //  (a) natural monotonicity (Deuflhard, affine invariant): the simplified
+    //      correction dxbar = -J(x)^{-1} r(x + alpha dx), reusing this LU,
+    //      satisfies |dxbar| <= (1 - alpha/4) |dx|, or
+    //  (b) Armijo on phi = |r|^2: phi(x + alpha dx) <= (1 - 2e-4 alpha) phi(x).
+    // (a) matters for ill-conditioned systems (the creeping friction law has
+    // condition numbers ~1e7-1e8): there a full step can raise |r| while
+    // moving much closer to the root, and a residual-only test stalls.
     const double phi = w.r.squaredNorm();
+    const double dx_norm = w.dx.norm();
     double alpha = 1.0;
     bool accepted = false;
     while (alpha >= 1e-10) {
@@ -118,6 +127,11 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
         const double phi_trial = w.r_trial.squaredNorm();
         if (phi_trial <= (1.0 - 2e-4 * alpha) * phi ||
             w.r_trial.lpNorm<Eigen::Infinity>() <= tol) {
+          accepted = true;
+          break;
+        }
+        w.dx_bar = w.lu.solve(w.r_trial);
+        if (w.dx_bar.norm() <= (1.0 - 0.25 * alpha) * dx_norm) {
           accepted = true;
           break;
         }

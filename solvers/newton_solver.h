@@ -2,8 +2,12 @@
 //
 // Solves  g_eq(x) = g_lb_eq  (exactly num_variables() equality rows) with
 //   J dx = -r,  r = g_eq(x) - g_lb_eq,  J = d g_eq / dx  (dense partial-pivot
-//   LU), x <- x + alpha dx,  alpha = 1, 1/2, ... until the Armijo condition
-//   |r(x + alpha dx)|^2 <= (1 - 2e-4 alpha) |r(x)|^2  holds.
+//   LU), x <- x + alpha dx,  alpha = 1, 1/2, ... until either the natural
+//   monotonicity test (Deuflhard) |J(x)^{-1} r(x + alpha dx)| <=
+//   (1 - alpha/4) |dx|  or the Armijo condition
+//   |r(x + alpha dx)|^2 <= (1 - 2e-4 alpha) |r(x)|^2  holds. The first is
+//   affine invariant and keeps full steps on ill-conditioned systems, where
+//   the residual can rise on the way to the root.
 // Converged when max_i |r_i| <= options.feasibility_tolerance. The objective
 // is ignored (the root is isolated); bounds and inequality rows are checked at
 // the root: if the root violates them the status is kInfeasible (the root of

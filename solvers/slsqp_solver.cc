@@ -243,7 +243,7 @@ void SlsqpSolver::DoSolve(const NlpProblem& problem,
   // Independent feasibility check (+ active-set Newton polish if needed).
   const internal::PolishStats ps = internal::PolishActiveConstraints(
       problem, b, /*active_tol=*/1e-7, options.feasibility_tolerance,
-      /*max_iterations=*/5, &result->x);
+      /*max_iterations=*/20, &result->x);
   result->constraint_evaluations += ps.constraint_evaluations;
   result->jacobian_evaluations += ps.jacobian_evaluations;
   char msg[128];
