@@ -366,6 +366,13 @@ HeightmapTerrain::HeightmapTerrain(std::vector<double> xs, std::vector<double> y
         }
       }
       const Eigen::Matrix4d C = M * G * M.transpose();
+      // Finite but huge heights (1e308) overflow the slopes and coefficients
+      // (found by tests/fuzz/fuzz_scene); the sum of 16 terms must stay finite.
+      if (!(C.cwiseAbs().maxCoeff() <= 1e300)) {
+        throw SceneError(label_ + ": heights too large for a spline near (x[" +
+                         std::to_string(i) + "], y[" + std::to_string(j) +
+                         "]), coefficient " + Num(C.cwiseAbs().maxCoeff()));
+      }
       double* c = &coeffs_[(static_cast<std::size_t>(j) * (nx - 1) + i) * 16];
       for (int a = 0; a < 4; ++a) {
         for (int b = 0; b < 4; ++b) c[a * 4 + b] = C(a, b);

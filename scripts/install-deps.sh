@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
 # Installs every Debian package quasiroll needs. Idempotent; safe to re-run.
+#   scripts/install-deps.sh          what the build and scripts/test.sh need
+#   scripts/install-deps.sh --fuzz   also the optional fuzzing toolchain
 set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config git
@@ -8,6 +10,15 @@ PACKAGES=(
   libcli11-dev python3 python3-matplotlib python3-numpy
   chromium
 )
+# Optional, not needed by scripts/test.sh: clang + libFuzzer runtime for
+# scripts/fuzz.sh (docs/fuzzing.md).
+OPTIONAL_FUZZ_PACKAGES=(clang libclang-rt-14-dev)
+for arg in "$@"; do
+  case "$arg" in
+    --fuzz) PACKAGES+=("${OPTIONAL_FUZZ_PACKAGES[@]}") ;;
+    *) echo "usage: $0 [--fuzz]" >&2; exit 2 ;;
+  esac
+done
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 missing=()
