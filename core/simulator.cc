@@ -281,7 +281,9 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   s.ires = IntegratorResult{};
   s.theta = theta0;
   s.k = 0;
-  s.n = static_cast<int>(std::llround(t_end_ / dt_));
+  // Output times t_k = k dt, k < n, and t_n = t_end (the last interval is
+  // shorter when dt does not divide t_end; 1e-9 absorbs round-off in t/dt).
+  s.n = static_cast<int>(std::ceil(t_end_ / dt_ - 1e-9));
   s.ode_solves_seen = s.ode.nlp_solves();
   s.ode_iterations_seen = s.ode.nlp_iterations();
   s.done = false;
@@ -314,7 +316,8 @@ bool Simulator::Advance(SimulationResult* result) {
 bool Simulator::Interval(SimulationResult* result) {
   Session& s = *session_;
   const int k = s.k;
-  const double t = k * dt_;
+  const double t = k == s.n ? t_end_ : k * dt_;
+  const double t_next = k + 1 == s.n ? t_end_ : (k + 1) * dt_;
   s.solver.Solve(s.theta, &s.sol);
   QuasiStaticSolution& sol = s.sol;
   result->nlp_solves += sol.nlp_solves;
@@ -351,7 +354,7 @@ bool Simulator::Interval(SimulationResult* result) {
   s.ode.Hold(s.solver.problem().JointSpaceVelocity(sol.z));
   s.y = s.theta;
   const IntegratorStatus st =
-      s.integrator->Integrate(s.ode, t, t + dt_, s.y, s.iopts, &s.ires);
+      s.integrator->Integrate(s.ode, t, t_next, s.y, s.iopts, &s.ires);
   if (st != IntegratorStatus::kSuccess) {
     result->t_reached = s.ires.t_reached;
     if (s.ode.nlp_failed()) {

@@ -197,7 +197,17 @@ def paper_run(runs, has_trajectory):
     if not candidates:
         return None
     references = [r for r in candidates if is_reference(r)]
-    return min(references or candidates, key=_accuracy_key)
+    if references:
+        return min(references, key=_accuracy_key)
+    # The figures need a fine time series over the whole scene: longest run
+    # first, then the finest output interval, then the smallest error (an
+    # error measured on a coarse grid is not comparable).
+    longest = max((r["t_reached"] for r in candidates if is_finite(r["t_reached"])),
+                  default=math.nan)
+    full = [r for r in candidates if is_finite(r["t_reached"]) and r["t_reached"] >= longest]
+    return min(full or candidates,
+               key=lambda r: (r["dt"] if is_finite(r["dt"]) else math.inf,
+                              _accuracy_key(r)))
 
 
 def _preference(run, scene):
