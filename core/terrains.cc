@@ -93,6 +93,7 @@ GaussianTerrain::GaussianTerrain(std::vector<GaussianBump> bumps)
     if (!(b.sigma > 0.0) || !std::isfinite(b.sigma)) {
       throw SceneError(p + "sigma: must be > 0 and finite, got " + Num(b.sigma));
     }
+    inv_var_.push_back(1.0 / (b.sigma * b.sigma));
   }
 }
 
@@ -137,9 +138,10 @@ GaussianTerrain GaussianTerrain::Random(std::uint64_t seed, int count,
 
 TerrainJet GaussianTerrain::Evaluate(double x, double y) const {
   TerrainJet j;
-  for (const GaussianBump& b : bumps_) {
+  for (std::size_t k = 0; k < bumps_.size(); ++k) {
+    const GaussianBump& b = bumps_[k];
     const double dx = x - b.x, dy = y - b.y;
-    const double q = 1.0 / (b.sigma * b.sigma);
+    const double q = inv_var_[k];
     const double g = b.amplitude * std::exp(-0.5 * q * (dx * dx + dy * dy));
     const double q2 = q * q, q3 = q2 * q;
     j.h += g;
@@ -158,9 +160,10 @@ TerrainJet GaussianTerrain::Evaluate(double x, double y) const {
 
 double GaussianTerrain::Height(double x, double y) const {
   double h = 0.0;
-  for (const GaussianBump& b : bumps_) {
+  for (std::size_t k = 0; k < bumps_.size(); ++k) {
+    const GaussianBump& b = bumps_[k];
     const double dx = x - b.x, dy = y - b.y;
-    const double q = 1.0 / (b.sigma * b.sigma);
+    const double q = inv_var_[k];
     h += b.amplitude * std::exp(-0.5 * q * (dx * dx + dy * dy));  // as Evaluate()
   }
   return h;

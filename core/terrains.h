@@ -76,6 +76,7 @@ class GaussianTerrain final : public Terrain {
 
  private:
   std::vector<GaussianBump> bumps_;
+  std::vector<double> inv_var_;  // 1 / sigma_k^2, precomputed
 };
 
 // One separable cosine product:
