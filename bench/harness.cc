@@ -29,16 +29,55 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 const std::vector<std::string>& RunsCsvColumns() {
-  static const std::vector<std::string> columns = {
-      "run_id", "suite_group", "scene", "terrain", "nlp", "dae", "coupling",
-      "rk_method", "dt", "tol", "atol", "nlp_tol", "sigma", "eps", "dae_index",
-      "substeps", "contact_check", "mu", "seed", "roughness", "t_end", "repeats",
-      "status", "stop_reason", "t_reached", "mu_min", "critical_wheel",
-      "wall_s", "nlp_solves", "nlp_iters", "rhs_evals", "jac_evals", "steps",
-      "rejected_steps", "samples",
-      "ref_kind", "ref_status", "ref_hash", "common_samples",
-      "err_pos_rms", "err_pos_max", "err_final", "err_final_rot", "err_rot_max",
-      "err_force_rms", "err_slip", "drift_max", "drift_final", "gap_max"};
+  static const std::vector<std::string> columns = {"run_id",
+                                                   "suite_group",
+                                                   "scene",
+                                                   "terrain",
+                                                   "nlp",
+                                                   "dae",
+                                                   "coupling",
+                                                   "rk_method",
+                                                   "dt",
+                                                   "tol",
+                                                   "atol",
+                                                   "nlp_tol",
+                                                   "sigma",
+                                                   "eps",
+                                                   "dae_index",
+                                                   "substeps",
+                                                   "contact_check",
+                                                   "mu",
+                                                   "seed",
+                                                   "roughness",
+                                                   "t_end",
+                                                   "repeats",
+                                                   "status",
+                                                   "stop_reason",
+                                                   "t_reached",
+                                                   "mu_min",
+                                                   "critical_wheel",
+                                                   "wall_s",
+                                                   "nlp_solves",
+                                                   "nlp_iters",
+                                                   "rhs_evals",
+                                                   "jac_evals",
+                                                   "steps",
+                                                   "rejected_steps",
+                                                   "samples",
+                                                   "ref_kind",
+                                                   "ref_status",
+                                                   "ref_hash",
+                                                   "common_samples",
+                                                   "err_pos_rms",
+                                                   "err_pos_max",
+                                                   "err_final",
+                                                   "err_final_rot",
+                                                   "err_rot_max",
+                                                   "err_force_rms",
+                                                   "err_slip",
+                                                   "drift_max",
+                                                   "drift_final",
+                                                   "gap_max"};
   return columns;
 }
 
@@ -81,14 +120,17 @@ class RowBuilder {
     values_[it - cols.begin()] = value;
   }
   void Set(const std::string& column, double v) { Set(column, Num(v)); }
-  void SetInt(const std::string& column, long long v) { Set(column, std::to_string(v)); }
+  void SetInt(const std::string& column, long long v) {
+    Set(column, std::to_string(v));
+  }
   std::vector<std::string> values() const { return values_; }
 
  private:
   std::vector<std::string> values_;
 };
 
-void SetParameters(const RunSpec& run, const std::string& terrain_id, RowBuilder* b) {
+void SetParameters(const RunSpec& run, const std::string& terrain_id,
+                   RowBuilder* b) {
   b->Set("run_id", run.run_id);
   b->Set("suite_group", run.group);
   b->Set("scene", run.scene);
@@ -113,7 +155,8 @@ void SetParameters(const RunSpec& run, const std::string& terrain_id, RowBuilder
   b->SetInt("repeats", run.repeats);
 }
 
-void SetReference(const Reference* ref, const std::string& error, RowBuilder* b) {
+void SetReference(const Reference* ref, const std::string& error,
+                  RowBuilder* b) {
   if (ref) {
     b->Set("ref_kind", ref->kind);
     b->Set("ref_status", ref->status);
@@ -126,28 +169,32 @@ void SetReference(const Reference* ref, const std::string& error, RowBuilder* b)
 
 void SetNanMetrics(RowBuilder* b) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  for (const char* c : {"err_pos_rms", "err_pos_max", "err_final", "err_final_rot",
-                        "err_rot_max", "err_force_rms", "err_slip", "drift_max",
-                        "drift_final", "gap_max"})
+  for (const char* c : {"err_pos_rms", "err_pos_max", "err_final",
+                        "err_final_rot", "err_rot_max", "err_force_rms",
+                        "err_slip", "drift_max", "drift_final", "gap_max"})
     b->Set(c, nan);
   b->SetInt("common_samples", 0);
 }
 
 }  // namespace
 
-std::vector<std::string> MakeRow(const RunSpec& run, const std::string& terrain_id,
+std::vector<std::string> MakeRow(const RunSpec& run,
+                                 const std::string& terrain_id,
                                  const SimulationResult& result,
-                                 double min_wall_seconds, const Reference* reference,
+                                 double min_wall_seconds,
+                                 const Reference* reference,
                                  const std::string& reference_error) {
   RowBuilder b;
   SetParameters(run, terrain_id, &b);
   b.Set("status", result.status);
   b.Set("stop_reason", OneLine(result.stop_reason));
   b.Set("t_reached", result.t_reached);
-  b.Set("mu_min", result.status == "INFEASIBLE_FRICTION" ? Num(result.mu_min_at_stop)
-                                                          : std::string());
-  b.Set("critical_wheel",
-        result.critical_contact > 0 ? std::to_string(result.critical_contact) : "");
+  b.Set("mu_min", result.status == "INFEASIBLE_FRICTION"
+                      ? Num(result.mu_min_at_stop)
+                      : std::string());
+  b.Set("critical_wheel", result.critical_contact > 0
+                              ? std::to_string(result.critical_contact)
+                              : "");
   b.Set("wall_s", min_wall_seconds);
   b.SetInt("nlp_solves", result.nlp_solves);
   b.SetInt("nlp_iters", result.nlp_iterations);
@@ -180,7 +227,8 @@ std::vector<std::string> MakeRow(const RunSpec& run, const std::string& terrain_
   return b.values();
 }
 
-std::vector<std::string> ErrorRow(const RunSpec& run, const std::string& terrain_id,
+std::vector<std::string> ErrorRow(const RunSpec& run,
+                                  const std::string& terrain_id,
                                   const std::string& message,
                                   const Reference* reference,
                                   const std::string& reference_error) {
@@ -190,8 +238,8 @@ std::vector<std::string> ErrorRow(const RunSpec& run, const std::string& terrain
   b.Set("stop_reason", OneLine(message));
   b.Set("t_reached", std::numeric_limits<double>::quiet_NaN());
   b.Set("wall_s", std::numeric_limits<double>::quiet_NaN());
-  for (const char* c : {"nlp_solves", "nlp_iters", "rhs_evals", "jac_evals", "steps",
-                        "rejected_steps", "samples"})
+  for (const char* c : {"nlp_solves", "nlp_iters", "rhs_evals", "jac_evals",
+                        "steps", "rejected_steps", "samples"})
     b.SetInt(c, 0);
   SetReference(reference, reference_error, &b);
   SetNanMetrics(&b);
@@ -224,7 +272,8 @@ std::string TerrainJson(const TerrainSpec& spec) {
       std::vector<GaussianBump> bumps = spec.bumps;
       if (spec.random) {
         const auto& r = *spec.random;
-        bumps = GaussianTerrain::Random(r.seed, r.count, r.amplitude, r.sigma, r.x, r.y)
+        bumps = GaussianTerrain::Random(r.seed, r.count, r.amplitude, r.sigma,
+                                        r.x, r.y)
                     .bumps();
       }
       w.Key("type").Value("gaussians");
@@ -272,8 +321,8 @@ std::string FormatDuration(double s) {
   const long total = std::lround(s);
   char buf[32];
   if (total >= 3600)
-    std::snprintf(buf, sizeof(buf), "%ld:%02ld:%02ld", total / 3600, (total / 60) % 60,
-                  total % 60);
+    std::snprintf(buf, sizeof(buf), "%ld:%02ld:%02ld", total / 3600,
+                  (total / 60) % 60, total % 60);
   else
     std::snprintf(buf, sizeof(buf), "%ld:%02ld", total / 60, total % 60);
   return buf;
@@ -285,7 +334,8 @@ std::string FormatDuration(double s) {
 class Scheduler {
  public:
   Scheduler(std::vector<int> classes, int jobs)
-      : classes_(std::move(classes)), jobs_(std::max(1, jobs)),
+      : classes_(std::move(classes)),
+        jobs_(std::max(1, jobs)),
         taken_(classes_.size(), false),
         remaining_(static_cast<int>(classes_.size())) {}
 
@@ -365,19 +415,21 @@ class Progress {
     if (mode_ < 0) mode_ = (log_ && ::isatty(::fileno(log_))) ? 2 : 1;
     if (!log_) mode_ = 0;
   }
-  void Done(const std::string& run_id, const std::string& status, double t_reached,
-            double wall) {
+  void Done(const std::string& run_id, const std::string& status,
+            double t_reached, double wall) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++done_;
     if (status != "success") ++failed_;
-    const double elapsed = std::chrono::duration<double>(Clock::now() - start_).count();
+    const double elapsed =
+        std::chrono::duration<double>(Clock::now() - start_).count();
     const double eta = done_ > 0 ? elapsed / done_ * (total_ - done_) : NAN;
     if (mode_ == 1) {
-      std::fprintf(log_, "[%d/%d] %s: %s (t=%s s, %.3f s wall)\n", done_, total_,
-                   run_id.c_str(), status.c_str(), Num(t_reached).c_str(), wall);
+      std::fprintf(log_, "[%d/%d] %s: %s (t=%s s, %.3f s wall)\n", done_,
+                   total_, run_id.c_str(), status.c_str(),
+                   Num(t_reached).c_str(), wall);
     } else if (mode_ == 2) {
-      std::fprintf(log_, "\r\033[K%d/%d runs, %d failed, elapsed %s, ETA %s", done_,
-                   total_, failed_, FormatDuration(elapsed).c_str(),
+      std::fprintf(log_, "\r\033[K%d/%d runs, %d failed, elapsed %s, ETA %s",
+                   done_, total_, failed_, FormatDuration(elapsed).c_str(),
                    FormatDuration(eta).c_str());
       if (done_ == total_) std::fprintf(log_, "\n");
     }
@@ -417,7 +469,8 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
   w.Key("name").Value(suite.name);
   w.Key("path").Value(suite.path);
   w.Key("absolute_path")
-      .Value(suite.path.empty() ? std::string() : fs::absolute(suite.path).string());
+      .Value(suite.path.empty() ? std::string()
+                                : fs::absolute(suite.path).string());
   w.Key("hash").Value(Hex64(suite.text_hash));
   w.Key("groups").BeginArray();
   for (const std::string& g : suite.groups) w.Value(g);
@@ -462,8 +515,9 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
   const auto t_start = Clock::now();
   const std::string start_time = IsoTimeNow();
   const std::string& dir = options.out_dir;
-  int jobs = options.jobs > 0 ? options.jobs
-                              : static_cast<int>(std::thread::hardware_concurrency());
+  int jobs = options.jobs > 0
+                 ? options.jobs
+                 : static_cast<int>(std::thread::hardware_concurrency());
   if (jobs <= 0) jobs = 1;
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
@@ -480,7 +534,8 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
         re.emplace(options.filter, std::regex::ECMAScript);
       } catch (const std::regex_error& e) {
         throw SceneError("--filter: invalid regular expression (" +
-                         std::string(e.what()) + "), got \"" + options.filter + "\"");
+                         std::string(e.what()) + "), got \"" + options.filter +
+                         "\"");
       }
     }
     for (const RunSpec& r : suite.runs)
@@ -499,10 +554,12 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
     terrain_ids[i] = TerrainId(r, suite.scenes[r.scene_index]);
     if (options.resume) {
       bool ok_row = false, ok_traj = false;
-      const std::string text = ReadFileOr(dir + "/runs/" + r.run_id + ".csv", &ok_row);
+      const std::string text =
+          ReadFileOr(dir + "/runs/" + r.run_id + ".csv", &ok_row);
       ReadFileOr(dir + "/trajectories/" + r.run_id + ".csv", &ok_traj);
       const std::string prefix = header + "\n" + r.run_id + ",";
-      if (ok_row && ok_traj && text.rfind(prefix, 0) == 0 && text.back() == '\n') {
+      if (ok_row && ok_traj && text.rfind(prefix, 0) == 0 &&
+          text.back() == '\n') {
         std::string row = text.substr(header.size() + 1);
         row.pop_back();
         if (row.find('\n') == std::string::npos) {
@@ -521,13 +578,15 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
     for (std::size_t i = 0; i < selected.size(); ++i) {
       if (!written.insert(terrain_ids[i]).second) continue;
       const RunSpec& r = *selected[i];
-      const std::string json =
-          TerrainJson(SweptTerrain(suite.scenes[r.scene_index], r.seed, r.roughness));
-      if (!json.empty()) AtomicWriteFile(dir + "/terrains/" + terrain_ids[i] + ".json", json);
+      const std::string json = TerrainJson(
+          SweptTerrain(suite.scenes[r.scene_index], r.seed, r.roughness));
+      if (!json.empty())
+        AtomicWriteFile(dir + "/terrains/" + terrain_ids[i] + ".json", json);
     }
   }
 
-  Progress progress(options.log, options.progress, static_cast<int>(pending.size()));
+  Progress progress(options.log, options.progress,
+                    static_cast<int>(pending.size()));
   if (summary.resumed > 0)
     progress.Message("resume: " + std::to_string(summary.resumed) + " of " +
                      std::to_string(selected.size()) + " runs already done");
@@ -546,7 +605,8 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
     job.label = sc.name;
     job.nlp = suite.reference.nlp;
     job.key = ReferenceKey(job.scene, job.terrain, job.digest, suite.reference);
-    auto [it, inserted] = ref_index.emplace(job.key, static_cast<int>(refs.size()));
+    auto [it, inserted] =
+        ref_index.emplace(job.key, static_cast<int>(refs.size()));
     if (inserted) refs.push_back(std::move(job));
     run_ref[i] = it->second;
   }
@@ -560,7 +620,8 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
                                              suite.reference, j.label);
       } catch (const std::exception& e) {
         j.error = e.what();
-        progress.Message("reference for scene " + j.label + " failed: " + j.error);
+        progress.Message("reference for scene " + j.label +
+                         " failed: " + j.error);
       }
     });
   }
@@ -590,12 +651,15 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
         row = ErrorRow(r, terrain_ids[i], e.what(), ref, rj.error);
       }
       const std::string line = JoinRow(row);
-      AtomicWriteFile(dir + "/trajectories/" + r.run_id + ".csv", TrajectoryCsv(result));
-      AtomicWriteFile(dir + "/runs/" + r.run_id + ".csv", header + "\n" + line + "\n");
+      AtomicWriteFile(dir + "/trajectories/" + r.run_id + ".csv",
+                      TrajectoryCsv(result));
+      AtomicWriteFile(dir + "/runs/" + r.run_id + ".csv",
+                      header + "\n" + line + "\n");
       rows[i] = line;
-      progress.Done(r.run_id, row[std::find(RunsCsvColumns().begin(),
-                                            RunsCsvColumns().end(), "status") -
-                                  RunsCsvColumns().begin()],
+      progress.Done(r.run_id,
+                    row[std::find(RunsCsvColumns().begin(),
+                                  RunsCsvColumns().end(), "status") -
+                        RunsCsvColumns().begin()],
                     result.t_reached, result.wall_seconds);
     });
   }
@@ -617,7 +681,8 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
     if (status != "success") ++summary.failures;
   }
   AtomicWriteFile(dir + "/runs.csv", csv);
-  summary.wall_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
+  summary.wall_seconds =
+      std::chrono::duration<double>(Clock::now() - t_start).count();
   WriteMeta(suite, options, jobs, start_time, IsoTimeNow(), &summary);
   return summary;
 }

@@ -20,9 +20,9 @@ namespace quasiroll::bench {
 
 struct HarnessOptions {
   std::string out_dir;
-  int jobs = 0;            // <= 0: std::thread::hardware_concurrency()
-  std::string filter;      // ECMAScript regex on run_id; "" = every run
-  bool resume = false;     // reuse DIR/runs/<run_id>.csv of finished runs
+  int jobs = 0;         // <= 0: std::thread::hardware_concurrency()
+  std::string filter;   // ECMAScript regex on run_id; "" = every run
+  bool resume = false;  // reuse DIR/runs/<run_id>.csv of finished runs
   // Progress on `log`: -1 auto (a TTY gets one updating line, anything else
   // one line per finished run), 0 never, 1 lines, 2 updating line.
   int progress = -1;
@@ -46,13 +46,15 @@ std::string CsvField(const std::string& value);
 // One runs.csv row (values in RunsCsvColumns() order) for a run whose
 // simulation produced `result` (wall_s = the minimum over repeats), compared
 // with `reference` (null if unavailable; `reference_error` then says why).
-std::vector<std::string> MakeRow(const RunSpec& run, const std::string& terrain_id,
+std::vector<std::string> MakeRow(const RunSpec& run,
+                                 const std::string& terrain_id,
                                  const SimulationResult& result,
                                  double min_wall_seconds,
                                  const Reference* reference,
                                  const std::string& reference_error);
 // Row of a run that threw (status "error", the message as stop_reason).
-std::vector<std::string> ErrorRow(const RunSpec& run, const std::string& terrain_id,
+std::vector<std::string> ErrorRow(const RunSpec& run,
+                                  const std::string& terrain_id,
                                   const std::string& message,
                                   const Reference* reference,
                                   const std::string& reference_error = "");

@@ -41,7 +41,8 @@ class Pendulum final : public quasiroll::ConstrainedOde {
   static constexpr double kG = 9.81;
 };
 
-void BM_IntegrateHoldInterval(benchmark::State& state, const std::string& backend,
+void BM_IntegrateHoldInterval(benchmark::State& state,
+                              const std::string& backend,
                               quasiroll::RkMethod method) {
   quasiroll::RegisterBuiltinIntegrators();
   if (!quasiroll::IntegratorRegistry::Has(backend)) {
@@ -68,8 +69,9 @@ void BM_IntegrateHoldInterval(benchmark::State& state, const std::string& backen
   }
   state.counters["steps/call"] = benchmark::Counter(
       static_cast<double>(result.steps), benchmark::Counter::kAvgIterations);
-  state.counters["rhs/call"] = benchmark::Counter(
-      static_cast<double>(result.rhs_evaluations), benchmark::Counter::kAvgIterations);
+  state.counters["rhs/call"] =
+      benchmark::Counter(static_cast<double>(result.rhs_evaluations),
+                         benchmark::Counter::kAvgIterations);
 }
 
 using quasiroll::RkMethod;
@@ -79,6 +81,7 @@ BENCHMARK_CAPTURE(BM_IntegrateHoldInterval, rk_projection_rk4,
                   std::string("rk-projection"), RkMethod::kRk4);
 BENCHMARK_CAPTURE(BM_IntegrateHoldInterval, rk_projection_dp54,
                   std::string("rk-projection"), RkMethod::kDormandPrince54);
-BENCHMARK_CAPTURE(BM_IntegrateHoldInterval, ida, std::string("ida"), RkMethod::kRk4);
+BENCHMARK_CAPTURE(BM_IntegrateHoldInterval, ida, std::string("ida"),
+                  RkMethod::kRk4);
 
 }  // namespace

@@ -59,7 +59,8 @@ class JsonWriter {
   template <typename Vector>
   JsonWriter& Array(const Vector& values) {
     BeginArray();
-    for (Eigen_Index_t i = 0; i < static_cast<Eigen_Index_t>(values.size()); ++i)
+    for (Eigen_Index_t i = 0; i < static_cast<Eigen_Index_t>(values.size());
+         ++i)
       Value(static_cast<double>(values[i]));
     return EndArray();
   }
@@ -93,10 +94,18 @@ class JsonWriter {
     out_ += '"';
     for (char c : s) {
       switch (c) {
-        case '"': out_ += "\\\""; break;
-        case '\\': out_ += "\\\\"; break;
-        case '\n': out_ += "\\n"; break;
-        case '\t': out_ += "\\t"; break;
+        case '"':
+          out_ += "\\\"";
+          break;
+        case '\\':
+          out_ += "\\\\";
+          break;
+        case '\n':
+          out_ += "\\n";
+          break;
+        case '\t':
+          out_ += "\\t";
+          break;
         default:
           if (static_cast<unsigned char>(c) < 0x20) {
             char buf[8];

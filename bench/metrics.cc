@@ -43,7 +43,8 @@ TrajectorySample InterpolateSample(const std::vector<TrajectorySample>& ref,
   s.rpy = RpyFromRotation(qa.slerp(w, qb).toRotationMatrix());
   s.velocity = (1 - w) * a.velocity + w * b.velocity;
   s.angular_velocity = (1 - w) * a.angular_velocity + w * b.angular_velocity;
-  for (int j = 0; j < 6; ++j) s.joints[j] = (1 - w) * a.joints[j] + w * b.joints[j];
+  for (int j = 0; j < 6; ++j)
+    s.joints[j] = (1 - w) * a.joints[j] + w * b.joints[j];
   for (int i = 0; i < 3; ++i) {
     ContactSample& c = s.contacts[i];
     const ContactSample &ca = a.contacts[i], &cb = b.contacts[i];
@@ -82,10 +83,12 @@ AccuracyMetrics CompareTrajectories(const std::vector<TrajectorySample>& run,
     for (int i = 0; i < 3; ++i)
       forces_ok = forces_ok && std::isfinite(s.contacts[i].normal_force) &&
                   std::isfinite(r.contacts[i].normal_force) &&
-                  std::isfinite(s.contacts[i].slip) && std::isfinite(r.contacts[i].slip);
+                  std::isfinite(s.contacts[i].slip) &&
+                  std::isfinite(r.contacts[i].slip);
     if (forces_ok) {
       for (int i = 0; i < 3; ++i) {
-        const double df = s.contacts[i].normal_force - r.contacts[i].normal_force;
+        const double df =
+            s.contacts[i].normal_force - r.contacts[i].normal_force;
         const double ds = s.contacts[i].slip - r.contacts[i].slip;
         sum_f2 += df * df;
         sum_s2 += ds * ds;

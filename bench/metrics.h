@@ -14,9 +14,9 @@ struct AccuracyMetrics {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   // Over the common output times (run samples whose t lies within the
   // reference's time span); NaN when there is none.
-  double pos_rms = kNaN;    // sqrt(mean |p - p_ref|^2) [m]
-  double pos_max = kNaN;    // max |p - p_ref| [m]
-  double rot_max = kNaN;    // max angle of R_ref^T R [rad]
+  double pos_rms = kNaN;  // sqrt(mean |p - p_ref|^2) [m]
+  double pos_max = kNaN;  // max |p - p_ref| [m]
+  double rot_max = kNaN;  // max angle of R_ref^T R [rad]
   // Normal forces: sqrt(mean over samples and wheels of (N - N_ref)^2) [N],
   // over the common samples where both have finite forces (a quasi-static
   // failure records NaN forces).
@@ -28,7 +28,7 @@ struct AccuracyMetrics {
   double final_pos = kNaN;  // [m]
   double final_rot = kNaN;  // [rad]
   int common_samples = 0;
-  double t_common = kNaN;   // last common time [s]
+  double t_common = kNaN;  // last common time [s]
 };
 
 struct DriftMetrics {

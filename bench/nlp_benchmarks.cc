@@ -23,7 +23,8 @@ void SolveLoop(benchmark::State& state, const std::string& backend,
   Eigen::VectorXd x0 = problem.starting_point();
   if (warm) {
     if (solver->Solve(problem, x0, options, &result) != NlpStatus::kConverged) {
-      state.SkipWithError(("cold solve failed: " + result.backend_status).c_str());
+      state.SkipWithError(
+          ("cold solve failed: " + result.backend_status).c_str());
       return;
     }
     x0 = result.x;

@@ -19,10 +19,14 @@ namespace fs = std::filesystem;
 
 const char* ToString(AnalyticCase c) {
   switch (c) {
-    case AnalyticCase::kNone: return "none";
-    case AnalyticCase::kFlatStraight: return "flat";
-    case AnalyticCase::kCircle: return "circle";
-    case AnalyticCase::kIncline: return "incline";
+    case AnalyticCase::kNone:
+      return "none";
+    case AnalyticCase::kFlatStraight:
+      return "flat";
+    case AnalyticCase::kCircle:
+      return "circle";
+    case AnalyticCase::kIncline:
+      return "incline";
   }
   return "none";
 }
@@ -61,7 +65,8 @@ AnalyticCase DetectAnalyticCase(const Scene& s, const TerrainSpec& t,
   const auto& q = s.joint_angles;
   const auto& r = s.joint_rates;
   const bool pvc = s.mode == ActuationMode::kPvc;
-  if (t.type != TerrainSpec::Type::kPlane && t.type != TerrainSpec::Type::kIncline)
+  if (t.type != TerrainSpec::Type::kPlane &&
+      t.type != TerrainSpec::Type::kIncline)
     return no("terrain is neither plane nor incline");
   if (s.geometry.camber_offset != 0) return no("camber_offset != 0");
   if (q[2] != 0 || q[4] != 0) return no("initial cambers != 0");
@@ -121,7 +126,7 @@ AnalyticSolution::AnalyticSolution(const Scene& scene, const TerrainSpec& t,
   rates_[0] = 0;
   rates_[2] = rates_[4] = 0;
   const double alpha = (r[3] + r[5]) / 2;  // mean rear spin rate
-  v_ = rho_ * alpha;                        // rear-axle centre speed
+  v_ = rho_ * alpha;                       // rear-axle centre speed
 
   // Static load distribution on a plane tilted by beta about the lateral
   // axis (beta = 0 on flat ground); tractions balance the slope.
@@ -143,7 +148,8 @@ AnalyticSolution::AnalyticSolution(const Scene& scene, const TerrainSpec& t,
     if (pvc) {
       traction_[1] = traction_[2] = up * mg_ * sb / 2;
     } else {
-      for (int i = 0; i < 3; ++i) traction_[i] = up * std::tan(std::abs(beta)) * normal_[i];
+      for (int i = 0; i < 3; ++i)
+        traction_[i] = up * std::tan(std::abs(beta)) * normal_[i];
     }
   }
   for (int i = 0; i < 3; ++i) {
@@ -164,10 +170,10 @@ AnalyticSolution::AnalyticSolution(const Scene& scene, const TerrainSpec& t,
     }
     case AnalyticCase::kIncline: {
       const double gm = t.azimuth_rad;
-      const Vec3 uphill(std::cos(beta) * std::cos(gm), std::cos(beta) * std::sin(gm),
-                        std::sin(beta));
-      const Vec3 n(-std::sin(beta) * std::cos(gm), -std::sin(beta) * std::sin(gm),
-                   std::cos(beta));
+      const Vec3 uphill(std::cos(beta) * std::cos(gm),
+                        std::cos(beta) * std::sin(gm), std::sin(beta));
+      const Vec3 n(-std::sin(beta) * std::cos(gm),
+                   -std::sin(beta) * std::sin(gm), std::cos(beta));
       const Vec3 x = nose_up * uphill;
       R0_.col(0) = x;
       R0_.col(1) = n.cross(x);
@@ -211,7 +217,8 @@ TrajectorySample AnalyticSolution::Sample(double t) const {
     s.angular_velocity = Vec3::Zero();
   }
   s.rpy = RpyFromRotation(R);
-  for (int j = 0; j < 6; ++j) s.joints[j] = scene_.joint_angles[j] + rates_[j] * t;
+  for (int j = 0; j < 6; ++j)
+    s.joints[j] = scene_.joint_angles[j] + rates_[j] * t;
   const RobotGeometry& g = scene_.geometry;
   const std::array<Vec3, 3> attach = {Vec3(g.a, 0, -h_c_),
                                       Vec3(-g.b, g.track / 2, -h_c_),
@@ -329,18 +336,30 @@ std::string JsonStringField(const std::string& json, const std::string& name) {
     }
     if (++i >= json.size()) break;
     switch (json[i]) {
-      case 'n': out += '\n'; break;
-      case 't': out += '\t'; break;
-      case 'r': out += '\r'; break;
-      case 'b': out += '\b'; break;
-      case 'f': out += '\f'; break;
+      case 'n':
+        out += '\n';
+        break;
+      case 't':
+        out += '\t';
+        break;
+      case 'r':
+        out += '\r';
+        break;
+      case 'b':
+        out += '\b';
+        break;
+      case 'f':
+        out += '\f';
+        break;
       case 'u':
         if (i + 4 < json.size()) {
-          out += static_cast<char>(std::strtol(json.substr(i + 1, 4).c_str(), nullptr, 16));
+          out += static_cast<char>(
+              std::strtol(json.substr(i + 1, 4).c_str(), nullptr, 16));
           i += 4;
         }
         break;
-      default: out += json[i];
+      default:
+        out += json[i];
     }
   }
   return "";
@@ -361,7 +380,8 @@ std::vector<TrajectorySample> ParseTrajectoryCsv(const std::string& text) {
   std::vector<TrajectorySample> out;
   std::stringstream in(text);
   std::string line;
-  if (!std::getline(in, line)) throw std::runtime_error("trajectory csv: empty");
+  if (!std::getline(in, line))
+    throw std::runtime_error("trajectory csv: empty");
   const std::vector<std::string> header = SplitCsvLine(line);
   std::map<std::string, std::size_t> col;
   for (std::size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
@@ -371,7 +391,7 @@ std::vector<TrajectorySample> ParseTrajectoryCsv(const std::string& text) {
       throw std::runtime_error("trajectory csv: missing column '" + name + "'");
     return it->second;
   };
-  const std::array<const char*, 6> joints = {"phi1", "alpha1", "delta2",
+  const std::array<const char*, 6> joints = {"phi1",   "alpha1", "delta2",
                                              "alpha2", "delta3", "alpha3"};
   int line_no = 1;
   while (std::getline(in, line)) {
@@ -379,9 +399,10 @@ std::vector<TrajectorySample> ParseTrajectoryCsv(const std::string& text) {
     if (line.empty()) continue;
     const std::vector<std::string> cells = SplitCsvLine(line);
     if (cells.size() != header.size())
-      throw std::runtime_error("trajectory csv line " + std::to_string(line_no) +
-                               ": expected " + std::to_string(header.size()) +
-                               " cells, got " + std::to_string(cells.size()));
+      throw std::runtime_error("trajectory csv line " +
+                               std::to_string(line_no) + ": expected " +
+                               std::to_string(header.size()) + " cells, got " +
+                               std::to_string(cells.size()));
     auto num = [&](const std::string& name) {
       return ParseNumber(cells[index(name)], line_no);
     };
@@ -395,7 +416,8 @@ std::vector<TrajectorySample> ParseTrajectoryCsv(const std::string& text) {
     for (int i = 0; i < 3; ++i) {
       const std::string k = std::to_string(i + 1);
       ContactSample& c = s.contacts[i];
-      c.point = Vec3(num("c" + k + "_x"), num("c" + k + "_y"), num("c" + k + "_z"));
+      c.point =
+          Vec3(num("c" + k + "_x"), num("c" + k + "_y"), num("c" + k + "_z"));
       c.normal_force = num("n" + k);
       c.traction_lon = num("t" + k + "_lon");
       c.traction_lat = num("t" + k + "_lat");
@@ -420,8 +442,8 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
   ref.scene = scene_label;
   ref.key = ReferenceKey(scene, terrain, heightmap_digest, settings);
   ref.hash = Hex64(Fnv1a64(ref.key));
-  const AnalyticCase ac =
-      settings.analytic ? DetectAnalyticCase(scene, terrain) : AnalyticCase::kNone;
+  const AnalyticCase ac = settings.analytic ? DetectAnalyticCase(scene, terrain)
+                                            : AnalyticCase::kNone;
   const std::string csv_path = dir + "/references/" + ref.hash + ".csv";
   const std::string json_path = dir + "/references/" + ref.hash + ".json";
 
@@ -436,7 +458,8 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
           ref.kind = JsonStringField(json, "kind");
           ref.status = JsonStringField(json, "status");
           ref.stop_reason = JsonStringField(json, "stop_reason");
-          if (ac != AnalyticCase::kNone) ref.analytic.emplace(scene, terrain, ac);
+          if (ac != AnalyticCase::kNone)
+            ref.analytic.emplace(scene, terrain, ac);
           return ref;
         } catch (const std::runtime_error&) {
           ref.samples.clear();  // corrupt cache: recompute
@@ -451,7 +474,8 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
     ref.kind = std::string("analytic:") + ToString(ac);
     const double dt = scene.dt / settings.dt_divisor;
     const int n = static_cast<int>(std::llround(scene.t_end / dt));
-    for (int k = 0; k <= n; ++k) result.samples.push_back(ref.analytic->Sample(k * dt));
+    for (int k = 0; k <= n; ++k)
+      result.samples.push_back(ref.analytic->Sample(k * dt));
     result.status = "success";
     result.t_reached = n * dt;
   } else {

@@ -63,7 +63,7 @@ class AnalyticSolution {
   Scene scene_;
   AnalyticCase kind_;
   double rho_ = 0, h_c_ = 0, L_ = 0, mg_ = 0;
-  double v_ = 0, omega_ = 0;  // speed of the reference point, yaw rate
+  double v_ = 0, omega_ = 0;       // speed of the reference point, yaw rate
   std::array<double, 6> rates_{};  // effective joint rates
   Mat3 R0_ = Mat3::Identity();     // initial orientation
   Vec3 p0_ = Vec3::Zero();         // initial COM
@@ -73,18 +73,19 @@ class AnalyticSolution {
 };
 
 struct Reference {
-  std::string hash;         // 16 hex digits of FNV-1a 64 of `key`
-  std::string key;          // canonical text (scene + settings)
-  std::string kind;         // "analytic:flat" ..., "numerical", "numerical:dp54"
-  std::string status;       // "success" or the numerical run's status
+  std::string hash;    // 16 hex digits of FNV-1a 64 of `key`
+  std::string key;     // canonical text (scene + settings)
+  std::string kind;    // "analytic:flat" ..., "numerical", "numerical:dp54"
+  std::string status;  // "success" or the numerical run's status
   std::string stop_reason;
-  std::string scene;        // suite scene name (informational)
+  std::string scene;                      // suite scene name (informational)
   std::vector<TrajectorySample> samples;  // on the reference output grid
   std::optional<AnalyticSolution> analytic;
 
   // Samples to compare a run against: the exact solution at `times` if
   // analytic, else `samples` (interpolated by the metrics).
-  std::vector<TrajectorySample> ForTimes(const std::vector<double>& times) const;
+  std::vector<TrajectorySample> ForTimes(
+      const std::vector<double>& times) const;
 };
 
 // Canonical key text of the reference of `scene`.

@@ -22,13 +22,14 @@ namespace quasiroll {
 namespace {
 
 Scene PaperScene(ActuationMode mode) {
-  Scene scene = LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
+  Scene scene =
+      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
   scene.mode = mode;
   return scene;
 }
 
-void BM_QuasiStaticSolve(benchmark::State& state, std::string nlp, ActuationMode mode,
-                         bool warm) {
+void BM_QuasiStaticSolve(benchmark::State& state, std::string nlp,
+                         ActuationMode mode, bool warm) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
   const Scene scene = PaperScene(mode);
@@ -59,8 +60,8 @@ void BM_QuasiStaticSolve(benchmark::State& state, std::string nlp, ActuationMode
       break;
     }
   }
-  state.counters["nlp_iters"] =
-      benchmark::Counter(static_cast<double>(iterations) / std::max(1LL, solves));
+  state.counters["nlp_iters"] = benchmark::Counter(
+      static_cast<double>(iterations) / std::max(1LL, solves));
 }
 
 void BM_Step(benchmark::State& state, std::string dae, Coupling coupling) {
@@ -114,9 +115,10 @@ int RegisterAll() {
   for (const std::string& nlp : NlpSolverRegistry::Names()) {
     for (ActuationMode mode : {ActuationMode::kPaper, ActuationMode::kPvc}) {
       for (bool warm : {true, false}) {
-        const std::string name = "BM_QuasiStaticSolve/" + nlp + "/" + ToString(mode) +
-                                 (warm ? "/warm" : "/cold");
-        benchmark::RegisterBenchmark(name.c_str(), BM_QuasiStaticSolve, nlp, mode, warm)
+        const std::string name = "BM_QuasiStaticSolve/" + nlp + "/" +
+                                 ToString(mode) + (warm ? "/warm" : "/cold");
+        benchmark::RegisterBenchmark(name.c_str(), BM_QuasiStaticSolve, nlp,
+                                     mode, warm)
             ->Unit(benchmark::kMicrosecond);
       }
     }

@@ -24,7 +24,8 @@ void AtomicWriteFile(const std::string& path, const std::string& content) {
     fs::create_directories(target.parent_path(), ec);
     if (ec)
       throw std::runtime_error("cannot create directory '" +
-                               target.parent_path().string() + "': " + ec.message());
+                               target.parent_path().string() +
+                               "': " + ec.message());
   }
   std::ostringstream tmp_name;
   tmp_name << path << ".tmp." << ::getpid() << "."
@@ -34,7 +35,8 @@ void AtomicWriteFile(const std::string& path, const std::string& content) {
     if (!out) throw std::runtime_error("cannot write '" + tmp_name.str() + "'");
     out << content;
     out.flush();
-    if (!out) throw std::runtime_error("write failed for '" + tmp_name.str() + "'");
+    if (!out)
+      throw std::runtime_error("write failed for '" + tmp_name.str() + "'");
   }
   std::error_code ec;
   fs::rename(tmp_name.str(), target, ec);
@@ -62,8 +64,8 @@ std::string TrajectoryCsvHeader() {
       "delta3,alpha3";
   for (int i = 1; i <= 3; ++i) {
     const std::string s = std::to_string(i);
-    h += ",c" + s + "_x,c" + s + "_y,c" + s + "_z,n" + s + ",t" + s +
-         "_lon,t" + s + "_lat,slip" + s + ",use" + s;
+    h += ",c" + s + "_x,c" + s + "_y,c" + s + "_z,n" + s + ",t" + s + "_lon,t" +
+         s + "_lat,slip" + s + ",use" + s;
   }
   h += ",drift,gap_max,nlp_status,nlp_iters";
   return h;
@@ -114,14 +116,16 @@ std::string GitCommit() {
     char buf[256];
     while (std::fgets(buf, sizeof(buf), pipe)) out += buf;
     ::pclose(pipe);
-    while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
+    while (!out.empty() && (out.back() == '\n' || out.back() == '\r'))
+      out.pop_back();
     return out;
   };
   std::string commit =
       run("git -C '" + dir + "' rev-parse --short=12 HEAD 2>/dev/null");
   if (commit.empty()) return "unknown";
-  const std::string dirty = run("git -C '" + dir +
-                                "' status --porcelain --untracked-files=no 2>/dev/null");
+  const std::string dirty =
+      run("git -C '" + dir +
+          "' status --porcelain --untracked-files=no 2>/dev/null");
   if (!dirty.empty()) commit += "-dirty";
   return commit;
 }
@@ -138,15 +142,16 @@ void WriteLibraryVersions(JsonWriter* json) {
     json->Key(item.substr(0, eq)).Value(item.substr(eq + 1));
   }
 #endif
-  json->Key("compiler").Value(
+  json->Key("compiler")
+      .Value(
 #if defined(__clang__)
-      std::string("clang ") + __clang_version__
+          std::string("clang ") + __clang_version__
 #elif defined(__GNUC__)
-      std::string("gcc ") + __VERSION__
+          std::string("gcc ") + __VERSION__
 #else
-      std::string("unknown")
+          std::string("unknown")
 #endif
-  );
+      );
   json->EndObject();
 }
 
@@ -172,8 +177,8 @@ void WriteMachine(JsonWriter* json) {
 }
 
 std::string IsoTimeNow() {
-  const std::time_t now = std::chrono::system_clock::to_time_t(
-      std::chrono::system_clock::now());
+  const std::time_t now =
+      std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   std::tm tm{};
   gmtime_r(&now, &tm);
   char buf[32];
@@ -216,13 +221,15 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.Key("dt").Value(dt);
   j.Key("t_end").Value(t_end);
   j.Key("rk_method").Value(ToString(options.integrator.rk_method));
-  j.Key("step").Value(options.integrator.step > 0 ? options.integrator.step : dt);
+  j.Key("step").Value(options.integrator.step > 0 ? options.integrator.step
+                                                  : dt);
   j.Key("rtol").Value(options.integrator.rtol);
   j.Key("atol").Value(options.integrator.atol);
   j.Key("sigma").Value(options.integrator.baumgarte_sigma);
   j.Key("projection_tolerance").Value(options.integrator.projection_tolerance);
   j.Key("dae_index").Value(options.integrator.dae_index);
-  j.Key("nlp_residual_tolerance").Value(options.quasi_static.residual_tolerance);
+  j.Key("nlp_residual_tolerance")
+      .Value(options.quasi_static.residual_tolerance);
   j.EndObject();
   j.Key("commit").Value(GitCommit());
   j.Key("library_versions");

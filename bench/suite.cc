@@ -124,8 +124,8 @@ std::vector<double> ReadDoubleAxis(const YAML::Node& map,
   auto n = Child(map, key);
   if (!n) return fallback;
   const std::string p = JoinKey(path, key);
-  std::vector<double> v = ReadAxis<double>(
-      *n, p, [&b](const YAML::Node& x, const std::string& xp) {
+  std::vector<double> v =
+      ReadAxis<double>(*n, p, [&b](const YAML::Node& x, const std::string& xp) {
         return yaml::ReadDouble(x, xp, b);
       });
   std::vector<std::string> canon;
@@ -134,9 +134,11 @@ std::vector<double> ReadDoubleAxis(const YAML::Node& map,
   return v;
 }
 
-std::vector<std::string> ReadNameAxis(
-    const YAML::Node& map, const std::string& path, std::string_view key,
-    const std::vector<std::string>& known, std::vector<std::string> fallback) {
+std::vector<std::string> ReadNameAxis(const YAML::Node& map,
+                                      const std::string& path,
+                                      std::string_view key,
+                                      const std::vector<std::string>& known,
+                                      std::vector<std::string> fallback) {
   auto n = Child(map, key);
   if (!n) return fallback;
   const std::string p = JoinKey(path, key);
@@ -147,7 +149,8 @@ std::vector<std::string> ReadNameAxis(
         for (const std::string& k : known) ok = ok || k == s;
         if (!ok) {
           std::string list;
-          for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+          for (const std::string& k : known)
+            list += (list.empty() ? "" : ", ") + k;
           Fail(xp, "unknown name (known: " + list + "), got \"" + s + "\"");
         }
         return s;
@@ -188,7 +191,8 @@ SuiteScene ReadSuiteScene(const YAML::Node& node, const std::string& path,
   const std::string text = ReadFileOrEmpty(s.file);
   {
     std::ifstream probe(s.file);
-    if (!probe) Fail(file_path, "cannot open scene file, got \"" + s.file + "\"");
+    if (!probe)
+      Fail(file_path, "cannot open scene file, got \"" + s.file + "\"");
   }
   const std::string file_dir = fs::path(s.file).parent_path().string();
   // The file, parsed once as a node so that its terrain spec is available.
@@ -224,23 +228,28 @@ SuiteScene ReadSuiteScene(const YAML::Node& node, const std::string& path,
   return s;
 }
 
-ReferenceSettings ReadReference(const YAML::Node& node, const std::string& path) {
-  yaml::CheckKeys(node, path,
-                  {"analytic", "dt_divisor", "substeps", "nlp", "residual_tolerance"});
+ReferenceSettings ReadReference(const YAML::Node& node,
+                                const std::string& path) {
+  yaml::CheckKeys(
+      node, path,
+      {"analytic", "dt_divisor", "substeps", "nlp", "residual_tolerance"});
   ReferenceSettings r;
   if (auto n = Child(node, "analytic"))
-    r.analytic = yaml::ReadEnum(*n, JoinKey(path, "analytic"), {"true", "false"}) == "true";
+    r.analytic = yaml::ReadEnum(*n, JoinKey(path, "analytic"),
+                                {"true", "false"}) == "true";
   if (auto n = Child(node, "dt_divisor"))
-    r.dt_divisor = static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "dt_divisor"), 1, 1000));
+    r.dt_divisor = static_cast<int>(
+        yaml::ReadInt(*n, JoinKey(path, "dt_divisor"), 1, 1000));
   if (auto n = Child(node, "substeps"))
-    r.substeps = static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "substeps"), 1, 1000));
+    r.substeps =
+        static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "substeps"), 1, 1000));
   if (auto n = Child(node, "nlp")) {
     r.nlp = yaml::ReadString(*n, JoinKey(path, "nlp"));
     if (!NlpSolverRegistry::Has(r.nlp))
       Fail(JoinKey(path, "nlp"), "unknown NLP backend, got \"" + r.nlp + "\"");
   }
-  yaml::ReadOptionalDouble(node, path, "residual_tolerance", &r.residual_tolerance,
-                           Bounds::Positive());
+  yaml::ReadOptionalDouble(node, path, "residual_tolerance",
+                           &r.residual_tolerance, Bounds::Positive());
   return r;
 }
 
@@ -263,10 +272,11 @@ std::string CanonicalRunKey(const RunSpec& r) {
 void ExpandGroup(const YAML::Node& node, const std::string& path,
                  const std::string& group, Suite* suite) {
   yaml::CheckKeys(node, path,
-                  {"description", "scenes", "nlp", "dae", "coupling", "rk_method",
-                   "dt", "tol", "atol_ratio", "nlp_tol", "sigma", "eps", "mu",
-                   "seed", "roughness", "dae_index", "substeps", "contact_check", "t_end",
-                   "repeats"});
+                  {"description", "scenes",        "nlp",       "dae",
+                   "coupling",    "rk_method",     "dt",        "tol",
+                   "atol_ratio",  "nlp_tol",       "sigma",     "eps",
+                   "mu",          "seed",          "roughness", "dae_index",
+                   "substeps",    "contact_check", "t_end",     "repeats"});
   if (auto n = Child(node, "description"))
     yaml::ReadString(*n, JoinKey(path, "description"));
 
@@ -275,8 +285,7 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
   if (auto n = Child(node, "scenes")) {
     std::vector<std::string> names;
     for (const SuiteScene& s : suite->scenes) names.push_back(s.name);
-    for (const std::string& s :
-         ReadNameAxis(node, path, "scenes", names, {})) {
+    for (const std::string& s : ReadNameAxis(node, path, "scenes", names, {})) {
       for (std::size_t i = 0; i < names.size(); ++i)
         if (names[i] == s) scene_idx.push_back(static_cast<int>(i));
     }
@@ -297,7 +306,8 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
   const std::vector<double> tols =
       ReadDoubleAxis(node, path, "tol", Bounds::Positive(), {1e-8});
   double atol_ratio = 1e-2;
-  yaml::ReadOptionalDouble(node, path, "atol_ratio", &atol_ratio, Bounds::Positive());
+  yaml::ReadOptionalDouble(node, path, "atol_ratio", &atol_ratio,
+                           Bounds::Positive());
   const std::vector<double> nlp_tols =
       ReadDoubleAxis(node, path, "nlp_tol", Bounds::Positive(), {1e-12});
   const std::vector<double> sigmas =
@@ -320,18 +330,21 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
   std::vector<std::uint64_t> seeds;
   if (auto n = Child(node, "seed")) {
     const std::string p = JoinKey(path, "seed");
-    seeds = ReadAxis<std::uint64_t>(*n, p, [](const YAML::Node& x, const std::string& xp) {
-      return yaml::ReadUint64(x, xp);
-    });
+    seeds = ReadAxis<std::uint64_t>(
+        *n, p, [](const YAML::Node& x, const std::string& xp) {
+          return yaml::ReadUint64(x, xp);
+        });
     std::vector<std::string> canon;
     for (auto s : seeds) canon.push_back(std::to_string(s));
     if (n->IsSequence()) CheckNoDuplicates(canon, p);
   }
   double t_end_override = 0;
-  yaml::ReadOptionalDouble(node, path, "t_end", &t_end_override, Bounds::Positive());
+  yaml::ReadOptionalDouble(node, path, "t_end", &t_end_override,
+                           Bounds::Positive());
   int repeats = 1;
   if (auto n = Child(node, "repeats"))
-    repeats = static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "repeats"), 1, 1000));
+    repeats =
+        static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "repeats"), 1, 1000));
 
   for (int si : scene_idx) {
     const SuiteScene& sc = suite->scenes[si];
@@ -343,15 +356,18 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
     for (double r : roughness)
       if (r != 1.0 && !sc.gaussian_terrain())
         Fail(JoinKey(path, "roughness"),
-             scene_ref + " has no gaussian terrain (roughness must be 1), got " + Num(r));
+             scene_ref +
+                 " has no gaussian terrain (roughness must be 1), got " +
+                 Num(r));
     const double t_end = t_end_override > 0 ? t_end_override : sc.scene.t_end;
-    std::vector<double> sc_dts = dts.empty() ? std::vector<double>{sc.scene.dt} : dts;
+    std::vector<double> sc_dts =
+        dts.empty() ? std::vector<double>{sc.scene.dt} : dts;
     for (std::size_t i = 0; i < sc_dts.size(); ++i)
       if (sc_dts[i] > t_end)
         Fail(dts.empty() ? JoinKey(path, "t_end")
                          : JoinIndex(JoinKey(path, "dt"), i),
-             "dt must be <= t_end (" + Num(t_end) + ") of " + scene_ref + ", got " +
-                 Num(sc_dts[i]));
+             "dt must be <= t_end (" + Num(t_end) + ") of " + scene_ref +
+                 ", got " + Num(sc_dts[i]));
     const std::vector<double> sc_eps =
         epss.empty() ? std::vector<double>{sc.scene.epsilon} : epss;
     const std::vector<double> sc_mu =
@@ -379,40 +395,42 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
                           for (double nlp_tol : nlp_tols)
                             for (double dt : sc_dts)
                               for (std::int64_t sub : substeps)
-                               for (std::int64_t cc : contact_checks) {
-                                RunSpec r;
-                                r.index = static_cast<int>(suite->runs.size());
-                                r.group = group;
-                                r.scene_index = si;
-                                r.scene = sc.name;
-                                r.nlp = nlp;
-                                r.dae = dae;
-                                r.coupling = CouplingFromString(coupling);
-                                r.rk_method = RkMethodFromString(rk);
-                                r.dt = dt;
-                                r.tol = tol;
-                                r.atol = tol * atol_ratio;
-                                r.nlp_tol = nlp_tol;
-                                r.sigma = sigma;
-                                r.eps = eps;
-                                r.dae_index = static_cast<int>(di);
-                                r.substeps = static_cast<int>(sub);
-                                r.contact_check = static_cast<int>(cc);
-                                r.mu = mu;
-                                r.seed = seed;
-                                r.roughness = rough;
-                                r.t_end = t_end;
-                                r.repeats = repeats;
-                                r.key = CanonicalRunKey(r);
-                                r.run_id = group + "-" + sc.name + "-" + nlp + "-" +
-                                           dae + "-" + coupling + "-" +
-                                           Hex64(Fnv1a64(r.key)).substr(0, 8);
-                                std::string why;
-                                if (!r.Options().IsValid(&why))
-                                  Fail(path, "invalid method options (" + why +
-                                                 ") for " + scene_ref + ", got " + r.key);
-                                suite->runs.push_back(std::move(r));
-                              }
+                                for (std::int64_t cc : contact_checks) {
+                                  RunSpec r;
+                                  r.index =
+                                      static_cast<int>(suite->runs.size());
+                                  r.group = group;
+                                  r.scene_index = si;
+                                  r.scene = sc.name;
+                                  r.nlp = nlp;
+                                  r.dae = dae;
+                                  r.coupling = CouplingFromString(coupling);
+                                  r.rk_method = RkMethodFromString(rk);
+                                  r.dt = dt;
+                                  r.tol = tol;
+                                  r.atol = tol * atol_ratio;
+                                  r.nlp_tol = nlp_tol;
+                                  r.sigma = sigma;
+                                  r.eps = eps;
+                                  r.dae_index = static_cast<int>(di);
+                                  r.substeps = static_cast<int>(sub);
+                                  r.contact_check = static_cast<int>(cc);
+                                  r.mu = mu;
+                                  r.seed = seed;
+                                  r.roughness = rough;
+                                  r.t_end = t_end;
+                                  r.repeats = repeats;
+                                  r.key = CanonicalRunKey(r);
+                                  r.run_id = group + "-" + sc.name + "-" + nlp +
+                                             "-" + dae + "-" + coupling + "-" +
+                                             Hex64(Fnv1a64(r.key)).substr(0, 8);
+                                  std::string why;
+                                  if (!r.Options().IsValid(&why))
+                                    Fail(path, "invalid method options (" +
+                                                   why + ") for " + scene_ref +
+                                                   ", got " + r.key);
+                                  suite->runs.push_back(std::move(r));
+                                }
   }
 }
 
@@ -426,12 +444,14 @@ Suite LoadSuiteFromString(const std::string& text, const std::string& origin,
   suite.path = origin;
   suite.text_hash = Fnv1a64(text);
   const YAML::Node root = yaml::ParseYaml(text, origin);
-  yaml::CheckKeys(root, "", {"name", "description", "reference", "scenes", "groups"});
+  yaml::CheckKeys(root, "",
+                  {"name", "description", "reference", "scenes", "groups"});
   suite.name = origin.empty() ? "suite" : fs::path(origin).stem().string();
   if (auto n = Child(root, "name")) suite.name = yaml::ReadString(*n, "name");
   if (auto n = Child(root, "description"))
     suite.description = yaml::ReadString(*n, "description");
-  if (auto n = Child(root, "reference")) suite.reference = ReadReference(*n, "reference");
+  if (auto n = Child(root, "reference"))
+    suite.reference = ReadReference(*n, "reference");
 
   const YAML::Node scenes = yaml::Require(root, "", "scenes");
   if (!scenes.IsSequence() || scenes.size() == 0)
@@ -455,15 +475,18 @@ Suite LoadSuiteFromString(const std::string& text, const std::string& origin,
     const std::string raw = it->first.as<std::string>();
     const std::string p = JoinKey("groups", raw);
     if (!IsSafeName(raw))
-      Fail(p, "group names must be 1-64 characters of [A-Za-z0-9_.], got \"" + raw + "\"");
-    if (!group_names.insert(raw).second) Fail(p, "duplicate group, got \"" + raw + "\"");
+      Fail(p, "group names must be 1-64 characters of [A-Za-z0-9_.], got \"" +
+                  raw + "\"");
+    if (!group_names.insert(raw).second)
+      Fail(p, "duplicate group, got \"" + raw + "\"");
     suite.groups.push_back(raw);
     const std::size_t first = suite.runs.size();
     ExpandGroup(it->second, p, raw, &suite);
     if (suite.runs.size() == first) Fail(p, "empty grid, got 0 runs");
     for (std::size_t k = first; k < suite.runs.size(); ++k)
       if (!run_ids.insert(suite.runs[k].run_id).second)
-        Fail(p, "duplicate grid point (run id collision), got " + suite.runs[k].run_id);
+        Fail(p, "duplicate grid point (run id collision), got " +
+                    suite.runs[k].run_id);
   }
   return suite;
 }
@@ -473,7 +496,8 @@ Suite LoadSuite(const std::string& path) {
   if (!in) throw SceneError(path + ": cannot open suite file");
   std::ostringstream ss;
   ss << in.rdbuf();
-  Suite s = LoadSuiteFromString(ss.str(), path, fs::path(path).parent_path().string());
+  Suite s = LoadSuiteFromString(ss.str(), path,
+                                fs::path(path).parent_path().string());
   s.path = path;
   return s;
 }
@@ -486,7 +510,8 @@ TerrainSpec SweptTerrain(const SuiteScene& scene,
   if (seed && (!spec.random || spec.random->seed != *seed)) {
     if (!scene.random_terrain())
       throw SceneError("seed: scene \"" + scene.name +
-                       "\" has no random gaussian terrain, got " + std::to_string(*seed));
+                       "\" has no random gaussian terrain, got " +
+                       std::to_string(*seed));
     spec.random->seed = *seed;
   }
   if (roughness != 1.0) {
@@ -495,7 +520,8 @@ TerrainSpec SweptTerrain(const SuiteScene& scene,
                        "\" has no gaussian terrain, got " + Num(roughness));
     if (spec.random) {
       const auto& r = *spec.random;
-      spec.bumps = GaussianTerrain::Random(r.seed, r.count, r.amplitude, r.sigma, r.x, r.y)
+      spec.bumps = GaussianTerrain::Random(r.seed, r.count, r.amplitude,
+                                           r.sigma, r.x, r.y)
                        .bumps();
       spec.random.reset();
     }
@@ -512,8 +538,8 @@ Scene SweptScene(const Suite& suite, const RunSpec& run) {
   s.t_end = run.t_end;
   if (s.dt > s.t_end) s.dt = run.dt;
   const TerrainSpec spec = SweptTerrain(sc, run.seed, run.roughness);
-  if (run.roughness != 1.0 || (run.seed && sc.random_terrain() &&
-                               *run.seed != sc.terrain.random->seed))
+  if (run.roughness != 1.0 ||
+      (run.seed && sc.random_terrain() && *run.seed != sc.terrain.random->seed))
     s.terrain = MakeTerrain(spec);
   return s;
 }
@@ -558,9 +584,9 @@ std::string SceneCanonicalText(const Scene& scene, const TerrainSpec& t,
         const auto& r = *t.random;
         os << ";random{seed=" << r.seed << ";count=" << r.count << ";A=["
            << Num(r.amplitude.lo) << "," << Num(r.amplitude.hi) << "];s=["
-           << Num(r.sigma.lo) << "," << Num(r.sigma.hi) << "];x=[" << Num(r.x.lo)
-           << "," << Num(r.x.hi) << "];y=[" << Num(r.y.lo) << "," << Num(r.y.hi)
-           << "]}";
+           << Num(r.sigma.lo) << "," << Num(r.sigma.hi) << "];x=["
+           << Num(r.x.lo) << "," << Num(r.x.hi) << "];y=[" << Num(r.y.lo) << ","
+           << Num(r.y.hi) << "]}";
       } else {
         os << ";bumps=[";
         for (const GaussianBump& b : t.bumps)
@@ -573,8 +599,8 @@ std::string SceneCanonicalText(const Scene& scene, const TerrainSpec& t,
       os << ";height=" << Num(t.height) << ";components=[";
       for (const SinusoidComponent& c : t.components)
         os << "(" << Num(c.amplitude) << "," << Num(c.wavelength_x) << ","
-           << Num(c.wavelength_y) << "," << Num(c.phase_x) << "," << Num(c.phase_y)
-           << ")";
+           << Num(c.wavelength_y) << "," << Num(c.phase_x) << ","
+           << Num(c.phase_y) << ")";
       os << "]";
       break;
     case TerrainSpec::Type::kHeightmap:
@@ -590,7 +616,8 @@ std::string TerrainId(const RunSpec& run, const SuiteScene& scene) {
                       *run.seed != scene.terrain.random->seed;
   if (!seeded && run.roughness == 1.0) return scene.name;
   std::string id = scene.name;
-  if (run.seed && scene.random_terrain()) id += "_s" + std::to_string(*run.seed);
+  if (run.seed && scene.random_terrain())
+    id += "_s" + std::to_string(*run.seed);
   if (run.roughness != 1.0) id += "_r" + Num(run.roughness);
   return id;
 }

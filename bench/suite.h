@@ -74,14 +74,14 @@ struct RunSpec {
   std::string nlp, dae;
   Coupling coupling = Coupling::kZoh;
   RkMethod rk_method = RkMethod::kRk4;
-  double dt = 0;        // hold / output interval [s]
-  double tol = 0;       // integrator rtol (adaptive RK, IDA)
-  double atol = 0;      // integrator atol = tol * atol_ratio
-  double nlp_tol = 0;   // quasi-static residual tolerance
-  double sigma = 0;     // Baumgarte gain [1/s]
-  double eps = 0;       // regularisation velocity epsilon [m/s]
+  double dt = 0;       // hold / output interval [s]
+  double tol = 0;      // integrator rtol (adaptive RK, IDA)
+  double atol = 0;     // integrator atol = tol * atol_ratio
+  double nlp_tol = 0;  // quasi-static residual tolerance
+  double sigma = 0;    // Baumgarte gain [1/s]
+  double eps = 0;      // regularisation velocity epsilon [m/s]
   int dae_index = 2;
-  int substeps = 1;     // integrator steps per dt (step = dt / substeps)
+  int substeps = 1;  // integrator steps per dt (step = dt / substeps)
   // Sampled second-contact (single-point contact) check every N samples,
   // 0 = never (SimulationOptions::second_contact_check_every).
   int contact_check = 0;
@@ -99,7 +99,7 @@ struct RunSpec {
 };
 
 struct Suite {
-  std::string path;         // as given ("" when loaded from a string)
+  std::string path;  // as given ("" when loaded from a string)
   std::string name;
   std::string description;
   std::uint64_t text_hash = 0;  // FNV-1a of the suite file's text
@@ -139,8 +139,8 @@ Scene RunScene(const Suite& suite, const RunSpec& run);
 std::string SceneCanonicalText(const Scene& scene, const TerrainSpec& terrain,
                                const std::string& heightmap_digest);
 
-// Filename-safe id of a run's terrain ("<scene>", or "<scene>_s<seed>_r<roughness>"
-// when swept).
+// Filename-safe id of a run's terrain ("<scene>", or
+// "<scene>_s<seed>_r<roughness>" when swept).
 std::string TerrainId(const RunSpec& run, const SuiteScene& scene);
 
 }  // namespace quasiroll::bench

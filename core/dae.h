@@ -54,9 +54,11 @@ class ConstrainedOde {
   }
 
   // Optional root functions g(t, y); an integrator that supports events stops
-  // at the first sign change of any component and reports IntegratorStatus::kEvent.
+  // at the first sign change of any component and reports
+  // IntegratorStatus::kEvent.
   virtual int num_roots() const { return 0; }
-  virtual void Roots(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
+  virtual void Roots(double /*t*/,
+                     const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
                      Eigen::Ref<Eigen::VectorXd> /*g*/) const {}
 
   // Optional residual form F(t, y, y') = 0 of the whole state, for implicit
@@ -77,15 +79,16 @@ class ConstrainedOde {
   virtual void DifferentialIds(Eigen::Ref<Eigen::VectorXd> ids) const {
     ids.setOnes();
   }
-  virtual bool ConsistentDerivative(double /*t*/,
-                                    const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
-                                    Eigen::Ref<Eigen::VectorXd> /*ydot*/) {
+  virtual bool ConsistentDerivative(
+      double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& /*y*/,
+      Eigen::Ref<Eigen::VectorXd> /*ydot*/) {
     return false;
   }
 
   // Hook called by integrators before they start on [t0, t1] so the problem can
   // make y consistent (e.g. project onto H = 0). Default: nothing.
-  virtual void MakeConsistent(double /*t0*/, Eigen::Ref<Eigen::VectorXd> /*y*/) {}
+  virtual void MakeConsistent(double /*t0*/,
+                              Eigen::Ref<Eigen::VectorXd> /*y*/) {}
 };
 
 enum class IntegratorStatus {
@@ -95,7 +98,7 @@ enum class IntegratorStatus {
   kConstraintFailure,   // projection could not reach the tolerance
   kEvent,               // a root function changed sign; t_reached is the root
   kInvalidInput,
-  kRhsFailure,          // ConstrainedOde::Rhs returned false
+  kRhsFailure,  // ConstrainedOde::Rhs returned false
   kNotRun,
 };
 
@@ -126,7 +129,8 @@ struct IntegratorOptions {
   // Projection stops when ||H||_inf <= projection_tolerance.
   double projection_tolerance = 1e-12;
   int max_projection_iterations = 10;
-  // IDA: 2 = index-2 GGL residual (H = 0 exact), 1 = index-1 Baumgarte residual.
+  // IDA: 2 = index-2 GGL residual (H = 0 exact), 1 = index-1 Baumgarte
+  // residual.
   int dae_index = 2;
 
   bool IsValid(std::string* why) const;
@@ -136,11 +140,11 @@ struct IntegratorResult {
   IntegratorStatus status = IntegratorStatus::kNotRun;
   double t_reached = 0.0;
   int steps = 0;
-  int rejected_steps = 0;       // error-test failures of adaptive methods
+  int rejected_steps = 0;  // error-test failures of adaptive methods
   int rhs_evaluations = 0;
   int jacobian_evaluations = 0;  // J = dH/dy (and IDA Jacobian) evaluations
   int projection_iterations = 0;
-  int root_index = -1;           // component that fired for kEvent
+  int root_index = -1;  // component that fired for kEvent
   double wall_seconds = 0.0;
   std::string message;
 };

@@ -20,9 +20,8 @@ struct Placement {
 };
 
 // Wheel pose in world for platform pose (R, p) and the scene's joint angles.
-void WheelPose(const KinematicModel& model, const Placement& pl,
-               const Mat3& R, const Vec3& p, int chain, Mat3* R_GW,
-               Vec3* p_W) {
+void WheelPose(const KinematicModel& model, const Placement& pl, const Mat3& R,
+               const Vec3& p, int chain, Mat3* R_GW, Vec3* p_W) {
   Mat3 R_PW;
   Vec3 p_PW;
   std::array<Vec3, 2> axes, points;
@@ -47,9 +46,8 @@ bool ContactResidual(const KinematicModel& model, const Placement& pl,
     const SurfaceForms wheel =
         TorusForms(g.major_radius, g.tube_radius, q(k), q(k + 1));
     if (!model.terrain().Contains(q(k + 2), q(k + 3))) return false;
-    const SurfaceForms ground =
-        TerrainForms(model.terrain().Evaluate(q(k + 2), q(k + 3)), q(k + 2),
-                     q(k + 3));
+    const SurfaceForms ground = TerrainForms(
+        model.terrain().Evaluate(q(k + 2), q(k + 3)), q(k + 2), q(k + 3));
     res->segment<3>(5 * i) = p_W + R_GW * wheel.point - ground.point;
     const Vec3 n_w = R_GW * wheel.frame.col(2);
     res->segment<2>(5 * i + 3) = ground.frame.leftCols<2>().transpose() * n_w;
@@ -87,8 +85,8 @@ Configuration SolveInitialConfiguration(
       const Vec3 d = R_GW.transpose() * Vec3(0, 0, -1);
       const double u = std::atan2(d.y(), d.x());
       const double v = std::asin(std::clamp(d.z(), -1.0, 1.0));
-      const Vec3 c = p_W + R_GW * TorusForms(g.major_radius, g.tube_radius,
-                                             u, v).point;
+      const Vec3 c =
+          p_W + R_GW * TorusForms(g.major_radius, g.tube_radius, u, v).point;
       q.segment<4>(3 + 4 * i) << u, v, c.x(), c.y();
     }
   }
@@ -104,10 +102,13 @@ Configuration SolveInitialConfiguration(
 
   Vec15 res, trial_res, q_trial;
   if (!ContactResidual(model, pl, q, &res))
-    throw GeometryError("initial: a wheel's first contact guess is outside the terrain");
+    throw GeometryError(
+        "initial: a wheel's first contact guess is outside the terrain");
   int it = 0;
   const int kMaxIterations = 60;
-  for (; it < kMaxIterations && res.lpNorm<Eigen::Infinity>() > 0.01 * kResidualTolerance; ++it) {
+  for (; it < kMaxIterations &&
+         res.lpNorm<Eigen::Infinity>() > 0.01 * kResidualTolerance;
+       ++it) {
     // Central-difference Jacobian in scaled variables (15 x 15, cheap; error
     // O(h^2) only slows convergence, the residual itself is exact).
     Mat15 jac;
@@ -164,8 +165,8 @@ Configuration SolveInitialConfiguration(
     WheelPose(model, pl, R, p, i, &R_GW, &p_W);
     const SurfaceForms wheel =
         TorusForms(g.major_radius, g.tube_radius, q(k), q(k + 1));
-    const SurfaceForms ground = TerrainForms(
-        terrain.Evaluate(q(k + 2), q(k + 3)), q(k + 2), q(k + 3));
+    const SurfaceForms ground =
+        TerrainForms(terrain.Evaluate(q(k + 2), q(k + 3)), q(k + 2), q(k + 3));
     const Vec3 x_w = R_GW * wheel.frame.col(0);
     const Vec3 n_w = R_GW * wheel.frame.col(2);
     if (!(n_w.dot(ground.frame.col(2)) < 0)) {
@@ -173,10 +174,10 @@ Configuration SolveInitialConfiguration(
                           " touches the terrain with its inner side "
                           "(normals not opposed)");
     }
-    const double psi = std::atan2(-ground.frame.col(1).dot(x_w),
-                                  ground.frame.col(0).dot(x_w));
-    theta.segment<5>(ConfigIndex::Eta(i)) << q(k), q(k + 1), q(k + 2),
-        q(k + 3), psi;
+    const double psi =
+        std::atan2(-ground.frame.col(1).dot(x_w), ground.frame.col(0).dot(x_w));
+    theta.segment<5>(ConfigIndex::Eta(i)) << q(k), q(k + 1), q(k + 2), q(k + 3),
+        psi;
   }
   for (int j = 0; j < 6; ++j) theta(ConfigIndex::kTheta + j) = joint_angles[j];
 
@@ -211,12 +212,18 @@ Configuration SolveInitialConfiguration(const KinematicModel& model,
 
 const char* ToString(ContactValidity validity) {
   switch (validity) {
-    case ContactValidity::kValid: return "valid";
-    case ContactValidity::kTreadAngle: return "tread_angle";
-    case ContactValidity::kCurvature: return "relative_curvature";
-    case ContactValidity::kSecondContact: return "second_contact";
-    case ContactValidity::kNormalsNotOpposed: return "normals_not_opposed";
-    case ContactValidity::kOutsideTerrain: return "outside_terrain";
+    case ContactValidity::kValid:
+      return "valid";
+    case ContactValidity::kTreadAngle:
+      return "tread_angle";
+    case ContactValidity::kCurvature:
+      return "relative_curvature";
+    case ContactValidity::kSecondContact:
+      return "second_contact";
+    case ContactValidity::kNormalsNotOpposed:
+      return "normals_not_opposed";
+    case ContactValidity::kOutsideTerrain:
+      return "outside_terrain";
   }
   return "unknown";
 }

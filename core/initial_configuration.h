@@ -46,18 +46,18 @@ Configuration SolveInitialConfiguration(
 
 enum class ContactValidity {
   kValid,
-  kTreadAngle,          // |v_w| >= pi/2 - 0.1: off the convex tread
-  kCurvature,           // K_w + r_psi K_g r_psi not positive definite
-  kSecondContact,       // another torus point lies below the terrain
-  kNormalsNotOpposed,   // n_g . n_w >= 0
-  kOutsideTerrain,      // contact left a bounded terrain (heightmap)
+  kTreadAngle,         // |v_w| >= pi/2 - 0.1: off the convex tread
+  kCurvature,          // K_w + r_psi K_g r_psi not positive definite
+  kSecondContact,      // another torus point lies below the terrain
+  kNormalsNotOpposed,  // n_g . n_w >= 0
+  kOutsideTerrain,     // contact left a bounded terrain (heightmap)
 };
 const char* ToString(ContactValidity validity);
 
 struct ValidityReport {
-  std::array<ContactValidity, 3> contact = {
-      ContactValidity::kValid, ContactValidity::kValid,
-      ContactValidity::kValid};
+  std::array<ContactValidity, 3> contact = {ContactValidity::kValid,
+                                            ContactValidity::kValid,
+                                            ContactValidity::kValid};
   bool ok() const;
   std::string Describe() const;  // "" if ok, else e.g. "wheel 2: tread_angle"
 };

@@ -56,7 +56,8 @@ void KinematicModel::EvaluateChain(const Configuration& theta, int chain,
   Eigen::Matrix<double, 7, 1> key;
   key << theta.segment<5>(e), theta.segment<2>(j);
   // Bitwise comparison: NaNs never hit, -0.0 vs 0.0 only costs a recompute.
-  if (entry.valid && std::memcmp(key.data(), entry.key.data(), sizeof(double) * 7) == 0) {
+  if (entry.valid &&
+      std::memcmp(key.data(), entry.key.data(), sizeof(double) * 7) == 0) {
     *s = entry.state;
     return;
   }
@@ -123,14 +124,14 @@ bool KinematicModel::ContactRates(const ChainState& s, const Vec6& twist,
       s.ground.A.inverse() * (s.r_psi * (k_inv * (q + s.wheel.K * vt)));
   eta_rates->head<2>() = aw_rate;
   eta_rates->segment<2>(2) = ag_rate;
-  (*eta_rates)(4) = twist(5) + s.wheel.tau.dot(aw_rate) +
-                    s.ground.tau.dot(ag_rate);
+  (*eta_rates)(4) =
+      twist(5) + s.wheel.tau.dot(aw_rate) + s.ground.tau.dot(ag_rate);
   return true;
 }
 
 Vec6 KinematicModel::PlatformVelocity(const ChainState& s,
-                                      const EtaRates& eta_rates,
-                                      double q0_rate, double q1_rate) const {
+                                      const EtaRates& eta_rates, double q0_rate,
+                                      double q1_rate) const {
   const Vec2 aw_rate = eta_rates.head<2>();
   const Vec2 ag_rate = eta_rates.segment<2>(2);
   const Vec2 a_w = s.wheel.A * aw_rate;
@@ -138,8 +139,8 @@ Vec6 KinematicModel::PlatformVelocity(const ChainState& s,
   const Vec2 vt = b - a_w;
   const Mat2 kg = s.r_psi * s.ground.K * s.r_psi;
   const Vec2 wy_minus_wx = -(s.wheel.K * a_w + kg * b);  // (w_y, -w_x)
-  const double wz = eta_rates(4) - s.wheel.tau.dot(aw_rate) -
-                    s.ground.tau.dot(ag_rate);
+  const double wz =
+      eta_rates(4) - s.wheel.tau.dot(aw_rate) - s.ground.tau.dot(ag_rate);
   const Vec3 w_wheel = s.R_GCW * Vec3(-wy_minus_wx(1), wy_minus_wx(0), wz);
   const Vec3 v_c = s.R_GCW * Vec3(vt(0), vt(1), 0.0);
   const Vec3 w_p = w_wheel - q0_rate * s.axis[0] - q1_rate * s.axis[1];

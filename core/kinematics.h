@@ -2,9 +2,10 @@
 //
 // Configuration Theta in R^21 (model-notes §2): per chain i = 0, 1, 2 the
 // contact coordinates eta_i = (u_w, v_w, x_g, y_g, psi) at 5i..5i+4, then the
-// joint angles theta = (phi1, alpha1, delta2, alpha2, delta3, alpha3) at 15..20.
-// The platform pose is not a state: each chain gives one by forward kinematics
-// from its contact coordinates ("ground side"); H(Theta) = 0 says they agree.
+// joint angles theta = (phi1, alpha1, delta2, alpha2, delta3, alpha3)
+// at 15..20. The platform pose is not a state: each chain gives one by forward
+// kinematics from its contact coordinates ("ground side"); H(Theta) = 0 says
+// they agree.
 //
 // Chain i, ground side (model.md §2):
 //   R_GCW = R_GCG(x_g, y_g) R_psi,   R_GW = R_GCW R_WCW(u, v)^T,
@@ -49,8 +50,7 @@ using Configuration = Eigen::Matrix<double, kConfigSize, 1>;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Vec12 = Eigen::Matrix<double, 12, 1>;
 using LoopClosure = Eigen::Matrix<double, kNumConstraints, 1>;
-using LoopClosureJacobian =
-    Eigen::Matrix<double, kNumConstraints, kConfigSize>;
+using LoopClosureJacobian = Eigen::Matrix<double, kNumConstraints, kConfigSize>;
 using ContactVelocityMap = Eigen::Matrix<double, 6, 12>;
 
 // Named indices into Theta.
@@ -73,12 +73,12 @@ struct ChainState {
   SurfaceForms wheel;   // torus forms at (u, v), wheel frame
   SurfaceForms ground;  // terrain forms at (x_g, y_g), world frame
   Mat2 r_psi;
-  Mat3 R_GCW;           // wheel contact frame in world
-  Mat3 R_GW;            // wheel frame in world
-  Vec3 p_W;             // wheel centre
-  Mat3 R;               // platform rotation through this chain
-  Vec3 p;               // platform COM through this chain
-  Vec3 p_c;             // contact point
+  Mat3 R_GCW;                 // wheel contact frame in world
+  Mat3 R_GW;                  // wheel frame in world
+  Vec3 p_W;                   // wheel centre
+  Mat3 R;                     // platform rotation through this chain
+  Vec3 p;                     // platform COM through this chain
+  Vec3 p_c;                   // contact point
   std::array<Vec3, 2> axis;   // world joint axes (steer/camber, spin)
   std::array<Vec3, 2> point;  // world points on them
 };

@@ -4,8 +4,8 @@
 //
 // Row i of g is an equality when g_lb(i) == g_ub(i). Infinite bounds use
 // +-std::numeric_limits<double>::infinity(). Nothing here knows about robots:
-// the quasi-static problem (quasi_static.h) is one client, the Hock-Schittkowski
-// reference problems (nlp_reference_problems.h) are others.
+// the quasi-static problem (quasi_static.h) is one client, the
+// Hock-Schittkowski reference problems (nlp_reference_problems.h) are others.
 //
 // Style follows Drake's solvers/: the public non-virtual NlpSolver::Solve()
 // validates inputs and options (misuse -> std::invalid_argument), calls the
@@ -35,7 +35,8 @@ class NlpProblem {
                          Eigen::Ref<Eigen::VectorXd> g_lb,
                          Eigen::Ref<Eigen::VectorXd> g_ub) const = 0;
 
-  virtual double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const = 0;
+  virtual double Objective(
+      const Eigen::Ref<const Eigen::VectorXd>& x) const = 0;
   virtual void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
                                  Eigen::Ref<Eigen::VectorXd> grad) const = 0;
   virtual void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -49,10 +50,10 @@ class NlpProblem {
   //   sigma * d2f/dx2 + sum_i lambda_i d2g_i/dx2   (full symmetric matrix).
   // Backends that need second derivatives fall back to quasi-Newton otherwise.
   virtual bool HasLagrangianHessian() const { return false; }
-  virtual void LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
-                                 double /*sigma*/,
-                                 const Eigen::Ref<const Eigen::VectorXd>& /*lambda*/,
-                                 Eigen::Ref<Eigen::MatrixXd> /*hess*/) const {}
+  virtual void LagrangianHessian(
+      const Eigen::Ref<const Eigen::VectorXd>& /*x*/, double /*sigma*/,
+      const Eigen::Ref<const Eigen::VectorXd>& /*lambda*/,
+      Eigen::Ref<Eigen::MatrixXd> /*hess*/) const {}
 
   // Number of constraint rows that are equalities (g_lb == g_ub).
   int CountEqualities() const;

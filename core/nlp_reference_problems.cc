@@ -36,7 +36,8 @@ void Hs071Problem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
   g_ub << kInf, 40.0;
 }
 
-double Hs071Problem::Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+double Hs071Problem::Objective(
+    const Eigen::Ref<const Eigen::VectorXd>& x) const {
   return x(0) * x(3) * (x(0) + x(1) + x(2)) + x(2);
 }
 
@@ -54,8 +55,9 @@ void Hs071Problem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
   g(1) = x.squaredNorm();
 }
 
-void Hs071Problem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                      Eigen::Ref<Eigen::MatrixXd> jac) const {
+void Hs071Problem::ConstraintJacobian(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::MatrixXd> jac) const {
   jac(0, 0) = x(1) * x(2) * x(3);
   jac(0, 1) = x(0) * x(2) * x(3);
   jac(0, 2) = x(0) * x(1) * x(3);
@@ -63,10 +65,10 @@ void Hs071Problem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x
   jac.row(1) = 2.0 * x.transpose();
 }
 
-void Hs071Problem::LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                     double sigma,
-                                     const Eigen::Ref<const Eigen::VectorXd>& lambda,
-                                     Eigen::Ref<Eigen::MatrixXd> hess) const {
+void Hs071Problem::LagrangianHessian(
+    const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
+    const Eigen::Ref<const Eigen::VectorXd>& lambda,
+    Eigen::Ref<Eigen::MatrixXd> hess) const {
   const double l0 = lambda(0), l1 = lambda(1);
   hess.setZero();
   // Objective.
@@ -107,7 +109,8 @@ void Hs032Problem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
   g_ub << kInf, 1.0;
 }
 
-double Hs032Problem::Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+double Hs032Problem::Objective(
+    const Eigen::Ref<const Eigen::VectorXd>& x) const {
   const double s = x(0) + 3.0 * x(1) + x(2), d = x(0) - x(1);
   return s * s + 4.0 * d * d;
 }
@@ -126,18 +129,19 @@ void Hs032Problem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
   g(1) = x(0) + x(1) + x(2);
 }
 
-void Hs032Problem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                      Eigen::Ref<Eigen::MatrixXd> jac) const {
+void Hs032Problem::ConstraintJacobian(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::MatrixXd> jac) const {
   jac(0, 0) = -3.0 * x(0) * x(0);
   jac(0, 1) = 6.0;
   jac(0, 2) = 4.0;
   jac.row(1).setOnes();
 }
 
-void Hs032Problem::LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                     double sigma,
-                                     const Eigen::Ref<const Eigen::VectorXd>& lambda,
-                                     Eigen::Ref<Eigen::MatrixXd> hess) const {
+void Hs032Problem::LagrangianHessian(
+    const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
+    const Eigen::Ref<const Eigen::VectorXd>& lambda,
+    Eigen::Ref<Eigen::MatrixXd> hess) const {
   hess << 10.0, -2.0, 2.0,  //
       -2.0, 26.0, 6.0,      //
       2.0, 6.0, 2.0;
@@ -165,7 +169,8 @@ void Hs040Problem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
   g_ub = g_lb;
 }
 
-double Hs040Problem::Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+double Hs040Problem::Objective(
+    const Eigen::Ref<const Eigen::VectorXd>& x) const {
   return -x(0) * x(1) * x(2) * x(3);
 }
 
@@ -184,8 +189,9 @@ void Hs040Problem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
   g(2) = x(3) * x(3) - x(1);
 }
 
-void Hs040Problem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                      Eigen::Ref<Eigen::MatrixXd> jac) const {
+void Hs040Problem::ConstraintJacobian(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::MatrixXd> jac) const {
   jac.setZero();
   jac(0, 0) = 3.0 * x(0) * x(0);
   jac(0, 1) = 2.0 * x(1);
@@ -196,10 +202,10 @@ void Hs040Problem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x
   jac(2, 3) = 2.0 * x(3);
 }
 
-void Hs040Problem::LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                     double sigma,
-                                     const Eigen::Ref<const Eigen::VectorXd>& lambda,
-                                     Eigen::Ref<Eigen::MatrixXd> hess) const {
+void Hs040Problem::LagrangianHessian(
+    const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
+    const Eigen::Ref<const Eigen::VectorXd>& lambda,
+    Eigen::Ref<Eigen::MatrixXd> hess) const {
   hess.setZero();
   for (int i = 0; i < 4; ++i) {
     for (int j = 0; j < 4; ++j) {
@@ -247,12 +253,14 @@ void Hs073Problem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
   g_ub << kInf, kInf, 1.0;
 }
 
-double Hs073Problem::Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+double Hs073Problem::Objective(
+    const Eigen::Ref<const Eigen::VectorXd>& x) const {
   return 24.55 * x(0) + 26.75 * x(1) + 39.0 * x(2) + 40.50 * x(3);
 }
 
-void Hs073Problem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
-                                     Eigen::Ref<Eigen::VectorXd> grad) const {
+void Hs073Problem::ObjectiveGradient(
+    const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
+    Eigen::Ref<Eigen::VectorXd> grad) const {
   grad << 24.55, 26.75, 39.0, 40.50;
 }
 
@@ -266,8 +274,9 @@ void Hs073Problem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
   g(2) = x(0) + x(1) + x(2) + x(3);
 }
 
-void Hs073Problem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                      Eigen::Ref<Eigen::MatrixXd> jac) const {
+void Hs073Problem::ConstraintJacobian(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::MatrixXd> jac) const {
   double s = 0.0;
   for (int i = 0; i < 4; ++i) s += kHs73Var[i] * x(i) * x(i);
   const double q = std::sqrt(s);
@@ -300,23 +309,27 @@ void InfeasibleDiskProblem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
   g_ub << 1.0, kInf;
 }
 
-double InfeasibleDiskProblem::Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+double InfeasibleDiskProblem::Objective(
+    const Eigen::Ref<const Eigen::VectorXd>& x) const {
   return x.squaredNorm();
 }
 
-void InfeasibleDiskProblem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                              Eigen::Ref<Eigen::VectorXd> grad) const {
+void InfeasibleDiskProblem::ObjectiveGradient(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::VectorXd> grad) const {
   grad = 2.0 * x;
 }
 
-void InfeasibleDiskProblem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                        Eigen::Ref<Eigen::VectorXd> g) const {
+void InfeasibleDiskProblem::Constraints(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::VectorXd> g) const {
   g(0) = x.squaredNorm();
   g(1) = x(0) + x(1);
 }
 
-void InfeasibleDiskProblem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                               Eigen::Ref<Eigen::MatrixXd> jac) const {
+void InfeasibleDiskProblem::ConstraintJacobian(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::MatrixXd> jac) const {
   jac.row(0) = 2.0 * x.transpose();
   jac.row(1).setOnes();
 }
@@ -340,12 +353,14 @@ void CircleLineSystem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
   g_ub << 4.0, 0.0, 10.0;
 }
 
-double CircleLineSystem::Objective(const Eigen::Ref<const Eigen::VectorXd>& /*x*/) const {
+double CircleLineSystem::Objective(
+    const Eigen::Ref<const Eigen::VectorXd>& /*x*/) const {
   return 0.0;
 }
 
-void CircleLineSystem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
-                                         Eigen::Ref<Eigen::VectorXd> grad) const {
+void CircleLineSystem::ObjectiveGradient(
+    const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
+    Eigen::Ref<Eigen::VectorXd> grad) const {
   grad.setZero();
 }
 
@@ -356,8 +371,9 @@ void CircleLineSystem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
   g(2) = x(0) + 2.0 * x(1);
 }
 
-void CircleLineSystem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                          Eigen::Ref<Eigen::MatrixXd> jac) const {
+void CircleLineSystem::ConstraintJacobian(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::MatrixXd> jac) const {
   jac.row(0) = 2.0 * x.transpose();
   jac.row(1) << 1.0, -1.0;
   jac.row(2) << 1.0, 2.0;
@@ -377,9 +393,9 @@ ContactLikeSystem::ContactLikeSystem(int n) : n_(n) {
   x_star_.resize(n);
   for (int i = 0; i < n; ++i) x_star_(i) = 0.5 + 0.3 * std::sin(1.3 * i + 0.4);
   for (int j = 0; j < 3; ++j) {
-    x_star_(2 * j) = 0.2 - 0.1 * j;        // tangential components
+    x_star_(2 * j) = 0.2 - 0.1 * j;  // tangential components
     x_star_(2 * j + 1) = -0.3 + 0.1 * j;
-    x_star_(n - 3 + j) = 1.0 + 0.1 * j;    // normal forces
+    x_star_(n - 3 + j) = 1.0 + 0.1 * j;  // normal forces
   }
   x0_.resize(n);
   for (int i = 0; i < n; ++i)
@@ -401,12 +417,14 @@ void ContactLikeSystem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
   g_ub.tail(3).setZero();
 }
 
-double ContactLikeSystem::Objective(const Eigen::Ref<const Eigen::VectorXd>& /*x*/) const {
+double ContactLikeSystem::Objective(
+    const Eigen::Ref<const Eigen::VectorXd>& /*x*/) const {
   return 0.0;
 }
 
-void ContactLikeSystem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
-                                          Eigen::Ref<Eigen::VectorXd> grad) const {
+void ContactLikeSystem::ObjectiveGradient(
+    const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
+    Eigen::Ref<Eigen::VectorXd> grad) const {
   grad.setZero();
 }
 
@@ -421,12 +439,14 @@ void ContactLikeSystem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
   }
   for (int j = 0; j < 3; ++j) {
     const double fn = x(n_ - 3 + j);
-    g(n_ + j) = x(2 * j) * x(2 * j) + x(2 * j + 1) * x(2 * j + 1) - 0.64 * fn * fn;
+    g(n_ + j) =
+        x(2 * j) * x(2 * j) + x(2 * j + 1) * x(2 * j + 1) - 0.64 * fn * fn;
   }
 }
 
-void ContactLikeSystem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                           Eigen::Ref<Eigen::MatrixXd> jac) const {
+void ContactLikeSystem::ConstraintJacobian(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::MatrixXd> jac) const {
   jac.topRows(n_) = a_;
   for (int i = 0; i < n_; ++i) {
     const int k = (i + 1) % n_;
@@ -462,23 +482,27 @@ void InfeasibleRootSystem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
   g_ub = g_lb;
 }
 
-double InfeasibleRootSystem::Objective(const Eigen::Ref<const Eigen::VectorXd>& /*x*/) const {
+double InfeasibleRootSystem::Objective(
+    const Eigen::Ref<const Eigen::VectorXd>& /*x*/) const {
   return 0.0;
 }
 
-void InfeasibleRootSystem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
-                                             Eigen::Ref<Eigen::VectorXd> grad) const {
+void InfeasibleRootSystem::ObjectiveGradient(
+    const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
+    Eigen::Ref<Eigen::VectorXd> grad) const {
   grad.setZero();
 }
 
-void InfeasibleRootSystem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                       Eigen::Ref<Eigen::VectorXd> g) const {
+void InfeasibleRootSystem::Constraints(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::VectorXd> g) const {
   g(0) = std::exp(x(0));
   g(1) = x(0) + x(1);
 }
 
-void InfeasibleRootSystem::ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                              Eigen::Ref<Eigen::MatrixXd> jac) const {
+void InfeasibleRootSystem::ConstraintJacobian(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::MatrixXd> jac) const {
   jac(0, 0) = std::exp(x(0));
   jac(0, 1) = 0.0;
   jac.row(1).setOnes();
@@ -498,7 +522,8 @@ std::vector<std::unique_ptr<ReferenceProblem>> MakeReferenceProblems() {
   return v;
 }
 
-std::unique_ptr<ReferenceProblem> MakeReferenceProblem(const std::string& name) {
+std::unique_ptr<ReferenceProblem> MakeReferenceProblem(
+    const std::string& name) {
   for (auto& p : MakeReferenceProblems())
     if (p->name() == name) return std::move(p);
   return nullptr;

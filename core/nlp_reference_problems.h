@@ -12,11 +12,10 @@
 //     3 lower bounds, 3 cone rows), one whose unique root violates a bound.
 #pragma once
 
+#include <Eigen/Core>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/nlp.h"
 
@@ -54,7 +53,8 @@ class Hs071Problem final : public ReferenceProblem {
   Hs071Problem();
   int num_variables() const override { return 4; }
   int num_constraints() const override { return 2; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb, Eigen::Ref<Eigen::VectorXd> x_ub,
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                 Eigen::Ref<Eigen::VectorXd> x_ub,
                  Eigen::Ref<Eigen::VectorXd> g_lb,
                  Eigen::Ref<Eigen::VectorXd> g_ub) const override;
   double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
@@ -65,7 +65,8 @@ class Hs071Problem final : public ReferenceProblem {
   void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
                           Eigen::Ref<Eigen::MatrixXd> jac) const override;
   bool HasLagrangianHessian() const override { return true; }
-  void LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
+  void LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                         double sigma,
                          const Eigen::Ref<const Eigen::VectorXd>& lambda,
                          Eigen::Ref<Eigen::MatrixXd> hess) const override;
 };
@@ -78,7 +79,8 @@ class Hs032Problem final : public ReferenceProblem {
   Hs032Problem();
   int num_variables() const override { return 3; }
   int num_constraints() const override { return 2; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb, Eigen::Ref<Eigen::VectorXd> x_ub,
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                 Eigen::Ref<Eigen::VectorXd> x_ub,
                  Eigen::Ref<Eigen::VectorXd> g_lb,
                  Eigen::Ref<Eigen::VectorXd> g_ub) const override;
   double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
@@ -89,7 +91,8 @@ class Hs032Problem final : public ReferenceProblem {
   void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
                           Eigen::Ref<Eigen::MatrixXd> jac) const override;
   bool HasLagrangianHessian() const override { return true; }
-  void LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
+  void LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                         double sigma,
                          const Eigen::Ref<const Eigen::VectorXd>& lambda,
                          Eigen::Ref<Eigen::MatrixXd> hess) const override;
 };
@@ -102,7 +105,8 @@ class Hs040Problem final : public ReferenceProblem {
   Hs040Problem();
   int num_variables() const override { return 4; }
   int num_constraints() const override { return 3; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb, Eigen::Ref<Eigen::VectorXd> x_ub,
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                 Eigen::Ref<Eigen::VectorXd> x_ub,
                  Eigen::Ref<Eigen::VectorXd> g_lb,
                  Eigen::Ref<Eigen::VectorXd> g_ub) const override;
   double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
@@ -113,7 +117,8 @@ class Hs040Problem final : public ReferenceProblem {
   void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
                           Eigen::Ref<Eigen::MatrixXd> jac) const override;
   bool HasLagrangianHessian() const override { return true; }
-  void LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
+  void LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                         double sigma,
                          const Eigen::Ref<const Eigen::VectorXd>& lambda,
                          Eigen::Ref<Eigen::MatrixXd> hess) const override;
 };
@@ -126,7 +131,8 @@ class Hs073Problem final : public ReferenceProblem {
   Hs073Problem();
   int num_variables() const override { return 4; }
   int num_constraints() const override { return 3; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb, Eigen::Ref<Eigen::VectorXd> x_ub,
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                 Eigen::Ref<Eigen::VectorXd> x_ub,
                  Eigen::Ref<Eigen::VectorXd> g_lb,
                  Eigen::Ref<Eigen::VectorXd> g_ub) const override;
   double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
@@ -144,7 +150,8 @@ class InfeasibleDiskProblem final : public ReferenceProblem {
   InfeasibleDiskProblem();
   int num_variables() const override { return 2; }
   int num_constraints() const override { return 2; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb, Eigen::Ref<Eigen::VectorXd> x_ub,
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                 Eigen::Ref<Eigen::VectorXd> x_ub,
                  Eigen::Ref<Eigen::VectorXd> g_lb,
                  Eigen::Ref<Eigen::VectorXd> g_ub) const override;
   double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
@@ -164,7 +171,8 @@ class CircleLineSystem final : public ReferenceProblem {
   CircleLineSystem();
   int num_variables() const override { return 2; }
   int num_constraints() const override { return 3; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb, Eigen::Ref<Eigen::VectorXd> x_ub,
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                 Eigen::Ref<Eigen::VectorXd> x_ub,
                  Eigen::Ref<Eigen::VectorXd> g_lb,
                  Eigen::Ref<Eigen::VectorXd> g_ub) const override;
   double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
@@ -188,7 +196,8 @@ class ContactLikeSystem final : public ReferenceProblem {
   explicit ContactLikeSystem(int n = 18);
   int num_variables() const override { return n_; }
   int num_constraints() const override { return n_ + 3; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb, Eigen::Ref<Eigen::VectorXd> x_ub,
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                 Eigen::Ref<Eigen::VectorXd> x_ub,
                  Eigen::Ref<Eigen::VectorXd> g_lb,
                  Eigen::Ref<Eigen::VectorXd> g_ub) const override;
   double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
@@ -211,7 +220,8 @@ class InfeasibleRootSystem final : public ReferenceProblem {
   InfeasibleRootSystem();
   int num_variables() const override { return 2; }
   int num_constraints() const override { return 2; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb, Eigen::Ref<Eigen::VectorXd> x_ub,
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                 Eigen::Ref<Eigen::VectorXd> x_ub,
                  Eigen::Ref<Eigen::VectorXd> g_lb,
                  Eigen::Ref<Eigen::VectorXd> g_ub) const override;
   double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;

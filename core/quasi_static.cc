@@ -41,8 +41,7 @@ bool QuasiStaticParameters::IsValid(std::string* why) const {
     return false;
   for (int j = 0; j < 6; ++j) {
     if (!std::isfinite(joint_rates[j])) {
-      if (why)
-        *why = "joint_rates[" + std::to_string(j) + "]: must be finite";
+      if (why) *why = "joint_rates[" + std::to_string(j) + "]: must be finite";
       return false;
     }
   }
@@ -63,12 +62,18 @@ bool QuasiStaticOptions::IsValid(std::string* why) const {
 
 const char* ToString(QuasiStaticStatus status) {
   switch (status) {
-    case QuasiStaticStatus::kOk: return "OK";
-    case QuasiStaticStatus::kLiftOff: return "LIFT_OFF";
-    case QuasiStaticStatus::kInfeasibleFriction: return "INFEASIBLE_FRICTION";
-    case QuasiStaticStatus::kDegenerateContact: return "DEGENERATE_CONTACT";
-    case QuasiStaticStatus::kSingular: return "SINGULAR";
-    case QuasiStaticStatus::kSolverFailure: return "SOLVER_FAILURE";
+    case QuasiStaticStatus::kOk:
+      return "OK";
+    case QuasiStaticStatus::kLiftOff:
+      return "LIFT_OFF";
+    case QuasiStaticStatus::kInfeasibleFriction:
+      return "INFEASIBLE_FRICTION";
+    case QuasiStaticStatus::kDegenerateContact:
+      return "DEGENERATE_CONTACT";
+    case QuasiStaticStatus::kSingular:
+      return "SINGULAR";
+    case QuasiStaticStatus::kSolverFailure:
+      return "SOLVER_FAILURE";
   }
   return "UNKNOWN";
 }
@@ -88,7 +93,8 @@ QuasiStaticProblem::QuasiStaticProblem(const KinematicModel& model,
   l0_ = g.wheelbase();
   f0_ = params_.mass * params_.gravity;
   double max_rate = 0.0;
-  for (double r : params_.joint_rates) max_rate = std::max(max_rate, std::abs(r));
+  for (double r : params_.joint_rates)
+    max_rate = std::max(max_rate, std::abs(r));
   v0_ = std::max(rho_ * max_rate, 0.01);
 
   const int nm = num_motion();
@@ -165,9 +171,8 @@ void QuasiStaticProblem::ObjectiveGradient(
     grad.segment<2>(nm + 3 * i) = z.segment<2>(nm + 3 * i);
 }
 
-void QuasiStaticProblem::Constraints(
-    const Eigen::Ref<const Eigen::VectorXd>& z,
-    Eigen::Ref<Eigen::VectorXd> g) const {
+void QuasiStaticProblem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& z,
+                                     Eigen::Ref<Eigen::VectorXd> g) const {
   const int nm = num_motion(), ns = 6 + num_passive_;
   const auto m = z.head(nm);
   const auto f = z.segment<9>(nm);
@@ -176,7 +181,7 @@ void QuasiStaticProblem::Constraints(
   const double inv_v0 = 1.0 / v0_, mu = params_.mu,
                eps2 = params_.epsilon * params_.epsilon;
   for (int i = 0; i < 3; ++i) g(i) = vel(3 * i + 2) * inv_v0;  // E1
-  g.segment(3, ns).noalias() = statics_f_ * f;                  // E2, E3
+  g.segment(3, ns).noalias() = statics_f_ * f;                 // E2, E3
   g.segment(3, ns) += statics_0_;
   const int c0 = 3 + ns;
   for (int i = 0; i < 3; ++i) {  // C
@@ -215,8 +220,7 @@ void QuasiStaticProblem::ConstraintJacobian(
     const Mat2 dcds = ft * s.transpose() / sigma + mu * fn * Mat2::Identity();
     jac.block(c0 + 2 * i, 0, 2, nm).noalias() =
         inv_v0 * dcds * vel_m_.block(3 * i, 0, 2, nm);
-    jac.block<2, 2>(c0 + 2 * i, nm + 3 * i) =
-        sigma * inv_v0 * Mat2::Identity();
+    jac.block<2, 2>(c0 + 2 * i, nm + 3 * i) = sigma * inv_v0 * Mat2::Identity();
     jac.block<2, 1>(c0 + 2 * i, nm + 3 * i + 2) = mu * inv_v0 * s;
     jac.block<1, 2>(c0 + 6 + i, nm + 3 * i) = -2.0 * ft.transpose();
     jac(c0 + 6 + i, nm + 3 * i + 2) = 2.0 * mu * mu * fn;
@@ -299,11 +303,13 @@ bool ConesFeasible(const Eigen::Matrix<double, 9, 1>& fp,
         gi[i] = q - t * f(3 * i + 2);
         dg[i] = am.transpose() * a / q - t * cn.transpose();
         if (hess)
-          hg[i] = am.transpose() * (Mat2::Identity() - a * a.transpose() / (q * q)) * am / q;
+          hg[i] = am.transpose() *
+                  (Mat2::Identity() - a * a.transpose() / (q * q)) * am / q;
       }
       const double gmax = std::max({gi[0], gi[1], gi[2]});
       double sum = 0.0, p[3];
-      for (int i = 0; i < 3; ++i) sum += p[i] = std::exp(kappa * (gi[i] - gmax));
+      for (int i = 0; i < 3; ++i)
+        sum += p[i] = std::exp(kappa * (gi[i] - gmax));
       for (double& pi : p) pi /= sum;
       if (grad) {
         *grad = p[0] * dg[0] + p[1] * dg[1] + p[2] * dg[2];
@@ -321,14 +327,16 @@ bool ConesFeasible(const Eigen::Matrix<double, 9, 1>& fp,
       Eigen::Matrix3d hess;
       const double phi = smoothed(*y, &grad, &hess);
       if (grad.norm() < 1e-14) break;
-      Eigen::LDLT<Eigen::Matrix3d> ldlt(hess + 1e-14 * Eigen::Matrix3d::Identity());
+      Eigen::LDLT<Eigen::Matrix3d> ldlt(hess +
+                                        1e-14 * Eigen::Matrix3d::Identity());
       Eigen::Vector3d step = -ldlt.solve(grad);
       if (!step.allFinite() || grad.dot(step) >= 0) step = -grad;
       double alpha = 1.0;
       bool moved = false;
       for (int ls = 0; ls < 50; ++ls, alpha *= 0.5) {
         const Eigen::Vector3d trial = *y + alpha * step;
-        if (smoothed(trial, nullptr, nullptr) <= phi + 1e-4 * alpha * grad.dot(step)) {
+        if (smoothed(trial, nullptr, nullptr) <=
+            phi + 1e-4 * alpha * grad.dot(step)) {
           *y = trial;
           moved = true;
           break;
@@ -364,7 +372,8 @@ double QuasiStaticProblem::MinimumFriction(int* critical,
       if (critical) *critical = -1;
       return kNaN;
     }
-    const Eigen::Matrix<double, 9, 1> f = lu.solve(-Eigen::VectorXd(statics_0_));
+    const Eigen::Matrix<double, 9, 1> f =
+        lu.solve(-Eigen::VectorXd(statics_0_));
     double fn_min = kInf;
     int fn_arg = 0;
     for (int i = 0; i < 3; ++i) {
@@ -384,7 +393,8 @@ double QuasiStaticProblem::MinimumFriction(int* critical,
   }
   // paper: f = fp + N y with S fp = -s_b, S N = 0.
   Eigen::JacobiSVD<Eigen::Matrix<double, 6, 9>> svd(
-      Eigen::Matrix<double, 6, 9>(statics_f_), Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::Matrix<double, 6, 9>(statics_f_),
+      Eigen::ComputeFullU | Eigen::ComputeFullV);
   const Eigen::Matrix<double, 9, 1> fp =
       svd.solve(Eigen::Matrix<double, 6, 1>(-statics_0_));
   const Eigen::Matrix<double, 9, 3> null = svd.matrixV().rightCols<3>();
@@ -429,7 +439,9 @@ QuasiStaticSolver::QuasiStaticSolver(const KinematicModel& model,
                                      const QuasiStaticParameters& params,
                                      std::unique_ptr<NlpSolver> nlp,
                                      const QuasiStaticOptions& options)
-    : model_(model), problem_(model, params), nlp_(std::move(nlp)),
+    : model_(model),
+      problem_(model, params),
+      nlp_(std::move(nlp)),
       options_(options) {
   if (!nlp_) throw std::invalid_argument("QuasiStaticSolver: null NLP solver");
   std::string why;
@@ -467,7 +479,8 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
   out->condition_number = kNaN;
   out->critical_contact = -1;
   if (!theta.allFinite())
-    throw std::invalid_argument("QuasiStaticSolver::Solve: non-finite configuration");
+    throw std::invalid_argument(
+        "QuasiStaticSolver::Solve: non-finite configuration");
   problem_.SetConfiguration(theta);
 
   const ValidityReport validity = CheckValidity(model_, theta, false);
@@ -597,7 +610,8 @@ void QuasiStaticSolver::FillOutputs(QuasiStaticSolution* out) const {
   // Actuator torque = -(torque of the contact force about the joint axis).
   for (int j = 0; j < 6; ++j) {
     bool passive = false;
-    for (int k = 0; k < p.num_passive(); ++k) passive |= p.passive_joints()[k] == j;
+    for (int k = 0; k < p.num_passive(); ++k)
+      passive |= p.passive_joints()[k] == j;
     if (passive) {
       out->actuator_torques[j] = kNaN;
       continue;

@@ -2,8 +2,9 @@
 // eqs. (10)-(11), (19)-(22) replaced as explained in model.md §7.4).
 //
 // Unknowns z = (V^B, qdot_p, f), f_i = (f_x, f_y, f_n) in the wheel contact
-// frame {C_W}; the force of the ground on wheel i is F_i = R_GCW (f_x, f_y, -f_n).
-// With w(z) = (V^B, thetadot(z)) and [v; omega]_i = L_i w (kinematics.h):
+// frame {C_W}; the force of the ground on wheel i is F_i = R_GCW (f_x, f_y,
+// -f_n). With w(z) = (V^B, thetadot(z)) and [v; omega]_i = L_i w
+// (kinematics.h):
 //   E1  v_zi = 0                                           (3)
 //   E2  sum_i L_i^{vV T} f~_i + [R^T m g_vec; 0] = 0        (6)
 //   E3  tau_j = sum_i L_i^{v theta_j T} f~_i = 0, j passive (n_p, pvc only)
@@ -152,23 +153,23 @@ struct ContactOutput {
 
 struct QuasiStaticSolution {
   QuasiStaticStatus status = QuasiStaticStatus::kSolverFailure;
-  Vec6 twist = Vec6::Zero();                // V^B = (v^B, omega^B)
-  std::array<double, 6> joint_rates{};      // incl. passive rates
+  Vec6 twist = Vec6::Zero();            // V^B = (v^B, omega^B)
+  std::array<double, 6> joint_rates{};  // incl. passive rates
   std::array<ContactOutput, 3> contacts;
   // Actuator torques of actuated joints [N m]; NaN for passive joints.
   std::array<double, 6> actuator_torques{};
-  double gap = 0.0;             // bipotential gap G [W]
-  double mu_min = 0.0;          // NaN unless computed (failure or requested)
-  int critical_contact = -1;    // contact naming the failure (0-based)
+  double gap = 0.0;           // bipotential gap G [W]
+  double mu_min = 0.0;        // NaN unless computed (failure or requested)
+  int critical_contact = -1;  // contact naming the failure (0-based)
   double min_normal_force = 0.0;
-  double residual = 0.0;        // max scaled equality residual
+  double residual = 0.0;          // max scaled equality residual
   double condition_number = 0.0;  // NaN unless requested
   NlpStatus nlp_status = NlpStatus::kNotRun;
-  int nlp_iterations = 0;       // summed over homotopy stages
+  int nlp_iterations = 0;  // summed over homotopy stages
   int nlp_solves = 0;
   double wall_seconds = 0.0;
-  std::string message;          // why, for non-OK statuses
-  Eigen::VectorXd z;            // scaled unknowns (warm start)
+  std::string message;  // why, for non-OK statuses
+  Eigen::VectorXd z;    // scaled unknowns (warm start)
 };
 
 struct QuasiStaticOptions {
@@ -200,8 +201,7 @@ class QuasiStaticSolver {
                     const QuasiStaticOptions& options = {});
 
   // Status is also stored in *out. Never throws for numerical trouble.
-  QuasiStaticStatus Solve(const Configuration& theta,
-                          QuasiStaticSolution* out);
+  QuasiStaticStatus Solve(const Configuration& theta, QuasiStaticSolution* out);
   // Forget the warm start.
   void Reset() { have_warm_ = false; }
 

@@ -14,8 +14,10 @@ namespace quasiroll {
 
 const char* ToString(ActuationMode mode) {
   switch (mode) {
-    case ActuationMode::kPaper: return "paper";
-    case ActuationMode::kPvc: return "pvc";
+    case ActuationMode::kPaper:
+      return "paper";
+    case ActuationMode::kPvc:
+      return "pvc";
   }
   return "?";
 }
@@ -49,11 +51,12 @@ void ForEachMapping(const YAML::Node& node, const std::string& path,
   }
 }
 
-SinusoidComponent ReadComponent(const YAML::Node& node, const std::string& path) {
+SinusoidComponent ReadComponent(const YAML::Node& node,
+                                const std::string& path) {
   SinusoidComponent c;
   const Bounds wavelength = Bounds::Positive().AllowInf();
-  c.amplitude = ReadDouble(Require(node, path, "amplitude"),
-                           JoinKey(path, "amplitude"));
+  c.amplitude =
+      ReadDouble(Require(node, path, "amplitude"), JoinKey(path, "amplitude"));
   ReadOptionalDouble(node, path, "wavelength_x", &c.wavelength_x, wavelength);
   ReadOptionalDouble(node, path, "wavelength_y", &c.wavelength_y, wavelength);
   ReadOptionalDouble(node, path, "phase_x", &c.phase_x);
@@ -102,36 +105,37 @@ TerrainSpec ReadTerrainSpec(const YAML::Node& node, const std::string& path,
       const std::optional<YAML::Node> bumps = Child(node, "bumps");
       const std::optional<YAML::Node> random = Child(node, "random");
       if (bumps && random) {
-        Fail(JoinKey(path, "random"), "not allowed together with " +
-                                          JoinKey(path, "bumps"));
+        Fail(JoinKey(path, "random"),
+             "not allowed together with " + JoinKey(path, "bumps"));
       }
       if (!bumps && !random) {
         Fail(path, "gaussians needs either 'bumps' or 'random', got neither");
       }
       if (bumps) {
-        ForEachMapping(*bumps, JoinKey(path, "bumps"), "bumps",
-                       [&](const YAML::Node& b, const std::string& p) {
-                         CheckKeys(b, p, {"amplitude", "x", "y", "sigma"});
-                         GaussianBump bump;
-                         bump.amplitude = ReadDouble(Require(b, p, "amplitude"),
-                                                     JoinKey(p, "amplitude"));
-                         bump.x = ReadDouble(Require(b, p, "x"), JoinKey(p, "x"));
-                         bump.y = ReadDouble(Require(b, p, "y"), JoinKey(p, "y"));
-                         bump.sigma = ReadDouble(Require(b, p, "sigma"),
-                                                 JoinKey(p, "sigma"),
-                                                 Bounds::Positive());
-                         spec.bumps.push_back(bump);
-                       });
+        ForEachMapping(
+            *bumps, JoinKey(path, "bumps"), "bumps",
+            [&](const YAML::Node& b, const std::string& p) {
+              CheckKeys(b, p, {"amplitude", "x", "y", "sigma"});
+              GaussianBump bump;
+              bump.amplitude = ReadDouble(Require(b, p, "amplitude"),
+                                          JoinKey(p, "amplitude"));
+              bump.x = ReadDouble(Require(b, p, "x"), JoinKey(p, "x"));
+              bump.y = ReadDouble(Require(b, p, "y"), JoinKey(p, "y"));
+              bump.sigma = ReadDouble(Require(b, p, "sigma"),
+                                      JoinKey(p, "sigma"), Bounds::Positive());
+              spec.bumps.push_back(bump);
+            });
       } else {
         const std::string p = JoinKey(path, "random");
         if (!random->IsMap()) {
           Fail(p, "expected a mapping, got " + DescribeNode(*random));
         }
-        CheckKeys(*random, p, {"seed", "count", "amplitude", "sigma", "x", "y"});
+        CheckKeys(*random, p,
+                  {"seed", "count", "amplitude", "sigma", "x", "y"});
         TerrainSpec::Random r;
         r.seed = ReadUint64(Require(*random, p, "seed"), JoinKey(p, "seed"));
-        r.count = static_cast<int>(
-            ReadInt(Require(*random, p, "count"), JoinKey(p, "count"), 1, 100000));
+        r.count = static_cast<int>(ReadInt(Require(*random, p, "count"),
+                                           JoinKey(p, "count"), 1, 100000));
         // Defaults: roughly the statistics of the reference terrain R1.
         r.amplitude = {-0.04, 0.04};
         r.sigma = {0.25, 0.45};
@@ -161,11 +165,11 @@ TerrainSpec ReadTerrainSpec(const YAML::Node& node, const std::string& path,
                  "phase_x", "phase_y", "components"});
       ReadOptionalDouble(node, path, "height", &spec.height);
       if (std::optional<YAML::Node> comps = Child(node, "components")) {
-        for (const char* k :
-             {"amplitude", "wavelength_x", "wavelength_y", "phase_x", "phase_y"}) {
+        for (const char* k : {"amplitude", "wavelength_x", "wavelength_y",
+                              "phase_x", "phase_y"}) {
           if (Child(node, k)) {
-            Fail(JoinKey(path, k), "not allowed together with " +
-                                       JoinKey(path, "components"));
+            Fail(JoinKey(path, k),
+                 "not allowed together with " + JoinKey(path, "components"));
           }
         }
         ForEachMapping(*comps, JoinKey(path, "components"), "components",
@@ -176,7 +180,8 @@ TerrainSpec ReadTerrainSpec(const YAML::Node& node, const std::string& path,
                          spec.components.push_back(ReadComponent(c, p));
                        });
       } else {
-        if (!node.IsMap()) Fail(JoinKey(path, "amplitude"), "required key missing");
+        if (!node.IsMap())
+          Fail(JoinKey(path, "amplitude"), "required key missing");
         spec.components.push_back(ReadComponent(node, path));
       }
       break;
@@ -187,7 +192,8 @@ TerrainSpec ReadTerrainSpec(const YAML::Node& node, const std::string& path,
       if (!node.IsMap()) Fail(JoinKey(path, "file"), "required key missing");
       const std::string file =
           ReadString(Require(node, path, "file"), JoinKey(path, "file"));
-      if (file.empty()) Fail(JoinKey(path, "file"), "must not be empty, got \"\"");
+      if (file.empty())
+        Fail(JoinKey(path, "file"), "must not be empty, got \"\"");
       spec.file = ResolvePath(file, base_dir);
       break;
     }
@@ -215,16 +221,20 @@ void ReadSceneNode(const YAML::Node& node, const std::string& path,
   CheckKeys(node, path,
             {"name", "mode", "mass", "gravity", "mu", "epsilon", "joint_rates",
              "robot", "initial", "time", "terrain"});
-  if (auto n = Child(node, "name")) scene->name = ReadString(*n, JoinKey(path, "name"));
+  if (auto n = Child(node, "name"))
+    scene->name = ReadString(*n, JoinKey(path, "name"));
   if (auto n = Child(node, "mode")) {
-    scene->mode = ReadEnum(*n, JoinKey(path, "mode"), {"paper", "pvc"}) == "paper"
-                      ? ActuationMode::kPaper
-                      : ActuationMode::kPvc;
+    scene->mode =
+        ReadEnum(*n, JoinKey(path, "mode"), {"paper", "pvc"}) == "paper"
+            ? ActuationMode::kPaper
+            : ActuationMode::kPvc;
   }
   ReadOptionalDouble(node, path, "mass", &scene->mass, Bounds::Positive());
-  ReadOptionalDouble(node, path, "gravity", &scene->gravity, Bounds::Positive());
+  ReadOptionalDouble(node, path, "gravity", &scene->gravity,
+                     Bounds::Positive());
   ReadOptionalDouble(node, path, "mu", &scene->mu, Bounds::Positive());
-  ReadOptionalDouble(node, path, "epsilon", &scene->epsilon, Bounds::Positive());
+  ReadOptionalDouble(node, path, "epsilon", &scene->epsilon,
+                     Bounds::Positive());
   if (auto n = Child(node, "joint_rates")) {
     scene->joint_rates = ReadArray<6>(*n, JoinKey(path, "joint_rates"));
   }
@@ -270,9 +280,9 @@ void ReadSceneNode(const YAML::Node& node, const std::string& path,
     ReadOptionalDouble(*time, p, "dt", &scene->dt, Bounds::Positive());
   }
   if (!(scene->dt <= scene->t_end)) {
-    Fail(JoinKey(path, "time.dt"),
-         "must be <= " + JoinKey(path, "time.t_end") + " (" +
-             FormatNumber(scene->t_end) + "), got " + FormatNumber(scene->dt));
+    Fail(JoinKey(path, "time.dt"), "must be <= " + JoinKey(path, "time.t_end") +
+                                       " (" + FormatNumber(scene->t_end) +
+                                       "), got " + FormatNumber(scene->dt));
   }
 
   if (auto terrain = Child(node, "terrain")) {
@@ -289,7 +299,8 @@ void ReadSceneNode(const YAML::Node& node, const std::string& path,
 
 }  // namespace yaml
 
-Scene LoadSceneFromString(const std::string& yaml_text, const std::string& origin) {
+Scene LoadSceneFromString(const std::string& yaml_text,
+                          const std::string& origin) {
   namespace fs = std::filesystem;
   const YAML::Node root = yaml::ParseYaml(yaml_text, origin);
   Scene scene;
@@ -297,8 +308,9 @@ Scene LoadSceneFromString(const std::string& yaml_text, const std::string& origi
   std::string base_dir;
   if (!origin.empty()) {
     std::error_code ec;
-    base_dir = fs::is_directory(origin, ec) ? origin
-                                            : fs::path(origin).parent_path().string();
+    base_dir = fs::is_directory(origin, ec)
+                   ? origin
+                   : fs::path(origin).parent_path().string();
     const std::string stem = fs::path(origin).stem().string();
     if (!stem.empty() && !fs::is_directory(origin, ec)) scene.name = stem;
   }

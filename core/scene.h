@@ -12,7 +12,8 @@
 
 namespace quasiroll {
 
-// Bad scene/suite input. what() is one line: "<key.path>: <problem>, got <value>".
+// Bad scene/suite input. what() is one line: "<key.path>: <problem>, got
+// <value>".
 class SceneError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

@@ -26,7 +26,8 @@ bool SimulationOptions::IsValid(std::string* why) const {
     return false;
   };
   if (!std::isfinite(dt) || dt < 0)
-    return fail("dt: must be finite and >= 0 (0 = scene's), got " + std::to_string(dt));
+    return fail("dt: must be finite and >= 0 (0 = scene's), got " +
+                std::to_string(dt));
   if (!std::isfinite(t_end) || t_end < 0)
     return fail("t_end: must be finite and >= 0 (0 = scene's), got " +
                 std::to_string(t_end));
@@ -44,7 +45,9 @@ class Simulator::RobotOde final : public ConstrainedOde {
  public:
   RobotOde(const KinematicModel& model, Coupling coupling,
            QuasiStaticSolver* solver)
-      : model_(model), coupling_(coupling), solver_(solver),
+      : model_(model),
+        coupling_(coupling),
+        solver_(solver),
         weights_(model.CorrectionWeights()) {}
 
   void Hold(const Vec12& w) { w_ = w; }
@@ -162,8 +165,8 @@ double GeometricGap(const KinematicModel& model, const Configuration& theta) {
       Mat2 hess1;
       bool accepted = false;
       for (double alpha = 1.0; alpha > 1e-9; alpha *= 0.5) {
-        const double g1 = clearance(u + alpha * step(0), v + alpha * step(1),
-                                    &grad1, &hess1);
+        const double g1 =
+            clearance(u + alpha * step(0), v + alpha * step(1), &grad1, &hess1);
         if (g1 <= g0) {
           u += alpha * step(0);
           v += alpha * step(1);
@@ -204,8 +207,8 @@ Simulator::Simulator(const Scene& scene, const SimulationOptions& options)
 Simulator::~Simulator() = default;
 
 void Simulator::Record(double t, const Configuration& theta,
-                       const QuasiStaticSolution& sol,
-                       SimulationResult* result, int index) const {
+                       const QuasiStaticSolution& sol, SimulationResult* result,
+                       int index) const {
   TrajectorySample s;
   s.t = t;
   s.theta = theta;
@@ -290,7 +293,8 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   *result = SimulationResult{};
   result->samples.reserve(s.n + 1);
   result->wall_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
 }
 
 bool Simulator::Advance(SimulationResult* result) {
@@ -308,7 +312,8 @@ bool Simulator::Advance(SimulationResult* result) {
   result->steps = s.ires.steps;
   result->rejected_steps = s.ires.rejected_steps;
   result->wall_seconds +=
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
   s.done = !more;
   return more;
 }
@@ -342,7 +347,8 @@ bool Simulator::Interval(SimulationResult* result) {
     std::ostringstream os;
     os << "t=" << t << " s: " << ToString(sol.status) << " (mu=" << scene_.mu
        << ", mu_min=" << sol.mu_min;
-    if (result->critical_contact > 0) os << ", wheel " << result->critical_contact;
+    if (result->critical_contact > 0)
+      os << ", wheel " << result->critical_contact;
     os << "): " << sol.message;
     result->stop_reason = os.str();
     return false;
@@ -364,14 +370,14 @@ bool Simulator::Interval(SimulationResult* result) {
       result->mu_min_at_stop = f.mu_min;
       result->critical_contact =
           f.critical_contact >= 0 ? f.critical_contact + 1 : -1;
-      result->stop_reason = "t~" + std::to_string(s.ires.t_reached) + " s: " +
-                            ToString(f.status) + " inside the integrator: " +
-                            f.message;
+      result->stop_reason = "t~" + std::to_string(s.ires.t_reached) +
+                            " s: " + ToString(f.status) +
+                            " inside the integrator: " + f.message;
     } else {
       result->status = ToString(st);
       result->stop_configuration = s.y;
-      result->stop_reason = "t=" + std::to_string(s.ires.t_reached) + " s: " +
-                            options_.dae + ": " + ToString(st) + ": " +
+      result->stop_reason = "t=" + std::to_string(s.ires.t_reached) +
+                            " s: " + options_.dae + ": " + ToString(st) + ": " +
                             s.ires.message;
     }
     return false;

@@ -52,9 +52,9 @@ struct ContactSample {
 // One output row (docs/formats.md, trajectory.csv).
 struct TrajectorySample {
   double t = 0;
-  Vec3 position = Vec3::Zero();  // COM, world [m]
-  Vec3 rpy = Vec3::Zero();       // [rad]
-  Vec3 velocity = Vec3::Zero();  // COM velocity, world frame [m/s]
+  Vec3 position = Vec3::Zero();          // COM, world [m]
+  Vec3 rpy = Vec3::Zero();               // [rad]
+  Vec3 velocity = Vec3::Zero();          // COM velocity, world frame [m/s]
   Vec3 angular_velocity = Vec3::Zero();  // world frame [rad/s]
   std::array<double, 6> joints{};
   std::array<ContactSample, 3> contacts;
@@ -76,8 +76,8 @@ struct SimulationResult {
   // The configuration at which the run stopped (for a quasi-static failure
   // inside the integrator, the stage state where the solve failed), so the
   // failure can be reproduced with the quasi-static solver alone.
-  Configuration stop_configuration = Configuration::Constant(
-      std::numeric_limits<double>::quiet_NaN());
+  Configuration stop_configuration =
+      Configuration::Constant(std::numeric_limits<double>::quiet_NaN());
   std::vector<TrajectorySample> samples;
   // Cost counters.
   int nlp_solves = 0;

@@ -25,10 +25,10 @@
 namespace quasiroll {
 
 struct SurfaceForms {
-  Vec3 point;   // c(u, v) in the surface's own frame (world for the terrain)
-  Mat3 frame;   // columns x, y, n (orthonormal, right-handed)
-  Mat2 A;       // metric form
-  Mat2 K;       // curvature form (symmetric)
+  Vec3 point;  // c(u, v) in the surface's own frame (world for the terrain)
+  Mat3 frame;  // columns x, y, n (orthonormal, right-handed)
+  Mat2 A;      // metric form
+  Mat2 K;      // curvature form (symmetric)
   Eigen::RowVector2d tau;  // connection form
 };
 

@@ -1,5 +1,6 @@
 #include "core/terrains.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -9,8 +10,6 @@
 #include <sstream>
 #include <system_error>
 #include <utility>
-
-#include <Eigen/Dense>
 
 #include "core/scene.h"
 
@@ -48,7 +47,8 @@ std::string PlaneTerrain::Describe() const { return "plane z=" + Num(height_); }
 
 InclineTerrain::InclineTerrain(double beta_rad, double gamma_rad, double height)
     : beta_(beta_rad), gamma_(gamma_rad), height_(height) {
-  if (!std::isfinite(beta_rad) || !(std::abs(beta_rad) < std::numbers::pi / 2)) {
+  if (!std::isfinite(beta_rad) ||
+      !(std::abs(beta_rad) < std::numbers::pi / 2)) {
     throw SceneError("incline beta: must be finite with |beta| < pi/2, got " +
                      Num(beta_rad));
   }
@@ -72,8 +72,8 @@ TerrainJet InclineTerrain::Evaluate(double x, double y) const {
 }
 
 std::string InclineTerrain::Describe() const {
-  std::string s = "incline beta=" + Num(Deg(beta_)) + "deg gamma=" +
-                  Num(Deg(gamma_)) + "deg";
+  std::string s = "incline beta=" + Num(Deg(beta_)) +
+                  "deg gamma=" + Num(Deg(gamma_)) + "deg";
   if (height_ != 0.0) s += " height=" + Num(height_);
   return s;
 }
@@ -86,12 +86,16 @@ GaussianTerrain::GaussianTerrain(std::vector<GaussianBump> bumps)
     const GaussianBump& b = bumps_[k];
     const std::string p = "bumps[" + std::to_string(k) + "].";
     if (!std::isfinite(b.amplitude)) {
-      throw SceneError(p + "amplitude: must be finite, got " + Num(b.amplitude));
+      throw SceneError(p + "amplitude: must be finite, got " +
+                       Num(b.amplitude));
     }
-    if (!std::isfinite(b.x)) throw SceneError(p + "x: must be finite, got " + Num(b.x));
-    if (!std::isfinite(b.y)) throw SceneError(p + "y: must be finite, got " + Num(b.y));
+    if (!std::isfinite(b.x))
+      throw SceneError(p + "x: must be finite, got " + Num(b.x));
+    if (!std::isfinite(b.y))
+      throw SceneError(p + "y: must be finite, got " + Num(b.y));
     if (!(b.sigma > 0.0) || !std::isfinite(b.sigma)) {
-      throw SceneError(p + "sigma: must be > 0 and finite, got " + Num(b.sigma));
+      throw SceneError(p + "sigma: must be > 0 and finite, got " +
+                       Num(b.sigma));
     }
     inv_var_.push_back(1.0 / (b.sigma * b.sigma));
   }
@@ -101,7 +105,8 @@ GaussianTerrain GaussianTerrain::Random(std::uint64_t seed, int count,
                                         Interval amplitude, Interval sigma,
                                         Interval x, Interval y) {
   if (count < 1) {
-    throw SceneError("random.count: must be >= 1, got " + std::to_string(count));
+    throw SceneError("random.count: must be >= 1, got " +
+                     std::to_string(count));
   }
   const std::pair<const char*, Interval> ranges[] = {
       {"amplitude", amplitude}, {"sigma", sigma}, {"x", x}, {"y", y}};
@@ -112,8 +117,9 @@ GaussianTerrain GaussianTerrain::Random(std::uint64_t seed, int count,
                        Num(r.hi) + "]");
     }
     if (r.lo > r.hi) {
-      throw SceneError(std::string("random.") + name + ": lo must be <= hi, got [" +
-                       Num(r.lo) + ", " + Num(r.hi) + "]");
+      throw SceneError(std::string("random.") + name +
+                       ": lo must be <= hi, got [" + Num(r.lo) + ", " +
+                       Num(r.hi) + "]");
     }
   }
   if (!(sigma.lo > 0.0)) {
@@ -164,7 +170,8 @@ double GaussianTerrain::Height(double x, double y) const {
     const GaussianBump& b = bumps_[k];
     const double dx = x - b.x, dy = y - b.y;
     const double q = inv_var_[k];
-    h += b.amplitude * std::exp(-0.5 * q * (dx * dx + dy * dy));  // as Evaluate()
+    h += b.amplitude *
+         std::exp(-0.5 * q * (dx * dx + dy * dy));  // as Evaluate()
   }
   return h;
 }
@@ -185,7 +192,8 @@ SinusoidTerrain::SinusoidTerrain(std::vector<SinusoidComponent> components,
     const SinusoidComponent& c = components_[k];
     const std::string p = "components[" + std::to_string(k) + "].";
     if (!std::isfinite(c.amplitude)) {
-      throw SceneError(p + "amplitude: must be finite, got " + Num(c.amplitude));
+      throw SceneError(p + "amplitude: must be finite, got " +
+                       Num(c.amplitude));
     }
     if (!(c.wavelength_x > 0.0)) {
       throw SceneError(p + "wavelength_x: must be > 0 (or .inf), got " +
@@ -266,7 +274,8 @@ Eigen::MatrixXd NotAKnotSlopes(const std::vector<double>& t,
     A(0, 0) = dx[1];
     A(0, 1) = d;
     B.row(0) = ((dx[0] + 2.0 * d) * dx[1] * slope.row(0) +
-                dx[0] * dx[0] * slope.row(1)) / d;
+                dx[0] * dx[0] * slope.row(1)) /
+               d;
   }
   for (int i = 1; i + 1 < n; ++i) {
     A(i, i - 1) = dx[i];
@@ -279,7 +288,8 @@ Eigen::MatrixXd NotAKnotSlopes(const std::vector<double>& t,
     A(n - 1, n - 2) = d;
     A(n - 1, n - 1) = dx[n - 3];
     B.row(n - 1) = (dx[n - 2] * dx[n - 2] * slope.row(n - 3) +
-                    (2.0 * d + dx[n - 2]) * dx[n - 3] * slope.row(n - 2)) / d;
+                    (2.0 * d + dx[n - 2]) * dx[n - 3] * slope.row(n - 2)) /
+                   d;
   }
   return A.partialPivLu().solve(B);
 }
@@ -287,7 +297,8 @@ Eigen::MatrixXd NotAKnotSlopes(const std::vector<double>& t,
 void CheckAxis(const std::vector<double>& v, const std::string& label,
                const char* name) {
   if (v.size() < 4) {
-    throw SceneError(label + ": " + name + " needs at least 4 grid points, got " +
+    throw SceneError(label + ": " + name +
+                     " needs at least 4 grid points, got " +
                      std::to_string(v.size()));
   }
   for (std::size_t i = 0; i < v.size(); ++i) {
@@ -319,12 +330,14 @@ int FindCell(const std::vector<double>& knots, double t) {
 
 }  // namespace
 
-HeightmapTerrain::HeightmapTerrain(std::vector<double> xs, std::vector<double> ys,
+HeightmapTerrain::HeightmapTerrain(std::vector<double> xs,
+                                   std::vector<double> ys,
                                    std::vector<double> z, std::string label)
     : xs_(std::move(xs)), ys_(std::move(ys)), label_(std::move(label)) {
   CheckAxis(xs_, label_, "x");
   CheckAxis(ys_, label_, "y");
-  const int nx = static_cast<int>(xs_.size()), ny = static_cast<int>(ys_.size());
+  const int nx = static_cast<int>(xs_.size()),
+            ny = static_cast<int>(ys_.size());
   if (z.size() != xs_.size() * ys_.size()) {
     throw SceneError(label_ + ": expected " + std::to_string(nx) + "x" +
                      std::to_string(ny) + " = " + std::to_string(nx * ny) +
@@ -337,7 +350,8 @@ HeightmapTerrain::HeightmapTerrain(std::vector<double> xs, std::vector<double> y
       const double v = z[static_cast<std::size_t>(j) * nx + i];
       if (!std::isfinite(v)) {
         throw SceneError(label_ + ": z at (x[" + std::to_string(i) + "], y[" +
-                         std::to_string(j) + "]) must be finite, got " + Num(v));
+                         std::to_string(j) + "]) must be finite, got " +
+                         Num(v));
       }
       Z(i, j) = v;
     }
@@ -350,8 +364,8 @@ HeightmapTerrain::HeightmapTerrain(std::vector<double> xs, std::vector<double> y
 
   // Cubic Hermite on [0, 1]: coefficients of u^a from (p0, p1, d0, d1).
   Eigen::Matrix4d M;
-  M << 1, 0, 0, 0,  //
-      0, 0, 1, 0,   //
+  M << 1, 0, 0, 0,    //
+      0, 0, 1, 0,     //
       -3, 3, -2, -1,  //
       2, -2, 1, 1;
   coeffs_.resize(static_cast<std::size_t>(nx - 1) * (ny - 1) * 16);
@@ -428,14 +442,14 @@ HeightmapTerrain HeightmapTerrain::FromCsv(const std::string& path) {
       }
       if (!header_done) {
         if (!xs.empty() && !(v > xs.back())) {
-          throw SceneError(loc + ": x must be strictly increasing, got " + Num(v) +
-                           " after " + Num(xs.back()));
+          throw SceneError(loc + ": x must be strictly increasing, got " +
+                           Num(v) + " after " + Num(xs.back()));
         }
         xs.push_back(v);
       } else if (c == 0) {
         if (!ys.empty() && !(v > ys.back())) {
-          throw SceneError(loc + ": y must be strictly increasing, got " + Num(v) +
-                           " after " + Num(ys.back()));
+          throw SceneError(loc + ": y must be strictly increasing, got " +
+                           Num(v) + " after " + Num(ys.back()));
         }
         ys.push_back(v);
       } else {
@@ -445,8 +459,9 @@ HeightmapTerrain HeightmapTerrain::FromCsv(const std::string& path) {
     header_done = true;
   }
   if (xs.size() < 4 || ys.size() < 4) {
-    throw SceneError(path + ": grid must have at least 4x4 points (x by y), got " +
-                     std::to_string(xs.size()) + "x" + std::to_string(ys.size()));
+    throw SceneError(
+        path + ": grid must have at least 4x4 points (x by y), got " +
+        std::to_string(xs.size()) + "x" + std::to_string(ys.size()));
   }
   return HeightmapTerrain(std::move(xs), std::move(ys), std::move(z), path);
 }
@@ -504,11 +519,16 @@ std::string HeightmapTerrain::Describe() const {
 
 const char* ToString(TerrainSpec::Type type) {
   switch (type) {
-    case TerrainSpec::Type::kPlane: return "plane";
-    case TerrainSpec::Type::kIncline: return "incline";
-    case TerrainSpec::Type::kGaussians: return "gaussians";
-    case TerrainSpec::Type::kSinusoid: return "sinusoid";
-    case TerrainSpec::Type::kHeightmap: return "heightmap";
+    case TerrainSpec::Type::kPlane:
+      return "plane";
+    case TerrainSpec::Type::kIncline:
+      return "incline";
+    case TerrainSpec::Type::kGaussians:
+      return "gaussians";
+    case TerrainSpec::Type::kSinusoid:
+      return "sinusoid";
+    case TerrainSpec::Type::kHeightmap:
+      return "heightmap";
   }
   return "?";
 }

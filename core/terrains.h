@@ -44,9 +44,9 @@ class InclineTerrain final : public Terrain {
 };
 
 struct GaussianBump {
-  double amplitude = 0.0;  // A_k [m] (negative = dip)
-  double x = 0.0, y = 0.0; // centre [m]
-  double sigma = 1.0;      // s_k [m], > 0
+  double amplitude = 0.0;   // A_k [m] (negative = dip)
+  double x = 0.0, y = 0.0;  // centre [m]
+  double sigma = 1.0;       // s_k [m], > 0
 };
 
 // Closed interval [lo, hi] used by the random generators.
@@ -84,11 +84,11 @@ class GaussianTerrain final : public Terrain {
 // A wavelength of +infinity means "constant in that direction" (the factor is
 // then cos(phase)). Wavelengths must be > 0 (or +inf).
 struct SinusoidComponent {
-  double amplitude = 0.0;  // [m]
+  double amplitude = 0.0;                                         // [m]
   double wavelength_x = std::numeric_limits<double>::infinity();  // [m]
   double wavelength_y = std::numeric_limits<double>::infinity();  // [m]
-  double phase_x = 0.0;  // [rad]
-  double phase_y = 0.0;  // [rad]
+  double phase_x = 0.0;                                           // [rad]
+  double phase_y = 0.0;                                           // [rad]
 };
 
 // h = height + sum_k component_k(x, y) (see SinusoidComponent). Example: a

@@ -22,8 +22,9 @@ bool IsQuoted(const YAML::Node& node) {
 }
 
 std::string Lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) {
+    return static_cast<char>(std::tolower(c));
+  });
   return s;
 }
 
@@ -185,8 +186,9 @@ YAML::Node Require(const YAML::Node& map, const std::string& path,
 
 void CheckNumber(double v, const std::string& path, const Bounds& b) {
   if (std::isnan(v)) {
-    Fail(path, std::string(b.allow_inf ? "must be a number" : "must be finite") +
-                   ", got " + FormatNumber(v));
+    Fail(path,
+         std::string(b.allow_inf ? "must be a number" : "must be finite") +
+             ", got " + FormatNumber(v));
   }
   if (std::isinf(v) && !b.allow_inf) {
     Fail(path, "must be finite, got " + FormatNumber(v));
@@ -258,8 +260,8 @@ std::int64_t ReadInt(const YAML::Node& node, const std::string& path,
     Fail(path, "expected an integer, got " + DescribeNode(node));
   }
   if (v < min || v > max) {
-    Fail(path, "must be in [" + std::to_string(min) + ", " + std::to_string(max) +
-                   "], got " + std::to_string(v));
+    Fail(path, "must be in [" + std::to_string(min) + ", " +
+                   std::to_string(max) + "], got " + std::to_string(v));
   }
   return v;
 }
@@ -281,7 +283,8 @@ std::uint64_t ReadUint64(const YAML::Node& node, const std::string& path) {
 }
 
 std::string ReadString(const YAML::Node& node, const std::string& path) {
-  if (!node.IsScalar()) Fail(path, "expected a string, got " + DescribeNode(node));
+  if (!node.IsScalar())
+    Fail(path, "expected a string, got " + DescribeNode(node));
   return node.Scalar();
 }
 
@@ -323,7 +326,8 @@ std::pair<double, double> ReadInterval(const YAML::Node& node,
 }
 
 void ReadOptionalDouble(const YAML::Node& map, const std::string& path,
-                        std::string_view key, double* out, const Bounds& bounds) {
+                        std::string_view key, double* out,
+                        const Bounds& bounds) {
   if (std::optional<YAML::Node> n = Child(map, key)) {
     *out = ReadDouble(*n, JoinKey(path, key), bounds);
   }

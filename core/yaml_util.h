@@ -7,6 +7,8 @@
 // themselves (quasiroll::core links it privately).
 #pragma once
 
+#include <yaml-cpp/yaml.h>
+
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -17,8 +19,6 @@
 #include <string_view>
 #include <utility>
 #include <vector>
-
-#include <yaml-cpp/yaml.h>
 
 #include "core/scene.h"
 #include "core/terrains.h"
@@ -73,11 +73,26 @@ struct Bounds {
   static Bounds Any() { return {}; }
   static Bounds Positive() { return Bounds{}.Gt(0.0); }
   static Bounds NonNegative() { return Bounds{}.Ge(0.0); }
-  Bounds& Gt(double v) { gt = v; return *this; }
-  Bounds& Ge(double v) { ge = v; return *this; }
-  Bounds& Lt(double v) { lt = v; return *this; }
-  Bounds& Le(double v) { le = v; return *this; }
-  Bounds& AllowInf(bool on = true) { allow_inf = on; return *this; }
+  Bounds& Gt(double v) {
+    gt = v;
+    return *this;
+  }
+  Bounds& Ge(double v) {
+    ge = v;
+    return *this;
+  }
+  Bounds& Lt(double v) {
+    lt = v;
+    return *this;
+  }
+  Bounds& Le(double v) {
+    le = v;
+    return *this;
+  }
+  Bounds& AllowInf(bool on = true) {
+    allow_inf = on;
+    return *this;
+  }
 };
 
 // Checks v against b; throws "<path>: must be finite|> x|in (a, b], got v".

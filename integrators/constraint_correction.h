@@ -55,10 +55,10 @@ class ConstraintCorrection {
 
  private:
   int n_ = -1, m_ = -1;
-  Eigen::VectorXd d_;       // n, diagonal of D
-  Eigen::MatrixXd jac_;     // m x n
-  Eigen::MatrixXd jd_;      // m x n, J D
-  Eigen::MatrixXd a_;       // m x m
+  Eigen::VectorXd d_;    // n, diagonal of D
+  Eigen::MatrixXd jac_;  // m x n
+  Eigen::MatrixXd jd_;   // m x n, J D
+  Eigen::MatrixXd a_;    // m x m
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   Eigen::VectorXd h_, r_, lambda_, delta_;
 };

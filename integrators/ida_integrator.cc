@@ -54,8 +54,8 @@ struct IdaIntegrator::Impl {
   static int Residual(double t, N_Vector yy, N_Vector yp, N_Vector rr,
                       void* user_data);
   static int Jacobian(double t, double cj, N_Vector yy, N_Vector yp,
-                      N_Vector rr, SUNMatrix jac, void* user_data, N_Vector tmp1,
-                      N_Vector tmp2, N_Vector tmp3);
+                      N_Vector rr, SUNMatrix jac, void* user_data,
+                      N_Vector tmp1, N_Vector tmp2, N_Vector tmp3);
   static int RootFunction(double t, N_Vector yy, N_Vector yp, double* gout,
                           void* user_data);
   static void ErrorHandler(int error_code, const char* module,
@@ -176,11 +176,10 @@ int IdaIntegrator::Impl::Residual(double t, N_Vector yy, N_Vector yp,
 // affect the convergence rate of IDA's (already modified) Newton iteration,
 // never the converged solution. dF/dx comes from ode.RhsJacobian, or from
 // forward differences of Rhs with increment sqrt(eps) * max(1, |x_j|).
-int IdaIntegrator::Impl::Jacobian(double t, double cj, N_Vector yy,
-                                  N_Vector yp, N_Vector /*rr*/,
-                                  SUNMatrix jac_matrix, void* user_data,
-                                  N_Vector /*tmp1*/, N_Vector /*tmp2*/,
-                                  N_Vector /*tmp3*/) {
+int IdaIntegrator::Impl::Jacobian(double t, double cj, N_Vector yy, N_Vector yp,
+                                  N_Vector /*rr*/, SUNMatrix jac_matrix,
+                                  void* user_data, N_Vector /*tmp1*/,
+                                  N_Vector /*tmp2*/, N_Vector /*tmp3*/) {
   Impl& s = *static_cast<Impl*>(user_data);
   const int n = s.n, m = s.m;
   Map<const VectorXd> y(NV_DATA_S(yy), n + m);
@@ -308,9 +307,9 @@ void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
     }
   } else if (flag < 0) {
     switch (flag) {
-      case IDA_TOO_MUCH_WORK:   // max_steps reached
-      case IDA_TOO_MUCH_ACC:    // tolerances below machine precision
-      case IDA_ERR_FAIL:        // repeated error test failures / h < hmin
+      case IDA_TOO_MUCH_WORK:  // max_steps reached
+      case IDA_TOO_MUCH_ACC:   // tolerances below machine precision
+      case IDA_ERR_FAIL:       // repeated error test failures / h < hmin
         status = IntegratorStatus::kStepSizeTooSmall;
         break;
       case IDA_RES_FAIL:
@@ -336,13 +335,15 @@ void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
     if (s.rhs_failed) status = IntegratorStatus::kRhsFailure;
     std::ostringstream os;
     os << FlagName(flag) << " at t = " << t_ret;
-    if (s.rhs_failed) os << " (Rhs returned false at t = " << s.rhs_failure_time << ")";
+    if (s.rhs_failed)
+      os << " (Rhs returned false at t = " << s.rhs_failure_time << ")";
     if (!s.last_error.empty()) os << ": " << s.last_error;
     result->message = os.str();
   }
 
   // --- polish: IDA enforces H = 0 only to its Newton tolerance ---
-  if ((status == IntegratorStatus::kSuccess || status == IntegratorStatus::kEvent) &&
+  if ((status == IntegratorStatus::kSuccess ||
+       status == IntegratorStatus::kEvent) &&
       options.dae_index == 2 && m > 0) {
     const IntegratorStatus projected =
         s.correction.Project(ode, y, options.projection_tolerance,
@@ -416,10 +417,12 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
       for (int i = 0; i < n; ++i) NV_Ith_S(s.id, i) = ids(i) != 0 ? 1.0 : 0.0;
       flag = IDASetId(s.mem, s.id);
     }
-    if (flag == IDA_SUCCESS) flag = IDASStolerances(s.mem, options.rtol, options.atol);
+    if (flag == IDA_SUCCESS)
+      flag = IDASStolerances(s.mem, options.rtol, options.atol);
     if (flag == IDA_SUCCESS) flag = IDASetMaxNumSteps(s.mem, options.max_steps);
     if (flag == IDA_SUCCESS) flag = IDASetMinStep(s.mem, options.min_step);
-    if (flag == IDA_SUCCESS && options.step > 0) flag = IDASetInitStep(s.mem, options.step);
+    if (flag == IDA_SUCCESS && options.step > 0)
+      flag = IDASetInitStep(s.mem, options.step);
     if (flag == IDA_SUCCESS) flag = IDASetStopTime(s.mem, t1);
     if (flag == IDA_SUCCESS && nr != s.registered_roots) {
       flag = IDARootInit(s.mem, nr, nr > 0 ? &Impl::RootFunction : nullptr);

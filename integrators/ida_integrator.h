@@ -49,13 +49,15 @@ class IdaIntegrator final : public Integrator {
 
  private:
   void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
-                   Eigen::Ref<Eigen::VectorXd> y, const IntegratorOptions& options,
+                   Eigen::Ref<Eigen::VectorXd> y,
+                   const IntegratorOptions& options,
                    IntegratorResult* result) override;
 
   struct Impl;
   static void Finish(Impl& s, ConstrainedOde& ode, double t1,
                      Eigen::Ref<Eigen::VectorXd> y,
-                     const IntegratorOptions& options, IntegratorResult* result);
+                     const IntegratorOptions& options,
+                     IntegratorResult* result);
   std::unique_ptr<Impl> impl_;
 };
 

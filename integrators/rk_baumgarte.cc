@@ -28,7 +28,8 @@ IntegratorStatus RkBaumgarteIntegrator::CorrectedField::Field(
 }
 
 void RkBaumgarteIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
-                                        double t1, Eigen::Ref<Eigen::VectorXd> y,
+                                        double t1,
+                                        Eigen::Ref<Eigen::VectorXd> y,
                                         const IntegratorOptions& options,
                                         IntegratorResult* result) {
   field_.ode = &ode;

@@ -5,7 +5,8 @@
 //
 // the D^{-1}-weighted minimal-norm change of F with J y' = -sigma H, so that
 // ||H(t)|| = ||H(0)|| e^{-sigma t} in exact arithmetic. RK4 is stable for
-// sigma * h < 2.785. Methods, step control and events: integrators/runge_kutta.h.
+// sigma * h < 2.785. Methods, step control and events:
+// integrators/runge_kutta.h.
 #pragma once
 
 #include <string>
@@ -34,7 +35,8 @@ class RkBaumgarteIntegrator final : public Integrator {
   };
 
   void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
-                   Eigen::Ref<Eigen::VectorXd> y, const IntegratorOptions& options,
+                   Eigen::Ref<Eigen::VectorXd> y,
+                   const IntegratorOptions& options,
                    IntegratorResult* result) override;
 
   CorrectedField field_;

@@ -24,7 +24,8 @@ IntegratorStatus RkProjectionIntegrator::System::PostStep(
 }
 
 void RkProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
-                                         double t1, Eigen::Ref<Eigen::VectorXd> y,
+                                         double t1,
+                                         Eigen::Ref<Eigen::VectorXd> y,
                                          const IntegratorOptions& options,
                                          IntegratorResult* result) {
   system_.ode = &ode;

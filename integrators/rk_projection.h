@@ -42,7 +42,8 @@ class RkProjectionIntegrator final : public Integrator {
   };
 
   void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
-                   Eigen::Ref<Eigen::VectorXd> y, const IntegratorOptions& options,
+                   Eigen::Ref<Eigen::VectorXd> y,
+                   const IntegratorOptions& options,
                    IntegratorResult* result) override;
 
   System system_;

@@ -84,9 +84,12 @@ const ButcherTableau& Tableau(RkMethod method) {
   static const ButcherTableau dp54 = MakeDormandPrince54();
   static const ButcherTableau bs32 = MakeBogackiShampine32();
   switch (method) {
-    case RkMethod::kRk4: return rk4;
-    case RkMethod::kDormandPrince54: return dp54;
-    case RkMethod::kBogackiShampine32: return bs32;
+    case RkMethod::kRk4:
+      return rk4;
+    case RkMethod::kDormandPrince54:
+      return dp54;
+    case RkMethod::kBogackiShampine32:
+      return bs32;
   }
   return rk4;
 }
@@ -155,9 +158,8 @@ IntegratorStatus RungeKuttaDriver::LocateRoot(
   g_hi_ = g_new_;
   y_hi_ = y_new_;
   // Root time tolerance as in SUNDIALS: 100 * unit roundoff * (|t| + |h|).
-  const double theta_tol =
-      100.0 * std::numeric_limits<double>::epsilon() * (std::abs(t) + std::abs(h)) /
-      std::abs(h);
+  const double theta_tol = 100.0 * std::numeric_limits<double>::epsilon() *
+                           (std::abs(t) + std::abs(h)) / std::abs(h);
   // Illinois modification of regula falsi: alpha weights g_lo against g_hi;
   // when the same end is replaced twice in a row the retained end's value is
   // halved, which restores superlinear convergence.
@@ -264,7 +266,8 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
   while (true) {
     double t_new = 0.0, h_try = 0.0;
     if (!adaptive) {
-      t_new = accepted + 1 == fixed_steps ? t1 : t0 + (accepted + 1) * options.step;
+      t_new =
+          accepted + 1 == fixed_steps ? t1 : t0 + (accepted + 1) * options.step;
       h_try = t_new - t;
     } else {
       if (accepted >= options.max_steps) {
@@ -297,8 +300,9 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
       const double err = std::sqrt(sum / n);
       if (!(err <= 1.0)) {
         ++result->rejected_steps;
-        const double factor =
-            std::isfinite(err) ? std::max(0.2, 0.9 * std::pow(err, exponent)) : 0.2;
+        const double factor = std::isfinite(err)
+                                  ? std::max(0.2, 0.9 * std::pow(err, exponent))
+                                  : 0.2;
         h = h_try * factor;
         last_rejected = true;
         if (h < options.min_step) {
@@ -328,7 +332,8 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
       if (fired) {
         double t_root = t_new;
         int index = -1;
-        status = LocateRoot(system, ode, tab, t, h_try, result, &t_root, &index);
+        status =
+            LocateRoot(system, ode, tab, t, h_try, result, &t_root, &index);
         if (status != IntegratorStatus::kSuccess) return finish(status);
         ++result->steps;
         y_.swap(y_new_);

@@ -1,10 +1,9 @@
 #include "solvers/active_set_polish.h"
 
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <vector>
-
-#include <Eigen/QR>
 
 namespace quasiroll::internal {
 
@@ -45,7 +44,8 @@ PolishStats PolishPass(const NlpProblem& problem, const NlpBounds& b,
   }
   problem.Constraints(x, g);
   ++stats.constraint_evaluations;
-  stats.max_violation = MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
+  stats.max_violation =
+      MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
 
   while (stats.max_violation > feasibility_tolerance &&
          stats.iterations < max_iterations && !free_vars.empty() &&
@@ -67,7 +67,8 @@ PolishStats PolishPass(const NlpProblem& problem, const NlpBounds& b,
     if (rows.empty()) break;  // only bounds violated: projection did it
     problem.ConstraintJacobian(x, jac);
     ++stats.jacobian_evaluations;
-    const int k = static_cast<int>(rows.size()), f = static_cast<int>(free_vars.size());
+    const int k = static_cast<int>(rows.size()),
+              f = static_cast<int>(free_vars.size());
     ja.resize(k, f);
     r.resize(k);
     for (int a = 0; a < k; ++a) {
@@ -150,7 +151,8 @@ bool LooksLocallyInfeasible(const NlpProblem& problem, const NlpBounds& b,
   problem.Constraints(x, g);
   problem.ConstraintJacobian(x, jac);
   if (!g.allFinite() || !jac.allFinite()) return false;
-  const double viol = MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
+  const double viol =
+      MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
   if (viol < 1e-6) return false;  // not clearly infeasible
   for (int i = 0; i < m; ++i)
     v(i) = g(i) < b.g_lb(i) ? g(i) - b.g_lb(i)
@@ -161,7 +163,8 @@ bool LooksLocallyInfeasible(const NlpProblem& problem, const NlpBounds& b,
     if (x(j) <= b.x_lb(j) && grad(j) > 0) grad(j) = 0;
     if (x(j) >= b.x_ub(j) && grad(j) < 0) grad(j) = 0;
   }
-  const double scale = std::max(1.0, jac.cwiseAbs().maxCoeff()) * v.lpNorm<Eigen::Infinity>();
+  const double scale =
+      std::max(1.0, jac.cwiseAbs().maxCoeff()) * v.lpNorm<Eigen::Infinity>();
   return grad.lpNorm<Eigen::Infinity>() <= 1e-6 * scale;
 }
 

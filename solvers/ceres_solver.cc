@@ -1,12 +1,12 @@
 #include "solvers/ceres_solver.h"
 
+#include <ceres/ceres.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <vector>
-
-#include <ceres/ceres.h>
 
 #include "solvers/active_set_polish.h"
 
@@ -25,7 +25,8 @@ struct CeresNlpSolver::Impl {
   int f_evals = 0, g_evals = 0, j_evals = 0;
 
   int NumResiduals() const {
-    return static_cast<int>(eq_rows.size() + side_rows.size() + fixed_vars.size());
+    return static_cast<int>(eq_rows.size() + side_rows.size() +
+                            fixed_vars.size());
   }
   double SideValue(size_t k) const {
     const int i = side_rows[k];
@@ -52,9 +53,11 @@ struct CeresNlpSolver::Impl {
   class StopWhenFeasible final : public ceres::IterationCallback {
    public:
     double threshold = 0.0;  // on |r|_2 = sqrt(2 cost)
-    ceres::CallbackReturnType operator()(const ceres::IterationSummary& it) override {
-      return std::sqrt(2.0 * it.cost) <= threshold ? ceres::SOLVER_TERMINATE_SUCCESSFULLY
-                                                   : ceres::SOLVER_CONTINUE;
+    ceres::CallbackReturnType operator()(
+        const ceres::IterationSummary& it) override {
+      return std::sqrt(2.0 * it.cost) <= threshold
+                 ? ceres::SOLVER_TERMINATE_SUCCESSFULLY
+                 : ceres::SOLVER_CONTINUE;
     }
   };
 
@@ -64,7 +67,8 @@ struct CeresNlpSolver::Impl {
     ++g_evals;
     int k = 0;
     for (int i : eq_rows) r[k++] = g(i) - b.g_lb(i);
-    for (size_t s = 0; s < side_rows.size(); ++s) r[k++] = std::max(0.0, SideValue(s));
+    for (size_t s = 0; s < side_rows.size(); ++s)
+      r[k++] = std::max(0.0, SideValue(s));
     for (int j : fixed_vars) r[k++] = x(j) - b.x_lb(j);
     for (int q = 0; q < k; ++q)
       if (!std::isfinite(r[q])) return false;
@@ -72,8 +76,9 @@ struct CeresNlpSolver::Impl {
     problem->ConstraintJacobian(x, jac);
     ++j_evals;
     if (!jac.allFinite()) return false;
-    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
-        jr, k, n);
+    Eigen::Map<
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>
+        J(jr, k, n);
     int row = 0;
     for (int i : eq_rows) J.row(row++) = jac.row(i);
     for (size_t s = 0; s < side_rows.size(); ++s, ++row) {
@@ -99,7 +104,8 @@ struct CeresNlpSolver::Impl {
   class AlFunction final : public ceres::FirstOrderFunction {
    public:
     AlFunction(Impl* s, int n) : s_(s), n_(n) {}
-    bool Evaluate(const double* x, double* cost, double* gradient) const override {
+    bool Evaluate(const double* x, double* cost,
+                  double* gradient) const override {
       return s_->EvalAl(x, cost, gradient);
     }
     int NumParameters() const override { return n_; }
@@ -128,7 +134,8 @@ struct CeresNlpSolver::Impl {
       phi += lam_eq(k) * c + 0.5 * rho * c * c;
       w(i) += lam_eq(k) + rho * c;
     }
-    auto ineq = [&](double mu, double h) {  // PHR term, returns max(0, mu + rho h)
+    auto ineq = [&](double mu,
+                    double h) {  // PHR term, returns max(0, mu + rho h)
       const double t = std::max(0.0, mu + rho * h);
       phi += (t * t - mu * mu) / (2.0 * rho);
       return t;
@@ -238,11 +245,16 @@ CeresNlpSolver::~CeresNlpSolver() = default;
 namespace {
 const char* TerminationName(ceres::TerminationType t) {
   switch (t) {
-    case ceres::CONVERGENCE: return "CONVERGENCE";
-    case ceres::NO_CONVERGENCE: return "NO_CONVERGENCE";
-    case ceres::FAILURE: return "FAILURE";
-    case ceres::USER_SUCCESS: return "USER_SUCCESS";
-    case ceres::USER_FAILURE: return "USER_FAILURE";
+    case ceres::CONVERGENCE:
+      return "CONVERGENCE";
+    case ceres::NO_CONVERGENCE:
+      return "NO_CONVERGENCE";
+    case ceres::FAILURE:
+      return "FAILURE";
+    case ceres::USER_SUCCESS:
+      return "USER_SUCCESS";
+    case ceres::USER_FAILURE:
+      return "USER_FAILURE";
   }
   return "UNKNOWN";
 }
@@ -258,7 +270,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
   const bool square = static_cast<int>(s.eq_rows.size()) == n;
   char msg[256];
   Eigen::VectorXd& x = result->x;
-  for (int j = 0; j < n; ++j) x(j) = std::clamp(x0(j), s.b.x_lb(j), s.b.x_ub(j));
+  for (int j = 0; j < n; ++j)
+    x(j) = std::clamp(x0(j), s.b.x_lb(j), s.b.x_ub(j));
   int iterations = 0;
   auto finish = [&](NlpStatus status) {
     result->status = status;
@@ -272,8 +285,10 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
   if (s.NumResiduals() > 0) {
     s.PrepareLeastSquares();
     s.xp = x;
-    for (int j : s.lb_vars) s.ls->SetParameterLowerBound(s.xp.data(), j, s.b.x_lb(j));
-    for (int j : s.ub_vars) s.ls->SetParameterUpperBound(s.xp.data(), j, s.b.x_ub(j));
+    for (int j : s.lb_vars)
+      s.ls->SetParameterLowerBound(s.xp.data(), j, s.b.x_lb(j));
+    for (int j : s.ub_vars)
+      s.ls->SetParameterUpperBound(s.xp.data(), j, s.b.x_ub(j));
     ceres::Solver::Options o;
     o.minimizer_type = ceres::TRUST_REGION;
     o.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
@@ -285,7 +300,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
     o.gradient_tolerance = 1e-16;
     o.parameter_tolerance = 1e-16;
     o.num_threads = 1;
-    o.logging_type = options.verbosity > 0 ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+    o.logging_type =
+        options.verbosity > 0 ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
     o.minimizer_progress_to_stdout = options.verbosity > 0;
     s.stop_cb.threshold = 0.5 * feas_tol;
     o.callbacks.push_back(&s.stop_cb);
@@ -323,10 +339,12 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
         // ~1e7-1e8); finish with affine-invariant Newton steps from nearby.
         if (viol <= 1e-6) {
           const internal::PolishStats ps = internal::PolishActiveConstraints(
-              problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/20, &x);
+              problem, s.b, /*active_tol=*/1e-7, feas_tol,
+              /*max_iterations=*/20, &x);
           s.g_evals += ps.constraint_evaluations;
           s.j_evals += ps.jacobian_evaluations;
-          std::snprintf(msg, sizeof msg, "; polish -> violation %.2e", ps.max_violation);
+          std::snprintf(msg, sizeof msg, "; polish -> violation %.2e",
+                        ps.max_violation);
           result->backend_status += msg;
           if (ps.success) {
             finish(NlpStatus::kConverged);
@@ -365,20 +383,26 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
     s.gx = s.grad;
     s.gx.noalias() += s.jac.transpose() * lam;
     if (s.gx.allFinite()) {
-      for (size_t k = 0; k < s.fixed_vars.size(); ++k) s.lam_fix(k) = -s.gx(s.fixed_vars[k]);
-      for (size_t k = 0; k < s.lb_vars.size(); ++k) s.mu_lb(k) = std::max(0.0, s.gx(s.lb_vars[k]));
-      for (size_t k = 0; k < s.ub_vars.size(); ++k) s.mu_ub(k) = std::max(0.0, -s.gx(s.ub_vars[k]));
+      for (size_t k = 0; k < s.fixed_vars.size(); ++k)
+        s.lam_fix(k) = -s.gx(s.fixed_vars[k]);
+      for (size_t k = 0; k < s.lb_vars.size(); ++k)
+        s.mu_lb(k) = std::max(0.0, s.gx(s.lb_vars[k]));
+      for (size_t k = 0; k < s.ub_vars.size(); ++k)
+        s.mu_ub(k) = std::max(0.0, -s.gx(s.ub_vars[k]));
     }
   }
   s.rho = 10.0;
 
   if (!s.gp || s.gp_n != n) {
-    s.gp = std::make_unique<ceres::GradientProblem>(new Impl::AlFunction(&s, n));
+    s.gp =
+        std::make_unique<ceres::GradientProblem>(new Impl::AlFunction(&s, n));
     s.gp_n = n;
   }
   s.xa = x;
   problem.ObjectiveGradient(x, s.grad);
-  const double grad_scale = s.grad.allFinite() ? std::max(1.0, s.grad.lpNorm<Eigen::Infinity>()) : 1.0;
+  const double grad_scale =
+      s.grad.allFinite() ? std::max(1.0, s.grad.lpNorm<Eigen::Infinity>())
+                         : 1.0;
 
   ceres::GradientProblemSolver::Options go;
   go.line_search_direction_type = ceres::BFGS;
@@ -387,7 +411,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
   go.function_tolerance = 1e-16;
   go.parameter_tolerance = 1e-16;
   go.gradient_tolerance = options.optimality_tolerance * grad_scale;
-  go.logging_type = options.verbosity > 0 ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  go.logging_type =
+      options.verbosity > 0 ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
   go.minimizer_progress_to_stdout = options.verbosity > 0;
   std::string why;
   if (!go.IsValid(&why)) {
@@ -408,7 +433,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
   ceres::GradientProblemSolver::Summary gs;
   for (; outer < options.max_iterations && !converged; ++outer) {
     ceres::Solve(go, *s.gp, s.xa.data(), &gs);
-    if (!gs.iterations.empty()) iterations += static_cast<int>(gs.iterations.size()) - 1;
+    if (!gs.iterations.empty())
+      iterations += static_cast<int>(gs.iterations.size()) - 1;
     if (gs.termination_type == ceres::FAILURE && gs.iterations.size() <= 1 &&
         !std::isfinite(gs.final_cost)) {
       std::snprintf(msg, sizeof msg, "; AL inner solve failed: ");
@@ -425,7 +451,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
       result->backend_status += "; non-finite constraints in the AL loop";
       return;
     }
-    viol = MaxConstraintViolation(x, s.g, s.b.x_lb, s.b.x_ub, s.b.g_lb, s.b.g_ub);
+    viol =
+        MaxConstraintViolation(x, s.g, s.b.x_lb, s.b.x_ub, s.b.g_lb, s.b.g_ub);
     // Feasibility / complementarity measure and multiplier updates.
     double v = 0.0;
     for (size_t k = 0; k < n_eq; ++k) {
@@ -460,7 +487,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
       // a Newton polish instead of driving rho up against round-off.
       s.xa = x;
       const internal::PolishStats ps = internal::PolishActiveConstraints(
-          problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/20, &s.xa);
+          problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/20,
+          &s.xa);
       s.g_evals += ps.constraint_evaluations;
       s.j_evals += ps.jacobian_evaluations;
       if (ps.success) {
@@ -473,34 +501,39 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
       }
     }
     if (options.verbosity > 0)
-      std::printf("ceres AL outer %3d: inner %-14s %4zu it, |grad L| %.2e, "
-                  "violation %.2e, V %.2e, rho %.0e\n",
-                  outer, TerminationName(gs.termination_type),
-                  gs.iterations.empty() ? size_t{0} : gs.iterations.size() - 1,
-                  inner_grad, viol, v, s.rho);
+      std::printf(
+          "ceres AL outer %3d: inner %-14s %4zu it, |grad L| %.2e, "
+          "violation %.2e, V %.2e, rho %.0e\n",
+          outer, TerminationName(gs.termination_type),
+          gs.iterations.empty() ? size_t{0} : gs.iterations.size() - 1,
+          inner_grad, viol, v, s.rho);
     if (v > 0.25 * v_prev) s.rho = std::min(10.0 * s.rho, 1e8);
     v_prev = v;
   }
 
-  std::snprintf(msg, sizeof msg,
-                "; AL %d outer iterations, rho %.0e, violation %.2e%s, last inner %s",
-                outer, s.rho, viol, polished ? " (polished)" : "",
-                TerminationName(gs.termination_type));
+  std::snprintf(
+      msg, sizeof msg,
+      "; AL %d outer iterations, rho %.0e, violation %.2e%s, last inner %s",
+      outer, s.rho, viol, polished ? " (polished)" : "",
+      TerminationName(gs.termination_type));
   result->backend_status += msg;
-  NlpStatus status = converged ? NlpStatus::kConverged : NlpStatus::kIterationLimit;
+  NlpStatus status =
+      converged ? NlpStatus::kConverged : NlpStatus::kIterationLimit;
   if (!converged && viol > feas_tol && viol <= 1e-6) {
     const internal::PolishStats ps = internal::PolishActiveConstraints(
         problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/20, &x);
     s.g_evals += ps.constraint_evaluations;
     s.j_evals += ps.jacobian_evaluations;
-    std::snprintf(msg, sizeof msg, "; polish -> violation %.2e", ps.max_violation);
+    std::snprintf(msg, sizeof msg, "; polish -> violation %.2e",
+                  ps.max_violation);
     result->backend_status += msg;
     if (ps.success) status = NlpStatus::kConverged;
   }
   // Multipliers in Ipopt's convention.
   if (result->multipliers.size() != m) result->multipliers.resize(m);
   result->multipliers.setZero();
-  for (size_t k = 0; k < n_eq; ++k) result->multipliers(s.eq_rows[k]) = s.lam_eq(k);
+  for (size_t k = 0; k < n_eq; ++k)
+    result->multipliers(s.eq_rows[k]) = s.lam_eq(k);
   for (size_t k = 0; k < n_side; ++k)
     result->multipliers(s.side_rows[k]) += s.side_sign[k] * s.mu_side(k);
   finish(status);

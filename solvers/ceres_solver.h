@@ -24,7 +24,8 @@
 // squares penalty cannot locate a constrained optimum of a general f, so an
 // augmented Lagrangian (Powell-Hestenes-Rockafellar) outer loop is run:
 //   Phi(x) = f(x) + sum_E [lam_e c_e + rho/2 c_e^2]
-//                 + sum_{I and box} 1/(2 rho) [max(0, mu_i + rho h_i)^2 - mu_i^2]
+//                 + sum_{I and box} 1/(2 rho) [max(0, mu_i + rho h_i)^2 -
+//                 mu_i^2]
 // (box bounds are AL inequalities lb - x <= 0, x - ub <= 0; fixed variables
 // AL equalities). Phi is C^1; each inner problem min_x Phi is solved with
 // ceres::GradientProblemSolver (BFGS directions, Wolfe line search, gradient

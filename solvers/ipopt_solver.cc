@@ -1,13 +1,12 @@
 #include "solvers/ipopt_solver.h"
 
+#include <IpIpoptApplication.hpp>
+#include <IpJournalist.hpp>
+#include <IpTNLP.hpp>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
-
-#include <IpIpoptApplication.hpp>
-#include <IpJournalist.hpp>
-#include <IpTNLP.hpp>
 
 namespace quasiroll {
 namespace {
@@ -75,8 +74,8 @@ class Adapter final : public Ipopt::TNLP {
     return true;
   }
 
-  bool get_starting_point(Index, bool init_x, Number* x, bool init_z, Number* z_l,
-                          Number* z_u, Index, bool init_lambda,
+  bool get_starting_point(Index, bool init_x, Number* x, bool init_z,
+                          Number* z_l, Number* z_u, Index, bool init_lambda,
                           Number* lambda) override {
     if (init_x)
       for (int j = 0; j < n; ++j) x[j] = (*x0)(j);
@@ -119,8 +118,8 @@ class Adapter final : public Ipopt::TNLP {
     return gm.allFinite();
   }
 
-  bool eval_jac_g(Index nv, const Number* x, bool, Index mc, Index, Index* i_row,
-                  Index* j_col, Number* values) override {
+  bool eval_jac_g(Index nv, const Number* x, bool, Index mc, Index,
+                  Index* i_row, Index* j_col, Number* values) override {
     if (values == nullptr) {  // structure: dense, row-major
       Index k = 0;
       for (Index i = 0; i < mc; ++i)
@@ -132,7 +131,8 @@ class Adapter final : public Ipopt::TNLP {
     }
     problem->ConstraintJacobian(Eigen::Map<const Eigen::VectorXd>(x, nv), jac);
     ++result->jacobian_evaluations;
-    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+    Eigen::Map<
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
         values, mc, nv) = jac;
     return jac.allFinite();
   }
@@ -150,8 +150,9 @@ class Adapter final : public Ipopt::TNLP {
         }
       return true;
     }
-    problem->LagrangianHessian(Eigen::Map<const Eigen::VectorXd>(x, nv), obj_factor,
-                               Eigen::Map<const Eigen::VectorXd>(lambda, mc), hess);
+    problem->LagrangianHessian(
+        Eigen::Map<const Eigen::VectorXd>(x, nv), obj_factor,
+        Eigen::Map<const Eigen::VectorXd>(lambda, mc), hess);
     for (Index i = 0; i < nv; ++i)
       for (Index j = 0; j <= i; ++j, ++k) values[k] = hess(i, j);
     return hess.allFinite();
@@ -178,25 +179,44 @@ class Adapter final : public Ipopt::TNLP {
 
 const char* ReturnStatusName(Ipopt::ApplicationReturnStatus s) {
   switch (s) {
-    case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
-    case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
-    case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
-    case Ipopt::Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
-    case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
-    case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
-    case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
-    case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
-    case Ipopt::Restoration_Failed: return "Restoration_Failed";
-    case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
-    case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
-    case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
-    case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
-    case Ipopt::Invalid_Option: return "Invalid_Option";
-    case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
-    case Ipopt::Unrecoverable_Exception: return "Unrecoverable_Exception";
-    case Ipopt::NonIpopt_Exception_Thrown: return "NonIpopt_Exception_Thrown";
-    case Ipopt::Insufficient_Memory: return "Insufficient_Memory";
-    case Ipopt::Internal_Error: return "Internal_Error";
+    case Ipopt::Solve_Succeeded:
+      return "Solve_Succeeded";
+    case Ipopt::Solved_To_Acceptable_Level:
+      return "Solved_To_Acceptable_Level";
+    case Ipopt::Infeasible_Problem_Detected:
+      return "Infeasible_Problem_Detected";
+    case Ipopt::Search_Direction_Becomes_Too_Small:
+      return "Search_Direction_Becomes_Too_Small";
+    case Ipopt::Diverging_Iterates:
+      return "Diverging_Iterates";
+    case Ipopt::User_Requested_Stop:
+      return "User_Requested_Stop";
+    case Ipopt::Feasible_Point_Found:
+      return "Feasible_Point_Found";
+    case Ipopt::Maximum_Iterations_Exceeded:
+      return "Maximum_Iterations_Exceeded";
+    case Ipopt::Restoration_Failed:
+      return "Restoration_Failed";
+    case Ipopt::Error_In_Step_Computation:
+      return "Error_In_Step_Computation";
+    case Ipopt::Maximum_CpuTime_Exceeded:
+      return "Maximum_CpuTime_Exceeded";
+    case Ipopt::Not_Enough_Degrees_Of_Freedom:
+      return "Not_Enough_Degrees_Of_Freedom";
+    case Ipopt::Invalid_Problem_Definition:
+      return "Invalid_Problem_Definition";
+    case Ipopt::Invalid_Option:
+      return "Invalid_Option";
+    case Ipopt::Invalid_Number_Detected:
+      return "Invalid_Number_Detected";
+    case Ipopt::Unrecoverable_Exception:
+      return "Unrecoverable_Exception";
+    case Ipopt::NonIpopt_Exception_Thrown:
+      return "NonIpopt_Exception_Thrown";
+    case Ipopt::Insufficient_Memory:
+      return "Insufficient_Memory";
+    case Ipopt::Internal_Error:
+      return "Internal_Error";
   }
   return "unknown Ipopt return status";
 }
@@ -224,15 +244,17 @@ void Signature(const Adapter& a, std::vector<char>* sig) {
   sig->clear();
   sig->push_back(a.exact_hessian ? 'H' : 'L');
   for (int j = 0; j < a.n; ++j) {
-    sig->push_back(a.x_lb(j) == a.x_ub(j) ? 'f'
-                                          : static_cast<char>('0' + std::isfinite(a.x_lb(j)) +
-                                                              2 * std::isfinite(a.x_ub(j))));
+    sig->push_back(a.x_lb(j) == a.x_ub(j)
+                       ? 'f'
+                       : static_cast<char>('0' + std::isfinite(a.x_lb(j)) +
+                                           2 * std::isfinite(a.x_ub(j))));
   }
   sig->push_back('|');
   for (int i = 0; i < a.m; ++i) {
-    sig->push_back(a.g_lb(i) == a.g_ub(i) ? 'e'
-                                          : static_cast<char>('0' + std::isfinite(a.g_lb(i)) +
-                                                              2 * std::isfinite(a.g_ub(i))));
+    sig->push_back(a.g_lb(i) == a.g_ub(i)
+                       ? 'e'
+                       : static_cast<char>('0' + std::isfinite(a.g_lb(i)) +
+                                           2 * std::isfinite(a.g_ub(i))));
   }
 }
 
@@ -288,14 +310,16 @@ void IpoptSolver::DoSolve(const NlpProblem& problem,
   const int level = std::clamp(options.verbosity, 0, 12);
   // Console output level (the journal was created by Initialize()).
   opts->SetIntegerValue("print_level", level);
-  if (auto console = s.app->Jnlst()->GetJournal("console"); Ipopt::IsValid(console))
+  if (auto console = s.app->Jnlst()->GetJournal("console");
+      Ipopt::IsValid(console))
     console->SetAllPrintLevels(static_cast<Ipopt::EJournalLevel>(level));
   // Overall (scaled) KKT error target.
   opts->SetNumericValue("tol", options.optimality_tolerance);
   // Absolute constraint violation target, in the problem's own units.
   opts->SetNumericValue("constr_viol_tol", options.feasibility_tolerance);
   // An "acceptable" stop must still be feasible to the caller's tolerance.
-  opts->SetNumericValue("acceptable_constr_viol_tol", options.feasibility_tolerance);
+  opts->SetNumericValue("acceptable_constr_viol_tol",
+                        options.feasibility_tolerance);
   // Major iteration budget.
   opts->SetIntegerValue("max_iter", options.max_iterations);
   // Ipopt relaxes bounds by 1e-8 by default, which would let the answer

@@ -1,10 +1,9 @@
 #include "solvers/newton_solver.h"
 
+#include <Eigen/LU>
 #include <cmath>
 #include <cstdio>
 #include <vector>
-
-#include <Eigen/LU>
 
 namespace quasiroll {
 
@@ -97,9 +96,10 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
     const double pivot_max = u_diag.maxCoeff(), pivot_min = u_diag.minCoeff();
     if (!(pivot_min > 1e-13 * pivot_max)) {
       result->status = NlpStatus::kNumericalFailure;
-      std::snprintf(msg, sizeof msg,
-                    "rank-deficient Jacobian (pivot ratio %.3e) at iteration %d",
-                    pivot_max > 0 ? pivot_min / pivot_max : 0.0, iter);
+      std::snprintf(
+          msg, sizeof msg,
+          "rank-deficient Jacobian (pivot ratio %.3e) at iteration %d",
+          pivot_max > 0 ? pivot_min / pivot_max : 0.0, iter);
       result->backend_status = msg;
       result->iterations = iter;
       return;

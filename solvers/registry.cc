@@ -24,7 +24,8 @@ void RegisterBuiltinNlpSolvers() {
         [] { return std::make_unique<NewtonSolver>(); });
 #ifdef QUASIROLL_HAVE_IPOPT
     NlpSolverRegistry::Register(
-        "ipopt", "Ipopt interior point (exact or L-BFGS Hessian), dense Jacobian",
+        "ipopt",
+        "Ipopt interior point (exact or L-BFGS Hessian), dense Jacobian",
         [] { return std::make_unique<IpoptSolver>(); });
 #endif
 #ifdef QUASIROLL_HAVE_NLOPT

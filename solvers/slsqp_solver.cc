@@ -5,10 +5,9 @@
 #include <cstdio>
 #include <cstring>
 #include <new>
+#include <nlopt.hpp>
 #include <stdexcept>
 #include <vector>
-
-#include <nlopt.hpp>
 
 #include "solvers/active_set_polish.h"
 
@@ -63,7 +62,8 @@ struct SlsqpSolver::Impl {
     throw nlopt::forced_stop();  // caught by nlopt.hpp, re-thrown by optimize()
   }
 
-  static double ObjectiveCb(unsigned n, const double* xp, double* grad, void* data) {
+  static double ObjectiveCb(unsigned n, const double* xp, double* grad,
+                            void* data) {
     auto* s = static_cast<Impl*>(data);
     Eigen::Map<const Eigen::VectorXd> xm(xp, n);
     const double f = s->problem->Objective(xm);
@@ -88,11 +88,12 @@ struct SlsqpSolver::Impl {
     if (grad != nullptr) {
       s->EnsureJac(xp);
       for (unsigned k = 0; k < m; ++k)
-        for (unsigned j = 0; j < n; ++j) grad[k * n + j] = s->jac(s->eq_rows[k], j);
+        for (unsigned j = 0; j < n; ++j)
+          grad[k * n + j] = s->jac(s->eq_rows[k], j);
     }
   }
-  static void InequalityCb(unsigned m, double* res, unsigned n, const double* xp,
-                           double* grad, void* data) {
+  static void InequalityCb(unsigned m, double* res, unsigned n,
+                           const double* xp, double* grad, void* data) {
     auto* s = static_cast<Impl*>(data);
     s->EnsureG(xp);
     for (unsigned k = 0; k < m; ++k) {
@@ -109,11 +110,13 @@ struct SlsqpSolver::Impl {
   }
 
   void Build(int nv, double tol) {
-    opt = std::make_unique<nlopt::opt>(nlopt::LD_SLSQP, static_cast<unsigned>(nv));
+    opt = std::make_unique<nlopt::opt>(nlopt::LD_SLSQP,
+                                       static_cast<unsigned>(nv));
     opt->set_min_objective(&Impl::ObjectiveCb, this);
     tol_eq.assign(eq_rows.size(), tol);
     tol_ineq.assign(ineq_rows.size(), tol);
-    if (!eq_rows.empty()) opt->add_equality_mconstraint(&Impl::EqualityCb, this, tol_eq);
+    if (!eq_rows.empty())
+      opt->add_equality_mconstraint(&Impl::EqualityCb, this, tol_eq);
     if (!ineq_rows.empty())
       opt->add_inequality_mconstraint(&Impl::InequalityCb, this, tol_ineq);
     n = nv;
@@ -129,18 +132,30 @@ SlsqpSolver::~SlsqpSolver() = default;
 namespace {
 const char* NloptResultName(nlopt::result r) {
   switch (r) {
-    case nlopt::SUCCESS: return "SUCCESS";
-    case nlopt::STOPVAL_REACHED: return "STOPVAL_REACHED";
-    case nlopt::FTOL_REACHED: return "FTOL_REACHED";
-    case nlopt::XTOL_REACHED: return "XTOL_REACHED";
-    case nlopt::MAXEVAL_REACHED: return "MAXEVAL_REACHED";
-    case nlopt::MAXTIME_REACHED: return "MAXTIME_REACHED";
-    case nlopt::FAILURE: return "FAILURE";
-    case nlopt::INVALID_ARGS: return "INVALID_ARGS";
-    case nlopt::OUT_OF_MEMORY: return "OUT_OF_MEMORY";
-    case nlopt::ROUNDOFF_LIMITED: return "ROUNDOFF_LIMITED";
-    case nlopt::FORCED_STOP: return "FORCED_STOP";
-    default: return "UNKNOWN";
+    case nlopt::SUCCESS:
+      return "SUCCESS";
+    case nlopt::STOPVAL_REACHED:
+      return "STOPVAL_REACHED";
+    case nlopt::FTOL_REACHED:
+      return "FTOL_REACHED";
+    case nlopt::XTOL_REACHED:
+      return "XTOL_REACHED";
+    case nlopt::MAXEVAL_REACHED:
+      return "MAXEVAL_REACHED";
+    case nlopt::MAXTIME_REACHED:
+      return "MAXTIME_REACHED";
+    case nlopt::FAILURE:
+      return "FAILURE";
+    case nlopt::INVALID_ARGS:
+      return "INVALID_ARGS";
+    case nlopt::OUT_OF_MEMORY:
+      return "OUT_OF_MEMORY";
+    case nlopt::ROUNDOFF_LIMITED:
+      return "ROUNDOFF_LIMITED";
+    case nlopt::FORCED_STOP:
+      return "FORCED_STOP";
+    default:
+      return "UNKNOWN";
   }
 }
 }  // namespace
@@ -173,7 +188,8 @@ void SlsqpSolver::DoSolve(const NlpProblem& problem,
   }
   const double con_tol = options.feasibility_tolerance;
   if (!s.opt || s.n != n || s.n_eq != static_cast<int>(s.eq_rows.size()) ||
-      s.n_ineq != static_cast<int>(s.ineq_rows.size()) || s.con_tol != con_tol) {
+      s.n_ineq != static_cast<int>(s.ineq_rows.size()) ||
+      s.con_tol != con_tol) {
     s.Build(n, con_tol);  // new structure: (re)create the NLopt object
   }
   s.cache_x.resize(n);
@@ -252,7 +268,8 @@ void SlsqpSolver::DoSolve(const NlpProblem& problem,
                   ps.iterations, ps.max_violation);
     result->backend_status += msg;
   }
-  if (ps.success && (outcome == Outcome::kSuccess || outcome == Outcome::kRoundoff)) {
+  if (ps.success &&
+      (outcome == Outcome::kSuccess || outcome == Outcome::kRoundoff)) {
     result->status = NlpStatus::kConverged;
     return;
   }

@@ -13,29 +13,37 @@
 namespace quasiroll::cli {
 
 void BenchCommands::Register(CLI::App& app, std::function<int()>* selected) {
-  CLI::App* bench = app.add_subcommand(
-      "bench",
-      "Run a benchmark suite; writes DIR/runs.csv, DIR/trajectories/, DIR/meta.json");
+  CLI::App* bench =
+      app.add_subcommand("bench",
+                         "Run a benchmark suite; writes DIR/runs.csv, "
+                         "DIR/trajectories/, DIR/meta.json");
   bench->add_option("--suite", bench_.suite, "Suite YAML file")->required();
   bench->add_option("--out", bench_.out, "Output directory")->required();
-  bench->add_option("--jobs", bench_.jobs,
-                    "Parallel runs (default: hardware concurrency)")
+  bench
+      ->add_option("--jobs", bench_.jobs,
+                   "Parallel runs (default: hardware concurrency)")
       ->check(CLI::NonNegativeNumber);
-  bench->add_option("--filter", bench_.filter,
-                    "Keep only runs whose run_id matches this regex (ECMAScript)");
-  bench->add_flag("--resume", bench_.resume,
-                  "Skip runs already finished in DIR/runs/ (interrupted suite)");
-  bench->add_option("--progress", bench_.progress,
-                    "auto (bar on a TTY, else lines) | bar | lines | none")
+  bench->add_option(
+      "--filter", bench_.filter,
+      "Keep only runs whose run_id matches this regex (ECMAScript)");
+  bench->add_flag(
+      "--resume", bench_.resume,
+      "Skip runs already finished in DIR/runs/ (interrupted suite)");
+  bench
+      ->add_option("--progress", bench_.progress,
+                   "auto (bar on a TTY, else lines) | bar | lines | none")
       ->check(CLI::IsMember({"auto", "bar", "lines", "none"}))
       ->capture_default_str();
-  bench->callback([this, selected] { *selected = [this] { return RunBench(bench_); }; });
+  bench->callback(
+      [this, selected] { *selected = [this] { return RunBench(bench_); }; });
 
   CLI::App* report = app.add_subcommand(
       "report", "Render a bench output directory (reports/make_report.py DIR)");
-  report->add_option("dir", report_.dir, "Output directory of 'quasiroll bench'")
+  report
+      ->add_option("dir", report_.dir, "Output directory of 'quasiroll bench'")
       ->required();
-  report->callback([this, selected] { *selected = [this] { return RunReport(report_); }; });
+  report->callback(
+      [this, selected] { *selected = [this] { return RunReport(report_); }; });
 }
 
 int RunBench(const BenchArgs& args) {
@@ -50,11 +58,12 @@ int RunBench(const BenchArgs& args) {
                      : args.progress == "lines" ? 1
                                                 : 2;
   const bench::HarnessSummary s = bench::RunSuite(suite, options);
-  std::fprintf(stderr,
-               "suite %s: %d runs (%d selected, %d executed, %d resumed), %d not "
-               "successful, %.1f s\n",
-               suite.name.c_str(), s.total, s.selected, s.executed, s.resumed,
-               s.failures, s.wall_seconds);
+  std::fprintf(
+      stderr,
+      "suite %s: %d runs (%d selected, %d executed, %d resumed), %d not "
+      "successful, %.1f s\n",
+      suite.name.c_str(), s.total, s.selected, s.executed, s.resumed,
+      s.failures, s.wall_seconds);
   std::printf("%s/runs.csv\n", args.out.c_str());
   return 0;
 }
@@ -64,10 +73,11 @@ int RunReport(const ReportArgs& args) {
   const std::string python = "/usr/bin/python3";
   std::error_code ec;
   if (!std::filesystem::exists(script, ec)) {
-    std::fprintf(stderr,
-                 "error: the report generator %s does not exist (yet); runs.csv and "
-                 "the other files in %s can be used directly\n",
-                 script.c_str(), args.dir.c_str());
+    std::fprintf(
+        stderr,
+        "error: the report generator %s does not exist (yet); runs.csv and "
+        "the other files in %s can be used directly\n",
+        script.c_str(), args.dir.c_str());
     return 1;
   }
   std::fflush(stdout);
@@ -78,7 +88,8 @@ int RunReport(const ReportArgs& args) {
     return 1;
   }
   if (pid == 0) {
-    const char* argv[] = {python.c_str(), script.c_str(), args.dir.c_str(), nullptr};
+    const char* argv[] = {python.c_str(), script.c_str(), args.dir.c_str(),
+                          nullptr};
     ::execv(python.c_str(), const_cast<char* const*>(argv));
     std::perror(("error: cannot execute " + python).c_str());
     ::_exit(127);

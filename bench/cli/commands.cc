@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "bench/json_writer.h"
+#include "bench/run_output.h"
 #include "core/dae.h"
 #include "core/initial_configuration.h"
 #include "core/kinematics.h"
@@ -11,7 +12,6 @@
 #include "core/quasi_static.h"
 #include "core/scene.h"
 #include "core/simulator.h"
-#include "bench/run_output.h"
 
 namespace quasiroll::cli {
 
@@ -23,11 +23,13 @@ void Commands::Register(CLI::App& app) {
   pose->callback([this] { selected_ = [this] { return RunPose(pose_); }; });
 
   CLI::App* solve = app.add_subcommand(
-      "solve", "Solve the quasi-static problem at a scene's initial configuration");
+      "solve",
+      "Solve the quasi-static problem at a scene's initial configuration");
   solve->add_option("--scene", solve_.scene, "Scene YAML file")->required();
   solve->add_option("--nlp", solve_.nlp, "NLP backend (see 'quasiroll list')")
       ->capture_default_str();
-  solve->add_option("--mu", solve_.mu, "Override the friction coefficient (> 0)");
+  solve->add_option("--mu", solve_.mu,
+                    "Override the friction coefficient (> 0)");
   solve->add_option("--mode", solve_.mode, "Override the actuation mode")
       ->check(CLI::IsMember({"paper", "pvc"}));
   solve->add_flag("--json", solve_.json, "Print JSON instead of text");
@@ -37,23 +39,27 @@ void Commands::Register(CLI::App& app) {
       "run", "Simulate a scene; writes DIR/trajectory.csv and DIR/run.json");
   run->add_option("--scene", run_.scene, "Scene YAML file")->required();
   run->add_option("--nlp", run_.nlp, "NLP backend")->capture_default_str();
-  run->add_option("--dae", run_.dae, "Integrator backend")->capture_default_str();
+  run->add_option("--dae", run_.dae, "Integrator backend")
+      ->capture_default_str();
   run->add_option("--coupling", run_.coupling, "zoh | coupled")
       ->check(CLI::IsMember({"zoh", "coupled"}))
       ->capture_default_str();
-  run->add_option("--dt", run_.dt, "Hold/output interval [s] (default: scene's)");
+  run->add_option("--dt", run_.dt,
+                  "Hold/output interval [s] (default: scene's)");
   run->add_option("--t-end", run_.t_end, "End time [s] (default: scene's)");
   run->add_option("--mu", run_.mu, "Override the friction coefficient (> 0)");
   run->add_option("--mode", run_.mode, "Override the actuation mode")
       ->check(CLI::IsMember({"paper", "pvc"}));
   run->add_option("--rk", run_.rk_method, "RK scheme: rk4 | dp54 | bs32")
       ->capture_default_str();
-  run->add_option("--sigma", run_.sigma, "Baumgarte gain [1/s]")->capture_default_str();
+  run->add_option("--sigma", run_.sigma, "Baumgarte gain [1/s]")
+      ->capture_default_str();
   run->add_option("--rtol", run_.rtol, "Relative tolerance (adaptive RK, IDA)")
       ->capture_default_str();
   run->add_option("--atol", run_.atol, "Absolute tolerance (adaptive RK, IDA)")
       ->capture_default_str();
-  run->add_option("--dae-index", run_.dae_index, "IDA formulation: 2 (GGL) or 1 (Baumgarte)")
+  run->add_option("--dae-index", run_.dae_index,
+                  "IDA formulation: 2 (GGL) or 1 (Baumgarte)")
       ->capture_default_str();
   run->add_option("--out", run_.out, "Output directory")->capture_default_str();
   run->callback([this] { selected_ = [this] { return RunRun(run_); }; });
@@ -108,22 +114,24 @@ int RunPose(const PoseArgs& args) {
               scene.terrain->Describe().c_str());
   std::printf("position     x=%.9f y=%.9f z=%.9f m\n", p.x(), p.y(), p.z());
   std::printf("roll/pitch/yaw  %.9f %.9f %.9f rad\n", rpy(0), rpy(1), rpy(2));
-  std::printf("joints       phi1=%.6f alpha1=%.6f delta2=%.6f alpha2=%.6f "
-              "delta3=%.6f alpha3=%.6f rad\n",
-              theta(15), theta(16), theta(17), theta(18), theta(19),
-              theta(20));
+  std::printf(
+      "joints       phi1=%.6f alpha1=%.6f delta2=%.6f alpha2=%.6f "
+      "delta3=%.6f alpha3=%.6f rad\n",
+      theta(15), theta(16), theta(17), theta(18), theta(19), theta(20));
   for (int i = 0; i < 3; ++i) {
     const Vec3& c = chains[i].p_c;
     const Vec3 n = chains[i].ground.frame.col(2);
-    std::printf("wheel %d      contact (%.9f, %.9f, %.9f) normal (%.6f, %.6f, "
-                "%.6f) psi=%.9f u_w=%.6f v_w=%.6f\n",
-                i + 1, c.x(), c.y(), c.z(), n.x(), n.y(), n.z(),
-                theta(ConfigIndex::Psi(i)), theta(ConfigIndex::U(i)),
-                theta(ConfigIndex::V(i)));
+    std::printf(
+        "wheel %d      contact (%.9f, %.9f, %.9f) normal (%.6f, %.6f, "
+        "%.6f) psi=%.9f u_w=%.6f v_w=%.6f\n",
+        i + 1, c.x(), c.y(), c.z(), n.x(), n.y(), n.z(),
+        theta(ConfigIndex::Psi(i)), theta(ConfigIndex::U(i)),
+        theta(ConfigIndex::V(i)));
   }
-  std::printf("||H||_inf    %.3e   (contact residual %.3e, %d Newton "
-              "iterations)\n",
-              report.loop_closure, report.contact_residual, report.iterations);
+  std::printf(
+      "||H||_inf    %.3e   (contact residual %.3e, %d Newton "
+      "iterations)\n",
+      report.loop_closure, report.contact_residual, report.iterations);
   return 0;
 }
 
@@ -146,7 +154,8 @@ namespace {
 void ApplyOverrides(Scene* scene, double mu, const std::string& mode) {
   if (mu != 0) {
     if (!(std::isfinite(mu) && mu > 0))
-      throw SceneError("--mu: must be finite and > 0, got " + std::to_string(mu));
+      throw SceneError("--mu: must be finite and > 0, got " +
+                       std::to_string(mu));
     scene->mu = mu;
   }
   if (mode == "paper") scene->mode = ActuationMode::kPaper;
@@ -204,26 +213,31 @@ int RunSolve(const SolveArgs& args) {
     std::cout << w.str() << "\n";
     return ok ? 0 : 1;
   }
-  std::printf("status       %s%s%s\n", ToString(status), sol.message.empty() ? "" : ": ",
-              sol.message.c_str());
-  std::printf("nlp          %s, %d iterations in %d solves, %.1f us, scaled residual %.2e, "
-              "condition %.3g\n",
-              args.nlp.c_str(), sol.nlp_iterations, sol.nlp_solves, sol.wall_seconds * 1e6,
-              sol.residual, sol.condition_number);
-  std::printf("mode %s, mu = %g, mu_min = %.9g\n", ToString(scene.mode), scene.mu, sol.mu_min);
+  std::printf("status       %s%s%s\n", ToString(status),
+              sol.message.empty() ? "" : ": ", sol.message.c_str());
+  std::printf(
+      "nlp          %s, %d iterations in %d solves, %.1f us, scaled residual "
+      "%.2e, "
+      "condition %.3g\n",
+      args.nlp.c_str(), sol.nlp_iterations, sol.nlp_solves,
+      sol.wall_seconds * 1e6, sol.residual, sol.condition_number);
+  std::printf("mode %s, mu = %g, mu_min = %.9g\n", ToString(scene.mode),
+              scene.mu, sol.mu_min);
   if (!ok) return 1;
-  std::printf("twist V^B    v = (%.9f, %.9f, %.9f) m/s  w = (%.9f, %.9f, %.9f) rad/s\n",
-              sol.twist(0), sol.twist(1), sol.twist(2), sol.twist(3), sol.twist(4),
-              sol.twist(5));
+  std::printf(
+      "twist V^B    v = (%.9f, %.9f, %.9f) m/s  w = (%.9f, %.9f, %.9f) rad/s\n",
+      sol.twist(0), sol.twist(1), sol.twist(2), sol.twist(3), sol.twist(4),
+      sol.twist(5));
   std::printf("joint rates  ");
   for (double r : sol.joint_rates) std::printf("%.9f ", r);
   std::printf("rad/s\n");
   for (int i = 0; i < 3; ++i) {
     const ContactOutput& c = sol.contacts[i];
-    std::printf("wheel %d      N = %.6f N  traction lon/lat = %.6f / %.6f N  slip = "
-                "(%.3e, %.3e) m/s  use = %.4f\n",
-                i + 1, c.normal_force, c.traction(0), c.traction(1), c.slip(0), c.slip(1),
-                c.friction_use);
+    std::printf(
+        "wheel %d      N = %.6f N  traction lon/lat = %.6f / %.6f N  slip = "
+        "(%.3e, %.3e) m/s  use = %.4f\n",
+        i + 1, c.normal_force, c.traction(0), c.traction(1), c.slip(0),
+        c.slip(1), c.friction_use);
   }
   std::printf("actuator torques ");
   for (double t : sol.actuator_torques) std::printf("%.6f ", t);

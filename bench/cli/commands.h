@@ -17,7 +17,7 @@ struct PoseArgs {
 struct SolveArgs {
   std::string scene;
   std::string nlp = "newton";
-  double mu = 0;  // 0 = scene's
+  double mu = 0;     // 0 = scene's
   std::string mode;  // "" = scene's
   bool json = false;
 };

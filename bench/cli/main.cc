@@ -21,7 +21,7 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
-    std::cerr << "error: " << e.what() << "\n";     // one line, see --help
+    std::cerr << "error: " << e.what() << "\n";      // one line, see --help
     return 2;
   }
   try {

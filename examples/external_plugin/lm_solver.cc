@@ -1,11 +1,10 @@
 #include "lm_solver.h"
 
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
-
-#include <Eigen/QR>
 
 namespace example {
 
@@ -19,8 +18,8 @@ struct LevenbergMarquardtSolver::Workspace {
   std::vector<int> eq_rows;
 
   void Resize(int n, int m) {
-    for (Eigen::VectorXd* v : {&x_lb, &x_ub, &r, &r_trial, &dx, &x_trial,
-                               &scale, &jdx})
+    for (Eigen::VectorXd* v :
+         {&x_lb, &x_ub, &r, &r_trial, &dx, &x_trial, &scale, &jdx})
       v->resize(n);
     for (Eigen::VectorXd* v : {&g_lb, &g_ub, &g, &g_trial}) v->resize(m);
     rhs.resize(2 * n);
@@ -45,17 +44,18 @@ bool Residual(const Eigen::VectorXd& g, const Eigen::VectorXd& g_lb,
 }
 }  // namespace
 
-void LevenbergMarquardtSolver::DoSolve(const quasiroll::NlpProblem& problem,
-                                       const Eigen::Ref<const Eigen::VectorXd>& x0,
-                                       const quasiroll::NlpOptions& options,
-                                       quasiroll::NlpResult* result) {
+void LevenbergMarquardtSolver::DoSolve(
+    const quasiroll::NlpProblem& problem,
+    const Eigen::Ref<const Eigen::VectorXd>& x0,
+    const quasiroll::NlpOptions& options, quasiroll::NlpResult* result) {
   const int n = problem.num_variables(), m = problem.num_constraints();
   Workspace& w = *ws_;
   w.Resize(n, m);
   problem.GetBounds(w.x_lb, w.x_ub, w.g_lb, w.g_ub);
   w.eq_rows.clear();
   for (int i = 0; i < m; ++i)
-    if (w.g_lb(i) == w.g_ub(i)) w.eq_rows.push_back(i);  // n rows (Solve checked)
+    if (w.g_lb(i) == w.g_ub(i))
+      w.eq_rows.push_back(i);  // n rows (Solve checked)
 
   const double tol = options.feasibility_tolerance;
   char msg[200];
@@ -138,7 +138,8 @@ void LevenbergMarquardtSolver::DoSolve(const quasiroll::NlpProblem& problem,
     } else {
       // Reject: shorter, more gradient-like step. A step below round-off
       // relative to x means no further progress is possible.
-      const double step = (w.scale.asDiagonal() * w.dx).lpNorm<Eigen::Infinity>();
+      const double step =
+          (w.scale.asDiagonal() * w.dx).lpNorm<Eigen::Infinity>();
       const double size = (w.scale.asDiagonal() * x).lpNorm<Eigen::Infinity>();
       if (!(step > 1e-15 * std::max(size, 1e-300)) || !(lambda < 1e300))
         return fail(NlpStatus::kNumericalFailure, "stagnated", iter);
@@ -148,8 +149,8 @@ void LevenbergMarquardtSolver::DoSolve(const quasiroll::NlpProblem& problem,
   }
   result->iterations = iter;
 
-  const double viol = quasiroll::MaxConstraintViolation(x, w.g, w.x_lb, w.x_ub,
-                                                        w.g_lb, w.g_ub);
+  const double viol =
+      quasiroll::MaxConstraintViolation(x, w.g, w.x_lb, w.x_ub, w.g_lb, w.g_ub);
   if (viol > tol) {
     result->status = NlpStatus::kInfeasible;
     std::snprintf(msg, sizeof msg,

@@ -19,7 +19,8 @@ IntegratorStatus MidpointProjectionIntegrator::Project(
   for (int it = 0;; ++it) {
     ode.Constraints(y, h_);
     const double violation = h_.lpNorm<Eigen::Infinity>();
-    if (violation <= options.projection_tolerance) return IntegratorStatus::kSuccess;
+    if (violation <= options.projection_tolerance)
+      return IntegratorStatus::kSuccess;
     if (!std::isfinite(violation) || it == options.max_projection_iterations) {
       std::ostringstream os;
       os << "projection: ||H||_inf = " << violation << " after " << it
@@ -80,8 +81,10 @@ void MidpointProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
                                                Eigen::Ref<Eigen::VectorXd> y,
                                                const IntegratorOptions& options,
                                                IntegratorResult* result) {
-  const int n = ode.state_size(), m = ode.num_constraints(), nr = ode.num_roots();
-  for (Eigen::VectorXd* v : {&d_, &y0_, &y1_, &y_mid_, &y_hi_, &k_}) v->resize(n);
+  const int n = ode.state_size(), m = ode.num_constraints(),
+            nr = ode.num_roots();
+  for (Eigen::VectorXd* v : {&d_, &y0_, &y1_, &y_mid_, &y_hi_, &k_})
+    v->resize(n);
   h_.resize(m);
   lambda_.resize(m);
   jac_.resize(m, n);
@@ -111,8 +114,9 @@ void MidpointProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
   const double h_nominal = options.step > 0 ? options.step : t1 - t0;
   const double ratio = (t1 - t0) / h_nominal;
   if (!(ratio < static_cast<double>(options.max_steps))) {
-    result->message = "needs more than max_steps = " +
-                      std::to_string(options.max_steps) + " steps";
+    result->message =
+        "needs more than max_steps = " + std::to_string(options.max_steps) +
+        " steps";
     return finish(IntegratorStatus::kStepSizeTooSmall, t0);
   }
   const long steps = std::max(1L, static_cast<long>(std::ceil(ratio - 1e-9)));
@@ -120,7 +124,8 @@ void MidpointProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
 
   double t = t0;
   for (long k = 1; k <= steps; ++k) {
-    const double t_next = k == steps ? t1 : t0 + static_cast<double>(k) * h_nominal;
+    const double t_next =
+        k == steps ? t1 : t0 + static_cast<double>(k) * h_nominal;
     const double h = t_next - t;
     status = Step(ode, t, h, y0_, y1_, options, result);
     if (status != IntegratorStatus::kSuccess) return finish(status, t);

@@ -1,7 +1,8 @@
 // Integrator "midpoint-projection" (example plugin): the explicit midpoint
 // rule (RK2, fixed step) on y' = F(t, y), each step followed by the Newton
 // projection onto H = 0
-//   y <- y - D J^T (J D J^T)^{-1} H(y)   until ||H||_inf <= projection_tolerance
+//   y <- y - D J^T (J D J^T)^{-1} H(y)   until ||H||_inf <=
+//   projection_tolerance
 // (at most max_projection_iterations corrections, else kConstraintFailure),
 // using only the public ConstrainedOde interface (core/dae.h).
 //
@@ -12,10 +13,9 @@
 // from the last accepted state) and y is the (projected) state at the root.
 #pragma once
 
-#include <string>
-
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <string>
 
 #include "core/dae.h"
 
@@ -37,10 +37,10 @@ class MidpointProjectionIntegrator final : public quasiroll::Integrator {
                                    Eigen::VectorXd& out,
                                    const quasiroll::IntegratorOptions& options,
                                    quasiroll::IntegratorResult* result);
-  quasiroll::IntegratorStatus Project(quasiroll::ConstrainedOde& ode,
-                                      Eigen::VectorXd& y,
-                                      const quasiroll::IntegratorOptions& options,
-                                      quasiroll::IntegratorResult* result);
+  quasiroll::IntegratorStatus Project(
+      quasiroll::ConstrainedOde& ode, Eigen::VectorXd& y,
+      const quasiroll::IntegratorOptions& options,
+      quasiroll::IntegratorResult* result);
   // Index of the first root component whose sign changed from g_old_ to g,
   // -1 if none (a component exactly 0 at the start does not fire).
   int Fired(const Eigen::VectorXd& g) const;

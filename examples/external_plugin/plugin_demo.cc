@@ -10,6 +10,8 @@
 // Prints one line per check; exits 1 if any check failed.
 //
 //   plugin_demo [--data-dir DIR] [--t-end SECONDS] [--no-suite] [--jobs N]
+#include <unistd.h>  // getpid
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -19,8 +21,6 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
-
-#include <unistd.h>  // getpid
 
 #include "core/dae.h"
 #include "core/nlp.h"
@@ -57,7 +57,8 @@ bool Throws(F&& f) {
 // ----------------------------------------------------------- 1. NLP -----
 
 void CheckNlpBackend(const std::string& backend) {
-  std::printf("== NLP backend '%s' on the reference problems\n", backend.c_str());
+  std::printf("== NLP backend '%s' on the reference problems\n",
+              backend.c_str());
   auto solver = NlpSolverRegistry::Create(backend);
   NlpOptions options;
   options.feasibility_tolerance = 1e-12;  // the quasi-static solver's setting
@@ -67,11 +68,13 @@ void CheckNlpBackend(const std::string& backend) {
     NlpResult r;
     if (solver->RequiresSquareSystem() && !p->IsSquareSystem()) {
       // Contract: a problem the backend cannot take is misuse.
-      Check(Throws([&] { solver->Solve(*p, p->starting_point(), options, &r); }),
-            p->name() + ": not a square system -> std::invalid_argument");
+      Check(
+          Throws([&] { solver->Solve(*p, p->starting_point(), options, &r); }),
+          p->name() + ": not a square system -> std::invalid_argument");
       continue;
     }
-    const NlpStatus status = solver->Solve(*p, p->starting_point(), options, &r);
+    const NlpStatus status =
+        solver->Solve(*p, p->starting_point(), options, &r);
     char line[256];
     std::snprintf(line, sizeof line,
                   "%s: %s in %d iterations, viol %.1e, |x - x*| %.1e (%s)",
@@ -94,7 +97,9 @@ void CheckNlpBackend(const std::string& backend) {
   // Misuse throws; numerics never do.
   CircleLineSystem circle;
   NlpResult r;
-  Check(Throws([&] { solver->Solve(circle, Eigen::VectorXd::Ones(3), options, &r); }),
+  Check(Throws([&] {
+          solver->Solve(circle, Eigen::VectorXd::Ones(3), options, &r);
+        }),
         "x0 of the wrong size -> std::invalid_argument");
   Eigen::VectorXd x_nan = circle.starting_point();
   x_nan(0) = std::numeric_limits<double>::quiet_NaN();
@@ -102,8 +107,9 @@ void CheckNlpBackend(const std::string& backend) {
         "non-finite x0 -> std::invalid_argument");
   NlpOptions bad = options;
   bad.max_iterations = 0;
-  Check(Throws([&] { solver->Solve(circle, circle.starting_point(), bad, &r); }),
-        "invalid options -> std::invalid_argument");
+  Check(
+      Throws([&] { solver->Solve(circle, circle.starting_point(), bad, &r); }),
+      "invalid options -> std::invalid_argument");
 
   // NaN in the functions near the root: a status, not an exception.
   struct NanNearRoot final : public NlpProblem {
@@ -115,7 +121,8 @@ void CheckNlpBackend(const std::string& backend) {
                    Eigen::Ref<Eigen::VectorXd> d) const override {
       inner.GetBounds(a, b, c, d);
     }
-    double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override {
+    double Objective(
+        const Eigen::Ref<const Eigen::VectorXd>& x) const override {
       return inner.Objective(x);
     }
     void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -139,8 +146,10 @@ void CheckNlpBackend(const std::string& backend) {
   } catch (const std::exception&) {
     threw = true;
   }
-  Check(!threw && status != NlpStatus::kConverged && status != NlpStatus::kNotRun,
-        std::string("NaN near the root -> ") + ToString(status) + ", no exception");
+  Check(
+      !threw && status != NlpStatus::kConverged && status != NlpStatus::kNotRun,
+      std::string("NaN near the root -> ") + ToString(status) +
+          ", no exception");
 
   ContactLikeSystem contact;
   NlpOptions one = options;
@@ -194,7 +203,8 @@ void CheckIntegrator(const std::string& backend) {
     Eigen::VectorXd y(2);
     y << 1.0, 0.0;
     IntegratorResult r;
-    const IntegratorStatus status = integrator->Integrate(ode, 0.0, 2.0, y, options, &r);
+    const IntegratorStatus status =
+        integrator->Integrate(ode, 0.0, 2.0, y, options, &r);
     errors[k] = (y - Eigen::Vector2d(std::cos(2.0), std::sin(2.0))).norm();
     char line[200];
     std::snprintf(line, sizeof line,
@@ -206,7 +216,8 @@ void CheckIntegrator(const std::string& backend) {
           line);
   }
   Check(errors[0] / errors[1] > 3.0 && errors[0] / errors[1] < 5.0,
-        "second order: error ratio for h/2 = " + std::to_string(errors[0] / errors[1]));
+        "second order: error ratio for h/2 = " +
+            std::to_string(errors[0] / errors[1]));
 
   {  // event at y_2 = 0, i.e. t = pi - 0.5 from angle 0.5
     ode.roots = true;
@@ -215,12 +226,13 @@ void CheckIntegrator(const std::string& backend) {
     Eigen::VectorXd y(2);
     y << std::cos(0.5), std::sin(0.5);
     IntegratorResult r;
-    const IntegratorStatus status = integrator->Integrate(ode, 0.0, 5.0, y, options, &r);
+    const IntegratorStatus status =
+        integrator->Integrate(ode, 0.0, 5.0, y, options, &r);
     const double expected = std::numbers::pi - 0.5;
     Check(status == IntegratorStatus::kEvent && r.root_index == 0 &&
               std::abs(r.t_reached - expected) < 1e-4 && std::abs(y(1)) < 1e-4,
-          std::string("event: ") + ToString(status) + " at t = " +
-              std::to_string(r.t_reached) + " (expected " +
+          std::string("event: ") + ToString(status) +
+              " at t = " + std::to_string(r.t_reached) + " (expected " +
               std::to_string(expected) + ")");
     ode.roots = false;
   }
@@ -231,11 +243,12 @@ void CheckIntegrator(const std::string& backend) {
     Eigen::VectorXd y(2);
     y << 1.0, 0.0;
     IntegratorResult r;
-    const IntegratorStatus status = integrator->Integrate(ode, 0.0, 1.0, y, options, &r);
+    const IntegratorStatus status =
+        integrator->Integrate(ode, 0.0, 1.0, y, options, &r);
     Check(status == IntegratorStatus::kRhsFailure && r.t_reached <= 0.5 &&
               y.allFinite(),
-          std::string("Rhs failure -> ") + ToString(status) + " at t = " +
-              std::to_string(r.t_reached));
+          std::string("Rhs failure -> ") + ToString(status) +
+              " at t = " + std::to_string(r.t_reached));
     ode.fail_after = std::numeric_limits<double>::infinity();
   }
   {
@@ -259,12 +272,13 @@ SimulationResult Simulate(const Scene& scene, const std::string& nlp,
   SimulationResult result = simulator.Run();
   double drift = 0;
   for (const auto& s : result.samples) drift = std::max(drift, s.drift);
-  std::printf("   %-20s %-20s %-7s %s: t = %.2f s, %zu samples, %d NLP solves "
-              "(%lld iterations), %lld RHS, max drift %.1e, %.3f s\n",
-              nlp.c_str(), dae.c_str(), ToString(coupling), result.status.c_str(),
-              result.t_reached, result.samples.size(), result.nlp_solves,
-              result.nlp_iterations, result.rhs_evaluations, drift,
-              result.wall_seconds);
+  std::printf(
+      "   %-20s %-20s %-7s %s: t = %.2f s, %zu samples, %d NLP solves "
+      "(%lld iterations), %lld RHS, max drift %.1e, %.3f s\n",
+      nlp.c_str(), dae.c_str(), ToString(coupling), result.status.c_str(),
+      result.t_reached, result.samples.size(), result.nlp_solves,
+      result.nlp_iterations, result.rhs_evaluations, drift,
+      result.wall_seconds);
   return result;
 }
 
@@ -314,8 +328,10 @@ scenes:
     overrides: {time: {t_end: 1}}
 groups:
   pairs:
-    nlp: [)") + example::kNlpName + R"(, newton]
-    dae: [)" + example::kDaeName + R"(, rk-projection]
+    nlp: [)") + example::kNlpName +
+                           R"(, newton]
+    dae: [)" + example::kDaeName +
+                           R"(, rk-projection]
     coupling: [zoh, coupled]
     dt: [0.05]
 )";
@@ -374,7 +390,8 @@ int main(int argc, char** argv) {
 #ifdef EXAMPLE_HAVE_HARNESS
     if (suite) CheckSuite(data_dir, jobs);
 #else
-    if (suite) std::printf("(package without quasiroll::harness: suite skipped)\n");
+    if (suite)
+      std::printf("(package without quasiroll::harness: suite skipped)\n");
 #endif
   } catch (const std::exception& e) {
     std::fprintf(stderr, "plugin_demo: unexpected exception: %s\n", e.what());

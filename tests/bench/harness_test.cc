@@ -1,6 +1,8 @@
 // End-to-end: a tiny suite through the harness (runs.csv with one row per
 // grid point, failure and error rows, --jobs invariance, --resume, --filter)
 // and the CLI's exit codes.
+#include "bench/harness.h"
+
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -10,14 +12,14 @@
 #include <map>
 #include <sstream>
 
-#include "bench/harness.h"
 #include "bench/suite.h"
 
 namespace quasiroll::bench {
 namespace {
 
 namespace fs = std::filesystem;
-const std::string kScenes = std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/";
+const std::string kScenes =
+    std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/";
 
 std::string ReadAll(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -98,32 +100,37 @@ std::string WithoutTiming(const fs::path& p) {
 class BenchHarness : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ = fs::temp_directory_path() / ("quasiroll_harness_test_" +
-                                         std::to_string(::getpid()));
+    root_ = fs::temp_directory_path() /
+            ("quasiroll_harness_test_" + std::to_string(::getpid()));
     fs::remove_all(root_);
     fs::create_directories(root_);
     suite_path_ = (root_ / "tiny.yaml").string();
-    std::ofstream(suite_path_) << "name: tiny\n"
-        "scenes:\n"
-        "  - {name: paper, file: " << kScenes << "paper.yaml, overrides: {time: {t_end: 0.5}}}\n"
-        "  - {name: flat, file: " << kScenes << "flat.yaml, overrides: {time: {t_end: 0.5}}}\n"
-        "groups:\n"
-        "  wp:\n"
-        "    nlp: [newton, ceres]\n"
-        "    dae: [rk-projection, rk-baumgarte]\n"
-        "    dt: [0.05, 0.1]\n"
-        "  ip:\n"                     // ipopt runs are serialised (MUMPS)
-        "    scenes: [paper]\n"
-        "    nlp: ipopt\n"
-        "    dae: [rk-projection, rk-baumgarte]\n"
-        "    dt: 0.1\n"
-        "  unstable:\n"               // sigma * dt = 10 >> 2.785: blows up
-        "    scenes: [paper]\n"
-        "    dae: rk-baumgarte\n"
-        "    sigma: 200\n"
-        "  rough:\n"                  // no initial contact configuration
-        "    scenes: [paper]\n"
-        "    roughness: 100\n";
+    std::ofstream(suite_path_)
+        << "name: tiny\n"
+           "scenes:\n"
+           "  - {name: paper, file: "
+        << kScenes
+        << "paper.yaml, overrides: {time: {t_end: 0.5}}}\n"
+           "  - {name: flat, file: "
+        << kScenes
+        << "flat.yaml, overrides: {time: {t_end: 0.5}}}\n"
+           "groups:\n"
+           "  wp:\n"
+           "    nlp: [newton, ceres]\n"
+           "    dae: [rk-projection, rk-baumgarte]\n"
+           "    dt: [0.05, 0.1]\n"
+           "  ip:\n"  // ipopt runs are serialised (MUMPS)
+           "    scenes: [paper]\n"
+           "    nlp: ipopt\n"
+           "    dae: [rk-projection, rk-baumgarte]\n"
+           "    dt: 0.1\n"
+           "  unstable:\n"  // sigma * dt = 10 >> 2.785: blows up
+           "    scenes: [paper]\n"
+           "    dae: rk-baumgarte\n"
+           "    sigma: 200\n"
+           "  rough:\n"  // no initial contact configuration
+           "    scenes: [paper]\n"
+           "    roughness: 100\n";
     suite_ = LoadSuite(suite_path_);
     HarnessOptions o;
     o.out_dir = (root_ / "j1").string();
@@ -156,27 +163,62 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
   EXPECT_EQ(summary_j1_.executed, 20);
   const Table t = ReadTable(root_ / "j1" / "runs.csv");
   EXPECT_EQ(t.header, RunsCsvColumns());
-  for (const char* c :
-       {"scene", "nlp", "dae", "coupling", "dt", "tol", "sigma", "eps", "mu", "seed",
-        "status", "stop_reason", "t_reached", "wall_s", "repeats", "nlp_solves",
-        "nlp_iters", "rhs_evals", "steps", "rejected_steps", "err_pos_rms", "err_pos_max",
-        "err_final", "err_rot_max", "err_force_rms", "err_slip", "drift_max",
-        "drift_final", "gap_max", "run_id", "suite_group", "rk_method", "roughness",
-        "mu_min", "jac_evals", "t_end"})
-    EXPECT_NE(std::find(t.header.begin(), t.header.end(), c), t.header.end()) << c;
+  for (const char* c : {"scene",
+                        "nlp",
+                        "dae",
+                        "coupling",
+                        "dt",
+                        "tol",
+                        "sigma",
+                        "eps",
+                        "mu",
+                        "seed",
+                        "status",
+                        "stop_reason",
+                        "t_reached",
+                        "wall_s",
+                        "repeats",
+                        "nlp_solves",
+                        "nlp_iters",
+                        "rhs_evals",
+                        "steps",
+                        "rejected_steps",
+                        "err_pos_rms",
+                        "err_pos_max",
+                        "err_final",
+                        "err_rot_max",
+                        "err_force_rms",
+                        "err_slip",
+                        "drift_max",
+                        "drift_final",
+                        "gap_max",
+                        "run_id",
+                        "suite_group",
+                        "rk_method",
+                        "roughness",
+                        "mu_min",
+                        "jac_evals",
+                        "t_end"})
+    EXPECT_NE(std::find(t.header.begin(), t.header.end(), c), t.header.end())
+        << c;
   ASSERT_EQ(t.rows.size(), suite_.runs.size());
   for (std::size_t i = 0; i < t.rows.size(); ++i) {
     const auto& r = t.rows[i];
     EXPECT_EQ(r.at("run_id"), suite_.runs[i].run_id);  // grid order
-    EXPECT_TRUE(fs::exists(root_ / "j1" / "trajectories" / (r.at("run_id") + ".csv")));
+    EXPECT_TRUE(
+        fs::exists(root_ / "j1" / "trajectories" / (r.at("run_id") + ".csv")));
     EXPECT_TRUE(fs::exists(root_ / "j1" / "runs" / (r.at("run_id") + ".csv")));
     if (r.at("suite_group") == "wp" || r.at("suite_group") == "ip") {
-      EXPECT_EQ(r.at("status"), "success") << r.at("run_id") << ": " << r.at("stop_reason");
+      EXPECT_EQ(r.at("status"), "success")
+          << r.at("run_id") << ": " << r.at("stop_reason");
       EXPECT_EQ(r.at("t_reached"), "0.5");
       EXPECT_LT(std::stod(r.at("err_pos_max")), 1e-4) << r.at("run_id");
-      EXPECT_EQ(std::stod(r.at("err_pos_max")) >= std::stod(r.at("err_pos_rms")), true);
+      EXPECT_EQ(
+          std::stod(r.at("err_pos_max")) >= std::stod(r.at("err_pos_rms")),
+          true);
       EXPECT_GT(std::stoi(r.at("nlp_solves")), 0);
-      EXPECT_EQ(r.at("ref_kind"), r.at("scene") == "flat" ? "analytic:flat" : "numerical");
+      EXPECT_EQ(r.at("ref_kind"),
+                r.at("scene") == "flat" ? "analytic:flat" : "numerical");
       EXPECT_EQ(r.at("ref_status"), "success");
     }
   }
@@ -185,8 +227,9 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
   EXPECT_NE(ReadAll(root_ / "j1" / "terrains" / "flat.json").find("\"plane\""),
             std::string::npos);
   const std::string meta = ReadAll(root_ / "j1" / "meta.json");
-  for (const char* k : {"\"commit\"", "\"libraries\"", "\"machine\"", "\"start_time\"",
-                        "\"end_time\"", "\"hash\"", "\"jobs\":1", "\"complete\":true"})
+  for (const char* k :
+       {"\"commit\"", "\"libraries\"", "\"machine\"", "\"start_time\"",
+        "\"end_time\"", "\"hash\"", "\"jobs\":1", "\"complete\":true"})
     EXPECT_NE(meta.find(k), std::string::npos) << k;
 }
 
@@ -210,7 +253,8 @@ TEST_F(BenchHarness, FailuresAndErrorsAreRowsAndTheSuiteFinishes) {
 TEST_F(BenchHarness, JobsTwoGivesTheSameRunsCsvExceptTiming) {
   const HarnessSummary s = RunSuite(suite_, Options("j2", 2));
   EXPECT_EQ(s.executed, 20);
-  EXPECT_EQ(WithoutTiming(root_ / "j1" / "runs.csv"), WithoutTiming(root_ / "j2" / "runs.csv"));
+  EXPECT_EQ(WithoutTiming(root_ / "j1" / "runs.csv"),
+            WithoutTiming(root_ / "j2" / "runs.csv"));
   // Trajectories are bit-identical too.
   for (const RunSpec& r : suite_.runs)
     EXPECT_EQ(ReadAll(root_ / "j1" / "trajectories" / (r.run_id + ".csv")),
@@ -225,16 +269,19 @@ TEST_F(BenchHarness, ResumeAfterInterruptionGivesTheSameFiles) {
   // Simulate an interruption: no runs.csv, three runs not persisted, one
   // trajectory missing.
   fs::remove(dir / "runs.csv");
-  for (int i : {0, 7, 18}) fs::remove(dir / "runs" / (suite_.runs[i].run_id + ".csv"));
+  for (int i : {0, 7, 18})
+    fs::remove(dir / "runs" / (suite_.runs[i].run_id + ".csv"));
   fs::remove(dir / "trajectories" / (suite_.runs[9].run_id + ".csv"));
   HarnessOptions o = Options("resume", 2);
   o.resume = true;
   const HarnessSummary s = RunSuite(suite_, o);
   EXPECT_EQ(s.resumed, 16);
   EXPECT_EQ(s.executed, 4);
-  EXPECT_EQ(WithoutTiming(root_ / "j1" / "runs.csv"), WithoutTiming(dir / "runs.csv"));
+  EXPECT_EQ(WithoutTiming(root_ / "j1" / "runs.csv"),
+            WithoutTiming(dir / "runs.csv"));
   // Rows taken from disk are reused verbatim (timing included).
-  const Table a = ReadTable(root_ / "j1" / "runs.csv"), b = ReadTable(dir / "runs.csv");
+  const Table a = ReadTable(root_ / "j1" / "runs.csv"),
+              b = ReadTable(dir / "runs.csv");
   for (int i : {1, 2, 8, 16, 19}) EXPECT_EQ(a.rows[i], b.rows[i]);
   for (const RunSpec& r : suite_.runs)
     EXPECT_EQ(ReadAll(root_ / "j1" / "trajectories" / (r.run_id + ".csv")),
@@ -242,7 +289,8 @@ TEST_F(BenchHarness, ResumeAfterInterruptionGivesTheSameFiles) {
   // Resuming a finished directory runs nothing.
   const HarnessSummary again = RunSuite(suite_, o);
   EXPECT_EQ(again.executed, 0);
-  EXPECT_EQ(WithoutTiming(root_ / "j1" / "runs.csv"), WithoutTiming(dir / "runs.csv"));
+  EXPECT_EQ(WithoutTiming(root_ / "j1" / "runs.csv"),
+            WithoutTiming(dir / "runs.csv"));
 }
 
 TEST_F(BenchHarness, FilterKeepsMatchingRunIds) {
@@ -252,13 +300,15 @@ TEST_F(BenchHarness, FilterKeepsMatchingRunIds) {
   EXPECT_EQ(s.selected, 4);
   const Table t = ReadTable(root_ / "filter" / "runs.csv");
   ASSERT_EQ(t.rows.size(), 4u);
-  for (const auto& r : t.rows) EXPECT_EQ(r.at("run_id").rfind("wp-flat-newton", 0), 0u);
+  for (const auto& r : t.rows)
+    EXPECT_EQ(r.at("run_id").rfind("wp-flat-newton", 0), 0u);
   o.filter = "([";
   EXPECT_THROW(RunSuite(suite_, o), SceneError);
 }
 
 int RunCli(const std::string& args) {
-  const std::string cmd = std::string(QUASIROLL_CLI_PATH) + " " + args + " >/dev/null 2>&1";
+  const std::string cmd =
+      std::string(QUASIROLL_CLI_PATH) + " " + args + " >/dev/null 2>&1";
   const int status = std::system(cmd.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
@@ -267,16 +317,23 @@ TEST_F(BenchHarness, CliExitCodes) {
   const fs::path bad = root_ / "bad.yaml";
   std::ofstream(bad) << "scenes:\n  - {file: " << kScenes
                      << "paper.yaml}\ngroups:\n  g:\n    nlp: [newton, nope]\n";
-  EXPECT_EQ(RunCli("bench --suite " + bad.string() + " --out " + (root_ / "bad").string()), 2);
-  EXPECT_FALSE(fs::exists(root_ / "bad" / "runs.csv"));  // rejected before running
-  EXPECT_EQ(RunCli("bench --suite " + suite_path_ + " --out " + (root_ / "cli").string() +
+  EXPECT_EQ(RunCli("bench --suite " + bad.string() + " --out " +
+                   (root_ / "bad").string()),
+            2);
+  EXPECT_FALSE(
+      fs::exists(root_ / "bad" / "runs.csv"));  // rejected before running
+  EXPECT_EQ(RunCli("bench --suite " + suite_path_ + " --out " +
+                   (root_ / "cli").string() +
                    " --jobs 2 --filter unstable --progress lines"),
             0);  // the only run fails, the suite completes
   const Table t = ReadTable(root_ / "cli" / "runs.csv");
   ASSERT_EQ(t.rows.size(), 1u);
   EXPECT_NE(t.rows[0].at("status"), "success");
-  EXPECT_EQ(RunCli("bench --suite " + suite_path_ + " --out x --filter '(['"), 2);
-  EXPECT_EQ(RunCli("bench --suite " + (root_ / "missing.yaml").string() + " --out x"), 2);
+  EXPECT_EQ(RunCli("bench --suite " + suite_path_ + " --out x --filter '(['"),
+            2);
+  EXPECT_EQ(
+      RunCli("bench --suite " + (root_ / "missing.yaml").string() + " --out x"),
+      2);
 }
 
 }  // namespace

@@ -1,12 +1,13 @@
 // Accuracy and drift metrics on synthetic trajectories with known
 // differences.
+#include "bench/metrics.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
 
-#include "bench/metrics.h"
 #include "core/so3.h"
 
 namespace quasiroll::bench {
@@ -56,7 +57,8 @@ TEST(BenchMetrics, ConstantOffsetGivesRmsEqualMaxEqualOffset) {
 }
 
 TEST(BenchMetrics, LinearlyGrowingErrorHasKnownRmsAndMax) {
-  // e(t) = c t on t_k = k h, k = 0..n: max = c t_n, rms^2 = c^2 h^2 sum k^2/(n+1).
+  // e(t) = c t on t_k = k h, k = 0..n: max = c t_n, rms^2 = c^2 h^2 sum
+  // k^2/(n+1).
   const auto ref = Curve(0.1, 1.0);
   auto run = ref;
   const double c = 1e-3;
@@ -152,7 +154,8 @@ TEST(BenchMetrics, FailedRunIsMeasuredOverTheTimeReachedOnly) {
 
 TEST(BenchMetrics, ReferenceEndingEarlyLimitsTheCommonTimes) {
   const auto full = Curve(0.05, 2.0);
-  std::vector<TrajectorySample> ref(full.begin(), full.begin() + 11);  // to 0.5 s
+  std::vector<TrajectorySample> ref(full.begin(),
+                                    full.begin() + 11);  // to 0.5 s
   const AccuracyMetrics m = CompareTrajectories(full, ref, true);
   EXPECT_EQ(m.common_samples, 11);
   EXPECT_TRUE(std::isnan(m.final_pos));  // run end not covered

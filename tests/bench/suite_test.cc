@@ -1,11 +1,12 @@
 // Suite loading: grid expansion, defaults, run ids, and rejection of bad
 // suites with the entry path and value in the message.
+#include "bench/suite.h"
+
 #include <gtest/gtest.h>
 
 #include <set>
 #include <string>
 
-#include "bench/suite.h"
 #include "core/scene.h"
 
 namespace quasiroll::bench {
@@ -27,7 +28,8 @@ void ExpectRejected(const std::string& text,
     const std::string msg = e.what();
     EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
     for (const std::string& f : fragments)
-      EXPECT_NE(msg.find(f), std::string::npos) << "'" << f << "' not in: " << msg;
+      EXPECT_NE(msg.find(f), std::string::npos)
+          << "'" << f << "' not in: " << msg;
   }
 }
 
@@ -78,16 +80,18 @@ groups:
   for (const RunSpec& run : s.runs) {
     EXPECT_TRUE(ids.insert(run.run_id).second) << run.run_id;
     for (char c : run.run_id)
-      EXPECT_TRUE(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' ||
-                  c == '.')
+      EXPECT_TRUE(std::isalnum(static_cast<unsigned char>(c)) || c == '-' ||
+                  c == '_' || c == '.')
           << run.run_id;
   }
-  EXPECT_EQ(s.runs[16].run_id.rfind("sweep-paper-newton-rk-projection-zoh-", 0), 0u)
+  EXPECT_EQ(s.runs[16].run_id.rfind("sweep-paper-newton-rk-projection-zoh-", 0),
+            0u)
       << s.runs[16].run_id;
 }
 
 TEST(BenchSuite, RunIdsAreDeterministic) {
-  const std::string text = std::string(kBase) + "groups:\n  g:\n    dt: [0.1, 0.05]\n";
+  const std::string text =
+      std::string(kBase) + "groups:\n  g:\n    dt: [0.1, 0.05]\n";
   const Suite a = Load(text), b = Load(text);
   ASSERT_EQ(a.runs.size(), b.runs.size());
   for (std::size_t i = 0; i < a.runs.size(); ++i)
@@ -131,11 +135,13 @@ groups:
   ASSERT_TRUE(a.random.has_value());
   EXPECT_EQ(a.random->seed, 1u);
   ASSERT_FALSE(b.random.has_value());
-  const auto bumps = GaussianTerrain::Random(1, 5, a.random->amplitude, a.random->sigma,
-                                             a.random->x, a.random->y)
-                         .bumps();
+  const auto bumps =
+      GaussianTerrain::Random(1, 5, a.random->amplitude, a.random->sigma,
+                              a.random->x, a.random->y)
+          .bumps();
   ASSERT_EQ(b.bumps.size(), 5u);
-  for (int i = 0; i < 5; ++i) EXPECT_EQ(b.bumps[i].amplitude, 0.5 * bumps[i].amplitude);
+  for (int i = 0; i < 5; ++i)
+    EXPECT_EQ(b.bumps[i].amplitude, 0.5 * bumps[i].amplitude);
   EXPECT_NE(SceneCanonicalText(ReferenceScene(s, s.runs[0]), a, ""),
             SceneCanonicalText(ReferenceScene(s, s.runs[1]), b, ""));
   EXPECT_EQ(TerrainId(s.runs[1], s.scenes[0]), "rnd_s1_r0.5");
@@ -164,7 +170,8 @@ TEST(BenchSuite, RejectsEmptyGrids) {
 TEST(BenchSuite, RejectsUnknownKeys) {
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dtt: [0.1]\n",
                  {"groups.g.dtt", "unknown key"});
-  ExpectRejected(std::string(kBase) + "group:\n  g: {}\n", {"group", "unknown key"});
+  ExpectRejected(std::string(kBase) + "group:\n  g: {}\n",
+                 {"group", "unknown key"});
   ExpectRejected(R"(
 scenes:
   - {file: paper.yaml, overrides: {mass2: 3}}
@@ -176,9 +183,11 @@ groups: {g: {}}
 TEST(BenchSuite, RejectsBadNumbers) {
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dt: [0.1, -0.05]\n",
                  {"groups.g.dt[1]", "-0.05"});
-  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dt: 0\n", {"groups.g.dt", "0"});
-  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    scenes: [paper]\n    dt: [5]\n",
-                 {"groups.g.dt[0]", "t_end", "5"});
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dt: 0\n",
+                 {"groups.g.dt", "0"});
+  ExpectRejected(
+      std::string(kBase) + "groups:\n  g:\n    scenes: [paper]\n    dt: [5]\n",
+      {"groups.g.dt[0]", "t_end", "5"});
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    mu: [0.5, .nan]\n",
                  {"groups.g.mu[1]"});
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    tol: [\"1e-6\"]\n",
@@ -192,19 +201,24 @@ TEST(BenchSuite, RejectsBadNumbers) {
 TEST(BenchSuite, RejectsSweepsThatDoNotApply) {
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    seed: [3]\n",
                  {"groups.g.seed", "random", "3"});
-  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    scenes: [flat5]\n    roughness: 2\n",
+  ExpectRejected(std::string(kBase) +
+                     "groups:\n  g:\n    scenes: [flat5]\n    roughness: 2\n",
                  {"groups.g.roughness", "flat5", "2"});
 }
 
 TEST(BenchSuite, RejectsBadScenes) {
   ExpectRejected("scenes:\n  - {file: nope.yaml}\ngroups: {g: {}}\n",
                  {"scenes[0].file", "nope.yaml"});
-  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    scenes: [paper, hill]\n",
-                 {"groups.g.scenes[1]", "\"hill\""});
-  ExpectRejected("scenes:\n  - {file: paper.yaml}\n  - {file: paper.yaml}\ngroups: {g: {}}\n",
-                 {"scenes[1].name", "duplicate", "paper"});
-  ExpectRejected("scenes:\n  - {name: 'a b', file: paper.yaml}\ngroups: {g: {}}\n",
-                 {"scenes[0].name", "a b"});
+  ExpectRejected(
+      std::string(kBase) + "groups:\n  g:\n    scenes: [paper, hill]\n",
+      {"groups.g.scenes[1]", "\"hill\""});
+  ExpectRejected(
+      "scenes:\n  - {file: paper.yaml}\n  - {file: paper.yaml}\ngroups: {g: "
+      "{}}\n",
+      {"scenes[1].name", "duplicate", "paper"});
+  ExpectRejected(
+      "scenes:\n  - {name: 'a b', file: paper.yaml}\ngroups: {g: {}}\n",
+      {"scenes[0].name", "a b"});
   ExpectRejected(R"(
 scenes:
   - {file: paper.yaml, overrides: {mu: -1}}

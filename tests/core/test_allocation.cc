@@ -43,10 +43,13 @@ TEST_P(WarmStep, AdvanceDoesNotAllocate) {
   Simulator sim(scene, options);
   SimulationResult result;
   sim.Begin(sim.initial_configuration(), &result);
-  for (int k = 0; k < 5; ++k) ASSERT_TRUE(sim.Advance(&result)) << result.stop_reason;
+  for (int k = 0; k < 5; ++k)
+    ASSERT_TRUE(sim.Advance(&result)) << result.stop_reason;
   const long long before = g_allocations.load();
-  for (int k = 0; k < 50; ++k) ASSERT_TRUE(sim.Advance(&result)) << result.stop_reason;
-  EXPECT_EQ(g_allocations.load() - before, 0) << "allocations in 50 warmed-up steps";
+  for (int k = 0; k < 50; ++k)
+    ASSERT_TRUE(sim.Advance(&result)) << result.stop_reason;
+  EXPECT_EQ(g_allocations.load() - before, 0)
+      << "allocations in 50 warmed-up steps";
 }
 
 INSTANTIATE_TEST_SUITE_P(RkBackends, WarmStep,

@@ -26,7 +26,9 @@ std::shared_ptr<const Terrain> RoughTerrain() {
   return std::make_shared<GaussianTerrain>(bumps);
 }
 
-KinematicModel RoughModel() { return KinematicModel(RobotGeometry{}, RoughTerrain()); }
+KinematicModel RoughModel() {
+  return KinematicModel(RobotGeometry{}, RoughTerrain());
+}
 
 // Central difference of a vector function; truncation error ~ h^2 f'''/6,
 // round-off ~ eps |f| / h: with h = 1e-6 both are ~1e-10 for O(1..100)
@@ -42,7 +44,9 @@ TEST(SurfaceForms, TorusFormsMatchDefinitions) {
     for (double v : {0.0, 0.4, -0.9}) {
       const SurfaceForms f = TorusForms(R, r, u, v);
       const double h = 1e-6;
-      auto c = [&](double du, double dv) { return TorusForms(R, r, u + du, v + dv); };
+      auto c = [&](double du, double dv) {
+        return TorusForms(R, r, u + du, v + dv);
+      };
       Eigen::Matrix<double, 3, 2> dc, dn, dx;
       dc.col(0) = (c(h, 0).point - c(-h, 0).point) / (2 * h);
       dc.col(1) = (c(0, h).point - c(0, -h).point) / (2 * h);
@@ -55,7 +59,9 @@ TEST(SurfaceForms, TorusFormsMatchDefinitions) {
       EXPECT_LT((f.K - e.transpose() * dn * f.A.inverse()).norm(), 1e-6);
       EXPECT_LT((f.tau - f.frame.col(1).transpose() * dx).norm(), 1e-8);
       EXPECT_NEAR(f.frame.determinant(), 1.0, 1e-14);
-      EXPECT_LT((f.frame.col(2) - dc.col(0).cross(dc.col(1)).normalized()).norm(), 1e-8);
+      EXPECT_LT(
+          (f.frame.col(2) - dc.col(0).cross(dc.col(1)).normalized()).norm(),
+          1e-8);
     }
   }
 }
@@ -64,12 +70,13 @@ TEST(SurfaceForms, TerrainFormsMatchDefinitionsOnNonOrthogonalChart) {
   auto terrain = RoughTerrain();
   for (const Vec2& pt : {Vec2(0.1, 0.05), Vec2(0.35, 0.3), Vec2(-0.2, 0.6)}) {
     const TerrainJet jet = terrain->Evaluate(pt.x(), pt.y());
-    ASSERT_GT(std::abs(jet.hx * jet.hy), 1e-6) << "chart must be non-orthogonal here";
+    ASSERT_GT(std::abs(jet.hx * jet.hy), 1e-6)
+        << "chart must be non-orthogonal here";
     const SurfaceForms f = TerrainForms(jet, pt.x(), pt.y());
     const double h = 1e-6;
     auto c = [&](double dx, double dy) {
-      return TerrainForms(terrain->Evaluate(pt.x() + dx, pt.y() + dy), pt.x() + dx,
-                          pt.y() + dy);
+      return TerrainForms(terrain->Evaluate(pt.x() + dx, pt.y() + dy),
+                          pt.x() + dx, pt.y() + dy);
     };
     Eigen::Matrix<double, 3, 2> dc, dn, dxf;
     dc.col(0) = (c(h, 0).point - c(-h, 0).point) / (2 * h);
@@ -98,7 +105,8 @@ TEST(Kinematics, LoopClosureJacobianMatchesCentralDifferences) {
   Configuration theta = RoughStart(model);
   // Also off the manifold H = 0: J is exact everywhere (model.md §6).
   Configuration off = theta;
-  for (int i = 0; i < kConfigSize; ++i) off(i) += 1e-3 * std::sin(3.0 * i + 1.0);
+  for (int i = 0; i < kConfigSize; ++i)
+    off(i) += 1e-3 * std::sin(3.0 * i + 1.0);
   for (const Configuration& q : {theta, off}) {
     LoopClosureJacobian jac;
     model.ConstraintJacobian(q, &jac);
@@ -136,14 +144,20 @@ TEST(Kinematics, ContactVelocityMapMatchesFiniteDifferencedMotion) {
     std::array<Vec3, 2> ax, pt;
     const int j = ConfigIndex::kTheta + 2 * i;
     model.Mount(i, theta(j), theta(j + 1), &R_PW0, &p_PW0, &ax, &pt);
-    const Vec3 local = R_PW0.transpose() * (s.R.transpose() * (s.p_c - s.p) - p_PW0);
+    const Vec3 local =
+        R_PW0.transpose() * (s.R.transpose() * (s.p_c - s.p) - p_PW0);
     auto pose = [&](double t, Mat3* R_GW, Vec3* point) {
       const Vec3 wb = w.segment<3>(3) * t;
-      const Mat3 R = s.R * Eigen::AngleAxisd(wb.norm(), wb.norm() > 0 ? wb.normalized() : Vec3::UnitX()).toRotationMatrix();
-      const Vec3 p = s.p + s.R * w.head<3>() * t;  // body twist held, first order exact
+      const Mat3 R =
+          s.R * Eigen::AngleAxisd(
+                    wb.norm(), wb.norm() > 0 ? wb.normalized() : Vec3::UnitX())
+                    .toRotationMatrix();
+      const Vec3 p =
+          s.p + s.R * w.head<3>() * t;  // body twist held, first order exact
       Mat3 R_PW;
       Vec3 p_PW;
-      model.Mount(i, theta(j) + w(6 + 2 * i) * t, theta(j + 1) + w(7 + 2 * i) * t, &R_PW, &p_PW, &ax, &pt);
+      model.Mount(i, theta(j) + w(6 + 2 * i) * t,
+                  theta(j + 1) + w(7 + 2 * i) * t, &R_PW, &p_PW, &ax, &pt);
       *R_GW = R * R_PW;
       *point = p + R * (p_PW + R_PW * local);
     };
@@ -155,8 +169,10 @@ TEST(Kinematics, ContactVelocityMapMatchesFiniteDifferencedMotion) {
     const Vec3 v_world = (xp - xm) / (2 * h);
     const Mat3 rdot = (Rp - Rm) / (2 * h);
     const Vec3 w_world = Vee(rdot * s.R_GW.transpose());
-    EXPECT_LT((twist.head<3>() - s.R_GCW.transpose() * v_world).norm(), 1e-8) << "wheel " << i;
-    EXPECT_LT((twist.tail<3>() - s.R_GCW.transpose() * w_world).norm(), 1e-8) << "wheel " << i;
+    EXPECT_LT((twist.head<3>() - s.R_GCW.transpose() * v_world).norm(), 1e-8)
+        << "wheel " << i;
+    EXPECT_LT((twist.tail<3>() - s.R_GCW.transpose() * w_world).norm(), 1e-8)
+        << "wheel " << i;
   }
 }
 
@@ -219,8 +235,10 @@ TEST(Kinematics, ObliqueInclineStraightDriveCoversRhoAlphaDotT) {
   const double yaw = 57.0 * M_PI / 180;
   auto terrain = std::make_shared<InclineTerrain>(beta, gamma);
   const KinematicModel model(RobotGeometry{}, terrain);
-  const Configuration theta0 = SolveInitialConfiguration(model, 0, 0, yaw, {0, 0, 0, 0, 0, 0});
-  const double rho = model.geometry().rho(), rate = 0.6, t_end = 0.3 / (rho * rate);
+  const Configuration theta0 =
+      SolveInitialConfiguration(model, 0, 0, yaw, {0, 0, 0, 0, 0, 0});
+  const double rho = model.geometry().rho(), rate = 0.6,
+               t_end = 0.3 / (rho * rate);
   Vec12 w = Vec12::Zero();
   w(0) = rho * rate;
   w(7) = w(9) = w(11) = rate;
@@ -233,8 +251,10 @@ TEST(Kinematics, ObliqueInclineStraightDriveCoversRhoAlphaDotT) {
     for (int i = 0; i < 3; ++i) {
       ChainState s;
       model.EvaluateChain(q, i, &s);
-      const Vec2 b = s.r_psi * (s.ground.A * qd->segment<2>(ConfigIndex::Xg(i)));
-      const TerrainJet jet = terrain->Evaluate(q(ConfigIndex::Xg(i)), q(ConfigIndex::Yg(i)));
+      const Vec2 b =
+          s.r_psi * (s.ground.A * qd->segment<2>(ConfigIndex::Xg(i)));
+      const TerrainJet jet =
+          terrain->Evaluate(q(ConfigIndex::Xg(i)), q(ConfigIndex::Yg(i)));
       const Vec2 metric(std::hypot(1.0, jet.hx), std::hypot(1.0, jet.hy));
       qd->segment<2>(ConfigIndex::Xg(i)) = (s.r_psi * b).cwiseQuotient(metric);
     }
@@ -274,9 +294,11 @@ TEST(Kinematics, ObliqueInclineStraightDriveCoversRhoAlphaDotT) {
 }
 
 TEST(InitialConfiguration, FlatGroundGivesDesignHeight) {
-  const KinematicModel model(RobotGeometry{}, std::make_shared<PlaneTerrain>(0.0));
+  const KinematicModel model(RobotGeometry{},
+                             std::make_shared<PlaneTerrain>(0.0));
   InitialConfigurationReport report;
-  const Configuration theta = SolveInitialConfiguration(model, 0, 0, 0, {0, 0, 0, 0, 0, 0}, &report);
+  const Configuration theta =
+      SolveInitialConfiguration(model, 0, 0, 0, {0, 0, 0, 0, 0, 0}, &report);
   Mat3 R;
   Vec3 p;
   model.PlatformPose(theta, &R, &p);
@@ -296,8 +318,10 @@ TEST(InitialConfiguration, InclineGivesSlopePitchAndRoll) {
   const double beta = 10.0 * M_PI / 180;
   // Straight uphill: nose up by beta (pitch = -beta with R = Rz Ry Rx).
   {
-    const KinematicModel model(RobotGeometry{}, std::make_shared<InclineTerrain>(beta, 0.0));
-    const Configuration theta = SolveInitialConfiguration(model, 0, 0, 0, {0, 0, 0, 0, 0, 0});
+    const KinematicModel model(RobotGeometry{},
+                               std::make_shared<InclineTerrain>(beta, 0.0));
+    const Configuration theta =
+        SolveInitialConfiguration(model, 0, 0, 0, {0, 0, 0, 0, 0, 0});
     Mat3 R;
     Vec3 p;
     model.PlatformPose(theta, &R, &p);
@@ -309,8 +333,10 @@ TEST(InitialConfiguration, InclineGivesSlopePitchAndRoll) {
   }
   // Across the slope (heading +x, ascent along +y): roll = -beta (left up).
   {
-    const KinematicModel model(RobotGeometry{}, std::make_shared<InclineTerrain>(beta, M_PI / 2));
-    const Configuration theta = SolveInitialConfiguration(model, 0, 0, 0, {0, 0, 0, 0, 0, 0});
+    const KinematicModel model(
+        RobotGeometry{}, std::make_shared<InclineTerrain>(beta, M_PI / 2));
+    const Configuration theta =
+        SolveInitialConfiguration(model, 0, 0, 0, {0, 0, 0, 0, 0, 0});
     Mat3 R;
     Vec3 p;
     model.PlatformPose(theta, &R, &p);
@@ -322,7 +348,8 @@ TEST(InitialConfiguration, InclineGivesSlopePitchAndRoll) {
   {
     auto terrain = std::make_shared<InclineTerrain>(beta, 0.7);
     const KinematicModel model(RobotGeometry{}, terrain);
-    const Configuration theta = SolveInitialConfiguration(model, 0.1, -0.2, 1.9, {0, 0, 0, 0, 0, 0});
+    const Configuration theta =
+        SolveInitialConfiguration(model, 0.1, -0.2, 1.9, {0, 0, 0, 0, 0, 0});
     Mat3 R;
     Vec3 p;
     model.PlatformPose(theta, &R, &p);
@@ -343,7 +370,8 @@ TEST(InitialConfiguration, RoughStartIsConsistent) {
 }
 
 TEST(InitialConfiguration, PaperSceneIsConsistent) {
-  const Scene scene = LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
+  const Scene scene =
+      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
   const KinematicModel model(scene.geometry, scene.terrain);
   InitialConfigurationReport report;
   const Configuration theta = SolveInitialConfiguration(model, scene, &report);
@@ -354,12 +382,14 @@ TEST(InitialConfiguration, PaperSceneIsConsistent) {
 }
 
 TEST(InitialConfiguration, ImpossibleGeometryIsAClearError) {
-  // A pit narrower than the wheel (bottom curvature 500 1/m > 50 1/m): contact search
-  // fails or the contact is invalid, reported as GeometryError, never a crash.
+  // A pit narrower than the wheel (bottom curvature 500 1/m > 50 1/m): contact
+  // search fails or the contact is invalid, reported as GeometryError, never a
+  // crash.
   auto terrain = std::make_shared<GaussianTerrain>(
       std::vector<GaussianBump>{{-0.05, 0.25, 0.0, 0.01}});
   const KinematicModel model(RobotGeometry{}, terrain);
-  EXPECT_THROW(SolveInitialConfiguration(model, 0, 0, 0, {0, 0, 0, 0, 0, 0}), GeometryError);
+  EXPECT_THROW(SolveInitialConfiguration(model, 0, 0, 0, {0, 0, 0, 0, 0, 0}),
+               GeometryError);
 }
 
 }  // namespace

@@ -7,8 +7,8 @@
 #include <memory>
 
 #include "core/initial_configuration.h"
-#include "core/simulator.h"
 #include "core/quasi_static.h"
+#include "core/simulator.h"
 #include "core/terrains.h"
 
 namespace quasiroll {
@@ -23,8 +23,8 @@ struct Scenario {
 };
 
 Scenario MakeSetup(std::shared_ptr<const Terrain> terrain, ActuationMode mode,
-                double yaw, std::array<double, 6> joints,
-                std::array<double, 6> rates, double mu = 0.5) {
+                   double yaw, std::array<double, 6> joints,
+                   std::array<double, 6> rates, double mu = 0.5) {
   Scenario s;
   s.model = std::make_unique<KinematicModel>(RobotGeometry{}, terrain);
   s.theta = SolveInitialConfiguration(*s.model, 0, 0, yaw, joints);
@@ -37,7 +37,8 @@ Scenario MakeSetup(std::shared_ptr<const Terrain> terrain, ActuationMode mode,
 class QuasiStaticBackends : public ::testing::TestWithParam<std::string> {
  protected:
   static void SetUpTestSuite() { RegisterBuiltinNlpSolvers(); }
-  QuasiStaticSolution Solve(const Scenario& s, QuasiStaticOptions options = {}) {
+  QuasiStaticSolution Solve(const Scenario& s,
+                            QuasiStaticOptions options = {}) {
     QuasiStaticSolver solver(*s.model, s.params,
                              NlpSolverRegistry::Create(GetParam()), options);
     QuasiStaticSolution sol;
@@ -58,9 +59,10 @@ double ForceTolerance(ActuationMode mode) {
 TEST_P(QuasiStaticBackends, O1FlatStraightDrive) {
   for (ActuationMode mode : {ActuationMode::kPaper, ActuationMode::kPvc}) {
     const Scenario s = MakeSetup(std::make_shared<PlaneTerrain>(0.0), mode, 0.0,
-                              {0, 0, 0, 0, 0, 0}, {0, 0.6, 0, 0.6, 0, 0.6});
+                                 {0, 0, 0, 0, 0, 0}, {0, 0.6, 0, 0.6, 0, 0.6});
     const QuasiStaticSolution sol = Solve(s);
-    ASSERT_EQ(sol.status, QuasiStaticStatus::kOk) << ToString(mode) << ": " << sol.message;
+    ASSERT_EQ(sol.status, QuasiStaticStatus::kOk)
+        << ToString(mode) << ": " << sol.message;
     const double tol = ForceTolerance(mode);
     EXPECT_NEAR(sol.twist(0), 0.06, 1e-9);  // rho alphadot
     EXPECT_NEAR(sol.twist.segment<5>(1).norm(), 0.0, 1e-9);
@@ -85,8 +87,9 @@ TEST_P(QuasiStaticBackends, O3InclineUpAndDown) {
   for (ActuationMode mode : {ActuationMode::kPaper, ActuationMode::kPvc}) {
     for (int dir : {+1, -1}) {
       const double yaw = dir > 0 ? 0.0 : M_PI;
-      const Scenario s = MakeSetup(std::make_shared<InclineTerrain>(beta, 0.0), mode,
-                                yaw, {0, 0, 0, 0, 0, 0}, {0, 0.6, 0, 0.6, 0, 0.6});
+      const Scenario s =
+          MakeSetup(std::make_shared<InclineTerrain>(beta, 0.0), mode, yaw,
+                    {0, 0, 0, 0, 0, 0}, {0, 0.6, 0, 0.6, 0, 0.6});
       const QuasiStaticSolution sol = Solve(s);
       ASSERT_EQ(sol.status, QuasiStaticStatus::kOk)
           << ToString(mode) << " dir " << dir << ": " << sol.message;
@@ -99,16 +102,21 @@ TEST_P(QuasiStaticBackends, O3InclineUpAndDown) {
       EXPECT_NEAR(sum_n, 48.2556, 1e-4);  // O3-num, 6 digits given
       EXPECT_NEAR(sum_n, kMg * std::cos(beta), 3 * tol);
       EXPECT_NEAR(sum_t, dir * kMg * std::sin(beta), 3 * tol);
-      const double n1 = kMg * (0.25 * std::cos(beta) - dir * 0.15 * std::sin(beta)) / 0.5;
+      const double n1 =
+          kMg * (0.25 * std::cos(beta) - dir * 0.15 * std::sin(beta)) / 0.5;
       EXPECT_NEAR(sol.contacts[0].normal_force, n1, tol);
-      EXPECT_NEAR(sol.contacts[0].normal_force, dir > 0 ? 21.5752 : 26.6804, 1e-4);
+      EXPECT_NEAR(sol.contacts[0].normal_force, dir > 0 ? 21.5752 : 26.6804,
+                  1e-4);
       if (mode == ActuationMode::kPaper) {
         for (const auto& c : sol.contacts)  // traction proportional to load
-          EXPECT_NEAR(c.traction.norm() / c.normal_force, std::tan(beta), tol / 10);
+          EXPECT_NEAR(c.traction.norm() / c.normal_force, std::tan(beta),
+                      tol / 10);
       } else {
         EXPECT_NEAR(sol.contacts[0].traction(0), 0.0, tol);
-        EXPECT_NEAR(sol.contacts[1].traction(0), dir * kMg * std::sin(beta) / 2, tol);
-        EXPECT_NEAR(sol.contacts[2].traction(0), dir * kMg * std::sin(beta) / 2, tol);
+        EXPECT_NEAR(sol.contacts[1].traction(0), dir * kMg * std::sin(beta) / 2,
+                    tol);
+        EXPECT_NEAR(sol.contacts[2].traction(0), dir * kMg * std::sin(beta) / 2,
+                    tol);
       }
     }
   }
@@ -134,9 +142,10 @@ TEST_P(QuasiStaticBackends, InclineFrictionThreshold) {
   EXPECT_NEAR(cases[2].threshold, 0.394378, 1e-6);
   for (const Case& c : cases) {
     for (double factor : {1.01, 0.99}) {
-      const Scenario s = MakeSetup(std::make_shared<InclineTerrain>(beta, 0.0), c.mode,
-                                c.dir > 0 ? 0.0 : M_PI, {0, 0, 0, 0, 0, 0},
-                                {0, 0.6, 0, 0.6, 0, 0.6}, factor * c.threshold);
+      const Scenario s =
+          MakeSetup(std::make_shared<InclineTerrain>(beta, 0.0), c.mode,
+                    c.dir > 0 ? 0.0 : M_PI, {0, 0, 0, 0, 0, 0},
+                    {0, 0.6, 0, 0.6, 0, 0.6}, factor * c.threshold);
       const QuasiStaticSolution sol = Solve(s);
       if (factor > 1) {
         EXPECT_EQ(sol.status, QuasiStaticStatus::kOk)
@@ -153,8 +162,9 @@ TEST_P(QuasiStaticBackends, InclineFrictionThreshold) {
 // O4: paper mode with real slip (steered front wheel, equal rates): every
 // sliding contact is on the cone boundary opposing its slip; G ~ 0.
 TEST_P(QuasiStaticBackends, O4SlidingContactsOpposeSlip) {
-  const Scenario s = MakeSetup(std::make_shared<PlaneTerrain>(0.0), ActuationMode::kPaper,
-                            0.0, {0.3, 0, 0, 0, 0, 0}, {0, 0.6, 0, 0.6, 0, 0.6});
+  const Scenario s =
+      MakeSetup(std::make_shared<PlaneTerrain>(0.0), ActuationMode::kPaper, 0.0,
+                {0.3, 0, 0, 0, 0, 0}, {0, 0.6, 0, 0.6, 0, 0.6});
   const QuasiStaticSolution sol = Solve(s);
   ASSERT_EQ(sol.status, QuasiStaticStatus::kOk) << sol.message;
   double sum_fn = 0;
@@ -187,8 +197,9 @@ TEST_P(QuasiStaticBackends, O6PvcMatchesExplicitSolution) {
   std::vector<GaussianBump> bumps = {{0.0231, 0.2323, -0.1855, 0.3764},
                                      {0.0369, 0.0122, 0.7951, 0.3896},
                                      {0.0376, 0.9101, -0.4398, 0.3412}};
-  const Scenario s = MakeSetup(std::make_shared<GaussianTerrain>(bumps), ActuationMode::kPvc,
-                            0.2, {0.1, 0, 0.05, 0, -0.03, 0}, {0.05, 0, 0, 0.6, 0, 0.7});
+  const Scenario s =
+      MakeSetup(std::make_shared<GaussianTerrain>(bumps), ActuationMode::kPvc,
+                0.2, {0.1, 0, 0.05, 0, -0.03, 0}, {0.05, 0, 0, 0.6, 0, 0.7});
   QuasiStaticOptions options;
   options.diagnostics = true;
   const QuasiStaticSolution sol = Solve(s, options);
@@ -217,8 +228,9 @@ TEST(QuasiStaticProblem, ConstraintJacobianMatchesFiniteDifferences) {
   std::vector<GaussianBump> bumps = {{0.0231, 0.2323, -0.1855, 0.3764},
                                      {0.03, 0.3, 0.25, 0.25}};
   for (ActuationMode mode : {ActuationMode::kPaper, ActuationMode::kPvc}) {
-    Scenario s = MakeSetup(std::make_shared<GaussianTerrain>(bumps), mode, 0.3,
-                        {0.2, 0, 0.05, 0, -0.05, 0}, {0.1, 0.6, 0.2, 0.5, 0.1, 0.7});
+    Scenario s =
+        MakeSetup(std::make_shared<GaussianTerrain>(bumps), mode, 0.3,
+                  {0.2, 0, 0.05, 0, -0.05, 0}, {0.1, 0.6, 0.2, 0.5, 0.1, 0.7});
     s.params.epsilon = 1e-3;  // keep the creep law smooth on the FD scale
     QuasiStaticProblem problem(*s.model, s.params);
     problem.SetConfiguration(s.theta);
@@ -244,9 +256,11 @@ TEST(QuasiStaticProblem, ConstraintJacobianMatchesFiniteDifferences) {
 TEST(QuasiStaticProblem, VirtualPowerBalance) {
   RegisterBuiltinNlpSolvers();
   std::vector<GaussianBump> bumps = {{0.0231, 0.2323, -0.1855, 0.3764}};
-  const Scenario s = MakeSetup(std::make_shared<GaussianTerrain>(bumps), ActuationMode::kPaper,
-                            0.1, {0.2, 0, 0, 0, 0, 0}, {0, 0.6, 0, 0.6, 0, 0.6});
-  QuasiStaticSolver solver(*s.model, s.params, NlpSolverRegistry::Create("newton"));
+  const Scenario s =
+      MakeSetup(std::make_shared<GaussianTerrain>(bumps), ActuationMode::kPaper,
+                0.1, {0.2, 0, 0, 0, 0, 0}, {0, 0.6, 0, 0.6, 0, 0.6});
+  QuasiStaticSolver solver(*s.model, s.params,
+                           NlpSolverRegistry::Create("newton"));
   QuasiStaticSolution sol;
   ASSERT_EQ(solver.Solve(s.theta, &sol), QuasiStaticStatus::kOk) << sol.message;
   Mat3 R;
@@ -256,13 +270,15 @@ TEST(QuasiStaticProblem, VirtualPowerBalance) {
   for (int i = 0; i < 3; ++i) {
     ChainState cs;
     s.model->EvaluateChain(s.theta, i, &cs);
-    const Vec3 v = cs.R_GCW * Vec3(sol.contacts[i].slip(0), sol.contacts[i].slip(1),
-                                   sol.contacts[i].normal_velocity);
+    const Vec3 v =
+        cs.R_GCW * Vec3(sol.contacts[i].slip(0), sol.contacts[i].slip(1),
+                        sol.contacts[i].normal_velocity);
     contact_power += sol.contacts[i].force_world.dot(v);
   }
   const double p_grav = Vec3(0, 0, -kMg).dot(R * sol.twist.head<3>());
   double p_act = 0;
-  for (int j = 0; j < 6; ++j) p_act += sol.actuator_torques[j] * sol.joint_rates[j];
+  for (int j = 0; j < 6; ++j)
+    p_act += sol.actuator_torques[j] * sol.joint_rates[j];
   EXPECT_NEAR(contact_power, -(p_grav + p_act), 1e-9);
 }
 
@@ -274,7 +290,8 @@ TEST(QuasiStaticProblem, VirtualPowerBalance) {
 // (creeping paper-mode states are ill-conditioned by design, model.md §7).
 TEST_P(QuasiStaticBackends, AgreesWithNewtonAlongRoughDrive) {
   RegisterBuiltinIntegrators();
-  const Scene paper = LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
+  const Scene paper =
+      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
   int compared = 0;
   for (ActuationMode mode : {ActuationMode::kPaper, ActuationMode::kPvc}) {
     Scene scene = paper;
@@ -283,21 +300,25 @@ TEST_P(QuasiStaticBackends, AgreesWithNewtonAlongRoughDrive) {
     Simulator sim(scene, SimulationOptions{});
     const SimulationResult drive = sim.Run();
     ASSERT_TRUE(drive.success()) << drive.stop_reason;
-    const QuasiStaticParameters params = QuasiStaticParameters::FromScene(scene);
+    const QuasiStaticParameters params =
+        QuasiStaticParameters::FromScene(scene);
     QuasiStaticOptions options;
     options.diagnostics = true;
-    QuasiStaticSolver reference(sim.model(), params, NlpSolverRegistry::Create("newton"), options);
-    QuasiStaticSolver candidate(sim.model(), params, NlpSolverRegistry::Create(GetParam()), options);
+    QuasiStaticSolver reference(sim.model(), params,
+                                NlpSolverRegistry::Create("newton"), options);
+    QuasiStaticSolver candidate(sim.model(), params,
+                                NlpSolverRegistry::Create(GetParam()), options);
     for (size_t k = 0; k < drive.samples.size() && k < 250; k += 10) {
       const Configuration& theta = drive.samples[k].theta;
       QuasiStaticSolution ref, got;
-      ASSERT_EQ(reference.Solve(theta, &ref), QuasiStaticStatus::kOk) << ref.message;
+      ASSERT_EQ(reference.Solve(theta, &ref), QuasiStaticStatus::kOk)
+          << ref.message;
       if (candidate.Solve(theta, &got) != QuasiStaticStatus::kOk) continue;
       const double cond = ref.condition_number;
       const double tol = cond < 1e3 ? 1e-9 : std::min(1e-5, cond * 1e-12);
       const double diff = (got.z - ref.z).lpNorm<Eigen::Infinity>();
-      EXPECT_LE(diff, tol) << GetParam() << " " << ToString(mode) << " sample " << k
-                           << " cond " << cond;
+      EXPECT_LE(diff, tol) << GetParam() << " " << ToString(mode) << " sample "
+                           << k << " cond " << cond;
       ++compared;
     }
   }

@@ -40,13 +40,15 @@ std::vector<Method> AllMethods() {
   RegisterBuiltinIntegrators();
   std::vector<Method> methods;
   for (const std::string& dae : IntegratorRegistry::Names())
-    for (Coupling c : {Coupling::kZoh, Coupling::kCoupled}) methods.push_back({dae, c});
+    for (Coupling c : {Coupling::kZoh, Coupling::kCoupled})
+      methods.push_back({dae, c});
   return methods;
 }
 
 class EveryIntegrator : public ::testing::TestWithParam<Method> {
  protected:
-  SimulationResult Simulate(const Scene& scene, SimulationOptions options = {}) {
+  SimulationResult Simulate(const Scene& scene,
+                            SimulationOptions options = {}) {
     options.dae = GetParam().dae;
     options.coupling = GetParam().coupling;
     Simulator sim(scene, options);
@@ -57,7 +59,8 @@ class EveryIntegrator : public ::testing::TestWithParam<Method> {
 // O1: flat straight drive. Speed rho alphadot = 0.06 m/s, creep slip <= eps,
 // loads (24.5, 12.25, 12.25) N, no drift. Exact solution is a constant
 // twist, so RK truncation vanishes: position to 1e-9 m over 2 s; loads to the
-// creeping-state force tolerance 6e-4 N (cond 1.2e7 x 1e-12 x 49 N, model.md §7).
+// creeping-state force tolerance 6e-4 N (cond 1.2e7 x 1e-12 x 49 N, model.md
+// §7).
 TEST_P(EveryIntegrator, O1FlatStraightDrive) {
   const SimulationResult r = Simulate(LoadWithEnd("flat", 2.0));
   ASSERT_TRUE(r.success()) << r.stop_reason;
@@ -93,11 +96,13 @@ TEST_P(EveryIntegrator, O2ConstantSteerCircle) {
   const double L = 0.5, b = 0.25, phi = 0.5;
   const double radius = std::hypot(L / std::tan(phi), b);
   EXPECT_NEAR(radius, 0.948774, 1e-6);
-  const Vec3 centre(-b, L / std::tan(phi), 0.0);  // ICR, yaw0 = 0, start at origin
+  const Vec3 centre(-b, L / std::tan(phi),
+                    0.0);  // ICR, yaw0 = 0, start at origin
   const double yaw_rate = 0.06 * std::tan(phi) / L;
   EXPECT_NEAR(yaw_rate, 0.065556, 1e-6);
   for (const TrajectorySample& s : r.samples) {
-    EXPECT_NEAR((s.position - centre).head<2>().norm(), radius, 1e-8) << "t=" << s.t;
+    EXPECT_NEAR((s.position - centre).head<2>().norm(), radius, 1e-8)
+        << "t=" << s.t;
     EXPECT_NEAR(s.rpy(2), yaw_rate * s.t, 1e-8) << "t=" << s.t;
     EXPECT_NEAR(s.angular_velocity.z(), yaw_rate, 1e-8);
     for (const auto& c : s.contacts) EXPECT_LE(c.slip, 1e-8);
@@ -116,14 +121,19 @@ TEST_P(EveryIntegrator, O2bPvcCrabMotion) {
   EXPECT_NEAR(std::tan(0.5), 0.546302, 1e-6);
   // Camber rate from the first hold interval (zoh holds it exactly; coupled
   // changes it only at second order over 0.05 s).
-  const double rate = (r.samples[1].joints[2] - s0.joints[2]) / (r.samples[1].t - s0.t);
-  EXPECT_NEAR(rate, -0.327781, GetParam().coupling == Coupling::kZoh ? 1e-6 : 2e-3);
-  EXPECT_NEAR(r.samples[1].joints[4], r.samples[1].joints[2], 1e-9);  // both rear
+  const double rate =
+      (r.samples[1].joints[2] - s0.joints[2]) / (r.samples[1].t - s0.t);
+  EXPECT_NEAR(rate, -0.327781,
+              GetParam().coupling == Coupling::kZoh ? 1e-6 : 2e-3);
+  EXPECT_NEAR(r.samples[1].joints[4], r.samples[1].joints[2],
+              1e-9);  // both rear
 }
 
-INSTANTIATE_TEST_SUITE_P(AllIntegrators, EveryIntegrator, ::testing::ValuesIn(AllMethods()),
+INSTANTIATE_TEST_SUITE_P(AllIntegrators, EveryIntegrator,
+                         ::testing::ValuesIn(AllMethods()),
                          [](const ::testing::TestParamInfo<Method>& info) {
-                           std::string n = info.param.dae + "_" + ToString(info.param.coupling);
+                           std::string n = info.param.dae + "_" +
+                                           ToString(info.param.coupling);
                            for (char& c : n)
                              if (c == '-') c = '_';
                            return n;
@@ -185,12 +195,15 @@ TEST(Simulation, PaperSceneDrift) {
   // far below the unstabilised drift (checked next).
   EXPECT_LE(MaxDrift(baumgarte), 1e-6);
 
-  const SimulationResult free_zoh = run("rk-projection", Coupling::kZoh, 20.0, false);
+  const SimulationResult free_zoh =
+      run("rk-projection", Coupling::kZoh, 20.0, false);
   ASSERT_TRUE(free_zoh.success()) << free_zoh.stop_reason;
-  const double d5 = free_zoh.samples[100].drift, d20 = free_zoh.samples.back().drift;
+  const double d5 = free_zoh.samples[100].drift,
+               d20 = free_zoh.samples.back().drift;
   EXPECT_GT(d20, 2 * d5) << "unstabilised zoh drift must grow";
   EXPECT_GT(d20, 10 * MaxDrift(baumgarte));
-  const SimulationResult free_coupled = run("rk-projection", Coupling::kCoupled, 20.0, false);
+  const SimulationResult free_coupled =
+      run("rk-projection", Coupling::kCoupled, 20.0, false);
   ASSERT_TRUE(free_coupled.success()) << free_coupled.stop_reason;
   EXPECT_LT(MaxDrift(free_coupled), 1e-3 * d20);
 }
@@ -214,7 +227,8 @@ TEST(Simulation, PvcLowFrictionStopsCleanly) {
   ASSERT_GE(r.samples.size(), 2u);
   EXPECT_EQ(r.samples.back().nlp_status, "INFEASIBLE_FRICTION");
   EXPECT_DOUBLE_EQ(r.samples.back().t, r.t_reached);
-  for (size_t k = 0; k + 1 < r.samples.size(); ++k) EXPECT_EQ(r.samples[k].nlp_status, "OK");
+  for (size_t k = 0; k + 1 < r.samples.size(); ++k)
+    EXPECT_EQ(r.samples[k].nlp_status, "OK");
   const std::string json = RunJson(scene, options, sim.dt(), sim.t_end(), r);
   EXPECT_NE(json.find("\"status\":\"INFEASIBLE_FRICTION\""), std::string::npos);
   std::ostringstream t;
@@ -246,10 +260,12 @@ TEST(Simulation, AllPairsAgreeOnPaperScene) {
       ASSERT_EQ(r.samples.size(), ref.samples.size());
       double pos = 0, force = 0;
       for (size_t k = 0; k < r.samples.size(); ++k) {
-        pos = std::max(pos, (r.samples[k].position - ref.samples[k].position).norm());
+        pos = std::max(
+            pos, (r.samples[k].position - ref.samples[k].position).norm());
         for (int i = 0; i < 3; ++i)
-          force = std::max(force, std::abs(r.samples[k].contacts[i].normal_force -
-                                           ref.samples[k].contacts[i].normal_force));
+          force = std::max(force,
+                           std::abs(r.samples[k].contacts[i].normal_force -
+                                    ref.samples[k].contacts[i].normal_force));
       }
       EXPECT_LE(pos, 1e-6) << nlp << "/" << dae;
       EXPECT_LE(force, 1e-3) << nlp << "/" << dae;
@@ -284,7 +300,8 @@ TEST(Simulation, TrajectoryIsBitIdenticalAcrossRuns) {
   const Scene seeded = LoadSceneFromString(
       "name: seeded\n"
       "time: {t_end: 3}\n"
-      "terrain: {type: gaussians, random: {seed: 42, count: 12, amplitude: [-0.02, 0.02],"
+      "terrain: {type: gaussians, random: {seed: 42, count: 12, amplitude: "
+      "[-0.02, 0.02],"
       " sigma: [0.2, 0.4], x: [-0.5, 2], y: [-1, 1]}}\n");
   for (const Scene& scene : {LoadWithEnd("paper", 3.0), seeded}) {
     for (const std::string dae : {"rk-projection", "ida"}) {

@@ -1,6 +1,7 @@
 // Terrain implementations: analytic derivatives vs finite differences,
 // heightmap spline properties, CSV parsing, deterministic random bumps.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -13,8 +14,6 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 #include "core/scene.h"
 #include "core/terrains.h"
 
@@ -26,16 +25,26 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 // The ten jet entries addressed by (order in x, order in y).
 double Get(const TerrainJet& j, int p, int q) {
   switch (p * 10 + q) {
-    case 0: return j.h;
-    case 10: return j.hx;
-    case 1: return j.hy;
-    case 20: return j.hxx;
-    case 11: return j.hxy;
-    case 2: return j.hyy;
-    case 30: return j.hxxx;
-    case 21: return j.hxxy;
-    case 12: return j.hxyy;
-    case 3: return j.hyyy;
+    case 0:
+      return j.h;
+    case 10:
+      return j.hx;
+    case 1:
+      return j.hy;
+    case 20:
+      return j.hxx;
+    case 11:
+      return j.hxy;
+    case 2:
+      return j.hyy;
+    case 30:
+      return j.hxxx;
+    case 21:
+      return j.hxxy;
+    case 12:
+      return j.hxyy;
+    case 3:
+      return j.hyyy;
   }
   ADD_FAILURE() << "bad derivative index " << p << "," << q;
   return 0.0;
@@ -70,27 +79,30 @@ void CheckDerivatives(const FdCase& c) {
     const TerrainJet jym = c.terrain->Evaluate(x, y - d);
     EXPECT_DOUBLE_EQ(j0.h, c.terrain->Height(x, y));
     for (int n = 1; n <= 3; ++n) {
-      const double tol =
-          4.0 * (d * d / 6.0 * c.bound(n + 2) + 2.0 * kEps * c.bound(n - 1) / d) +
-          1e-13;
+      const double tol = 4.0 * (d * d / 6.0 * c.bound(n + 2) +
+                                2.0 * kEps * c.bound(n - 1) / d) +
+                         1e-13;
       for (int p = 0; p <= n; ++p) {
         const int q = n - p;
         const double analytic = Get(j0, p, q);
         if (p >= 1) {  // differentiate the (p-1, q) entry in x
           const double fd = (Get(jxp, p - 1, q) - Get(jxm, p - 1, q)) / (2 * d);
-          EXPECT_NEAR(analytic, fd, tol) << "d^" << p << "x d^" << q << "y via x";
+          EXPECT_NEAR(analytic, fd, tol)
+              << "d^" << p << "x d^" << q << "y via x";
         }
         if (q >= 1) {  // differentiate the (p, q-1) entry in y
           const double fd = (Get(jyp, p, q - 1) - Get(jym, p, q - 1)) / (2 * d);
-          EXPECT_NEAR(analytic, fd, tol) << "d^" << p << "x d^" << q << "y via y";
+          EXPECT_NEAR(analytic, fd, tol)
+              << "d^" << p << "x d^" << q << "y via y";
         }
       }
     }
   }
 }
 
-const std::vector<std::array<double, 2>> kPoints = {
-    {0.0, 0.0}, {0.37, -0.21}, {-1.3, 0.8}, {1.1, 1.7}, {2.2, -0.9}, {0.05, 0.55}};
+const std::vector<std::array<double, 2>> kPoints = {{0.0, 0.0},  {0.37, -0.21},
+                                                    {-1.3, 0.8}, {1.1, 1.7},
+                                                    {2.2, -0.9}, {0.05, 0.55}};
 
 // R1 terrain of model-notes Appendix A (also tested against paper.yaml).
 std::vector<GaussianBump> SomeBumps() {
@@ -106,8 +118,8 @@ TEST(TerrainTest, PlaneDerivatives) {
   EXPECT_EQ(t->Height(5.0, -2.0), 0.3);
   EXPECT_TRUE(t->Contains(1e9, -1e9));
   EXPECT_FALSE(t->Describe().empty());
-  CheckDerivatives({"plane", t, 1e-3, [](int n) { return n == 0 ? 3.0 : 0.0; },
-                    kPoints});
+  CheckDerivatives(
+      {"plane", t, 1e-3, [](int n) { return n == 0 ? 3.0 : 0.0; }, kPoints});
 }
 
 TEST(TerrainTest, InclineFormulaAndDerivatives) {
@@ -115,9 +127,10 @@ TEST(TerrainTest, InclineFormulaAndDerivatives) {
   const double gamma = 0.7;
   auto t = std::make_shared<InclineTerrain>(beta, gamma, 0.1);
   const double x = 0.4, y = -1.2;
-  EXPECT_NEAR(t->Height(x, y),
-              0.1 + std::tan(beta) * (std::cos(gamma) * x + std::sin(gamma) * y),
-              1e-15);
+  EXPECT_NEAR(
+      t->Height(x, y),
+      0.1 + std::tan(beta) * (std::cos(gamma) * x + std::sin(gamma) * y),
+      1e-15);
   const TerrainJet j = t->Evaluate(x, y);
   EXPECT_NEAR(std::hypot(j.hx, j.hy), std::tan(beta), 1e-15);
   EXPECT_NEAR(std::atan2(j.hy, j.hx), gamma, 1e-15);
@@ -126,7 +139,9 @@ TEST(TerrainTest, InclineFormulaAndDerivatives) {
   EXPECT_NEAR(up.Height(1.0, 5.0), std::tan(beta), 1e-15);
   EXPECT_FALSE(up.Describe().empty());
   CheckDerivatives({"incline", t, 1e-3,
-                    [](int n) { return n == 0 ? 2.0 : n == 1 ? 0.2 : 0.0; },
+                    [](int n) { return n == 0   ? 2.0
+                                       : n == 1 ? 0.2
+                                                : 0.0; },
                     kPoints});
   EXPECT_THROW(InclineTerrain(std::numbers::pi / 2, 0.0), SceneError);
 }
@@ -146,8 +161,9 @@ TEST(TerrainTest, GaussianDerivatives) {
   // Height() agrees with the formula.
   double h = 0.0;
   for (const auto& b : SomeBumps()) {
-    h += b.amplitude * std::exp(-(std::pow(0.3 - b.x, 2) + std::pow(-0.2 - b.y, 2)) /
-                                (2 * b.sigma * b.sigma));
+    h += b.amplitude *
+         std::exp(-(std::pow(0.3 - b.x, 2) + std::pow(-0.2 - b.y, 2)) /
+                  (2 * b.sigma * b.sigma));
   }
   EXPECT_NEAR(t->Height(0.3, -0.2), h, 1e-16);
 }
@@ -170,11 +186,11 @@ TEST(TerrainTest, SinusoidDerivatives) {
   CheckDerivatives({"sinusoid", t, 1e-5, bound, kPoints});
   // Formula and the "inf = constant" convention.
   const double x = 0.3, y = -0.7;
-  const double expected =
-      0.02 +
-      0.03 * std::cos(2 * std::numbers::pi * x / 0.9 + 0.3) *
-          std::cos(2 * std::numbers::pi * y / 1.4 - 0.2) +
-      0.01 * std::cos(2 * std::numbers::pi * x / 0.5 + 1.0);
+  const double expected = 0.02 +
+                          0.03 *
+                              std::cos(2 * std::numbers::pi * x / 0.9 + 0.3) *
+                              std::cos(2 * std::numbers::pi * y / 1.4 - 0.2) +
+                          0.01 * std::cos(2 * std::numbers::pi * x / 0.5 + 1.0);
   EXPECT_NEAR(t->Height(x, y), expected, 1e-16);
   SinusoidTerrain corrugation({{0.05, 1.0, inf, 0.0, 0.0}});
   EXPECT_EQ(corrugation.Evaluate(0.2, 3.0).hy, 0.0);
@@ -230,19 +246,25 @@ TEST(HeightmapTest, ReproducesBicubicPolynomialsExactly) {
   // any sum of x^a y^b with a, b <= 3.
   auto p = [](double x, double y) {
     return 0.3 + 0.5 * x - 0.2 * y + 0.7 * x * x * x - 0.4 * x * x * y +
-           0.25 * x * y * y * y - 0.1 * y * y * y + 0.05 * x * x * x * y * y * y;
+           0.25 * x * y * y * y - 0.1 * y * y * y +
+           0.05 * x * x * x * y * y * y;
   };
   const HeightmapTerrain t = MakeMap(p, 8, 6);
-  for (const auto& pt : {std::array<double, 2>{-1.9, -1.4}, {0.3, 0.2},
-                         {2.99, 1.99}, {1.234, -0.777}, {-0.5, 1.5}}) {
+  for (const auto& pt : {std::array<double, 2>{-1.9, -1.4},
+                         {0.3, 0.2},
+                         {2.99, 1.99},
+                         {1.234, -0.777},
+                         {-0.5, 1.5}}) {
     const double x = pt[0], y = pt[1];
     const TerrainJet j = t.Evaluate(x, y);
     const double x2 = x * x, y2 = y * y;
     EXPECT_NEAR(j.h, p(x, y), 1e-11);
-    EXPECT_NEAR(j.hx, 0.5 + 2.1 * x2 - 0.8 * x * y + 0.25 * y2 * y +
-                          0.15 * x2 * y2 * y, 1e-10);
-    EXPECT_NEAR(j.hy, -0.2 - 0.4 * x2 + 0.75 * x * y2 - 0.3 * y2 +
-                          0.15 * x2 * x * y2, 1e-10);
+    EXPECT_NEAR(
+        j.hx, 0.5 + 2.1 * x2 - 0.8 * x * y + 0.25 * y2 * y + 0.15 * x2 * y2 * y,
+        1e-10);
+    EXPECT_NEAR(j.hy,
+                -0.2 - 0.4 * x2 + 0.75 * x * y2 - 0.3 * y2 + 0.15 * x2 * x * y2,
+                1e-10);
     EXPECT_NEAR(j.hxx, 4.2 * x - 0.8 * y + 0.3 * x * y2 * y, 1e-9);
     EXPECT_NEAR(j.hxy, -0.8 * x + 0.75 * y2 + 0.45 * x2 * y2, 1e-9);
     EXPECT_NEAR(j.hyy, 1.5 * x * y - 0.6 * y + 0.3 * x2 * x * y, 1e-9);
@@ -285,7 +307,8 @@ TEST(HeightmapTest, DomainAndValidation) {
   EXPECT_FALSE(t.Contains(0.0, -1.51));
   EXPECT_FALSE(t.Describe().empty());
   // Grid values are reproduced at the knots.
-  EXPECT_NEAR(t.Height(t.xs()[2], t.ys()[3]), Smooth(t.xs()[2], t.ys()[3]), 1e-15);
+  EXPECT_NEAR(t.Height(t.xs()[2], t.ys()[3]), Smooth(t.xs()[2], t.ys()[3]),
+              1e-15);
 
   const std::vector<double> g4 = {0, 1, 2, 3};
   const std::vector<double> z16(16, 0.0);
@@ -293,7 +316,8 @@ TEST(HeightmapTest, DomainAndValidation) {
   EXPECT_THROW(HeightmapTerrain({0, 1, 2}, g4, std::vector<double>(12, 0.0)),
                SceneError);
   EXPECT_THROW(HeightmapTerrain({0, 2, 1, 3}, g4, z16), SceneError);
-  EXPECT_THROW(HeightmapTerrain(g4, g4, std::vector<double>(15, 0.0)), SceneError);
+  EXPECT_THROW(HeightmapTerrain(g4, g4, std::vector<double>(15, 0.0)),
+               SceneError);
   std::vector<double> bad = z16;
   bad[5] = std::numeric_limits<double>::infinity();
   EXPECT_THROW(HeightmapTerrain(g4, g4, bad), SceneError);
@@ -324,7 +348,8 @@ class CsvTest : public ::testing::Test {
       const std::string msg = e.what();
       EXPECT_NE(msg.find(path), std::string::npos) << msg;
       for (const auto& n : needles) {
-        EXPECT_NE(msg.find(n), std::string::npos) << "'" << n << "' not in: " << msg;
+        EXPECT_NE(msg.find(n), std::string::npos)
+            << "'" << n << "' not in: " << msg;
       }
     }
   }
@@ -358,9 +383,11 @@ TEST_F(CsvTest, RoundTripMatchesGridConstructor) {
   ASSERT_EQ(a.ys().size(), 7u);
   for (const auto& pt : kPoints) {
     if (!b.Contains(pt[0], pt[1])) continue;
-    const TerrainJet ja = a.Evaluate(pt[0], pt[1]), jb = b.Evaluate(pt[0], pt[1]);
+    const TerrainJet ja = a.Evaluate(pt[0], pt[1]),
+                     jb = b.Evaluate(pt[0], pt[1]);
     for (int n = 0; n <= 3; ++n) {
-      for (int p = 0; p <= n; ++p) EXPECT_EQ(Get(ja, p, n - p), Get(jb, p, n - p));
+      for (int p = 0; p <= n; ++p)
+        EXPECT_EQ(Get(ja, p, n - p), Get(jb, p, n - p));
     }
   }
 }
@@ -409,7 +436,8 @@ TEST(RandomGaussianTest, DeterministicAndWithinRanges) {
     EXPECT_EQ(p.x, b.bumps()[k].x);
     EXPECT_EQ(p.y, b.bumps()[k].y);
     EXPECT_EQ(p.sigma, b.bumps()[k].sigma);
-    if (p.amplitude != c.bumps()[k].amplitude || p.x != c.bumps()[k].x) ++differing;
+    if (p.amplitude != c.bumps()[k].amplitude || p.x != c.bumps()[k].x)
+      ++differing;
     for (const GaussianBump& q : {p, c.bumps()[k]}) {
       EXPECT_GE(q.amplitude, amp.lo);
       EXPECT_LT(q.amplitude, amp.hi);
@@ -444,8 +472,10 @@ TEST(RandomGaussianTest, DeterministicAndWithinRanges) {
 TEST(RandomGaussianTest, RejectsBadArguments) {
   const Interval amp{-0.04, 0.04}, sig{0.2, 0.4}, r{-1, 1};
   EXPECT_THROW(GaussianTerrain::Random(1, 0, amp, sig, r, r), SceneError);
-  EXPECT_THROW(GaussianTerrain::Random(1, 3, {0.1, -0.1}, sig, r, r), SceneError);
-  EXPECT_THROW(GaussianTerrain::Random(1, 3, amp, {0.0, 0.4}, r, r), SceneError);
+  EXPECT_THROW(GaussianTerrain::Random(1, 3, {0.1, -0.1}, sig, r, r),
+               SceneError);
+  EXPECT_THROW(GaussianTerrain::Random(1, 3, amp, {0.0, 0.4}, r, r),
+               SceneError);
   EXPECT_THROW(GaussianTerrain::Random(1, 3, amp, sig, {2, 1}, r), SceneError);
 }
 
@@ -457,17 +487,21 @@ TEST(TerrainFactoryTest, BuildsEveryType) {
   EXPECT_NE(dynamic_cast<const InclineTerrain*>(MakeTerrain(s).get()), nullptr);
   s.type = TerrainSpec::Type::kGaussians;
   s.bumps = SomeBumps();
-  EXPECT_NE(dynamic_cast<const GaussianTerrain*>(MakeTerrain(s).get()), nullptr);
-  s.random = TerrainSpec::Random{3, 4, {-0.01, 0.01}, {0.2, 0.3}, {0, 1}, {0, 1}};
+  EXPECT_NE(dynamic_cast<const GaussianTerrain*>(MakeTerrain(s).get()),
+            nullptr);
+  s.random =
+      TerrainSpec::Random{3, 4, {-0.01, 0.01}, {0.2, 0.3}, {0, 1}, {0, 1}};
   auto g = MakeTerrain(s);
   EXPECT_EQ(dynamic_cast<const GaussianTerrain&>(*g).bumps().size(), 4u);
   s.type = TerrainSpec::Type::kSinusoid;
   s.components = {{0.01, 1.0, 2.0, 0.0, 0.0}};
-  EXPECT_NE(dynamic_cast<const SinusoidTerrain*>(MakeTerrain(s).get()), nullptr);
+  EXPECT_NE(dynamic_cast<const SinusoidTerrain*>(MakeTerrain(s).get()),
+            nullptr);
   s.type = TerrainSpec::Type::kHeightmap;
   s.file = "/nonexistent.csv";
   EXPECT_THROW(MakeTerrain(s), SceneError);
-  for (const char* name : {"plane", "incline", "gaussians", "sinusoid", "heightmap"}) {
+  for (const char* name :
+       {"plane", "incline", "gaussians", "sinusoid", "heightmap"}) {
     ASSERT_TRUE(TerrainTypeFromString(name).has_value());
     EXPECT_STREQ(ToString(*TerrainTypeFromString(name)), name);
   }

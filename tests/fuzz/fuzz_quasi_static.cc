@@ -16,6 +16,8 @@
 // Contract checked: Solve() never crashes and never throws, except
 // std::invalid_argument for non-finite input; a kOk solution has finite
 // outputs and a residual within tolerance.
+#include <fuzzer/FuzzedDataProvider.h>
+
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -27,8 +29,6 @@
 #include <stdexcept>
 #include <string>
 #include <typeinfo>
-
-#include <fuzzer/FuzzedDataProvider.h>
 
 #include "core/initial_configuration.h"
 #include "core/kinematics.h"
@@ -49,8 +49,10 @@ struct Fixture {
 const Fixture& GetFixture() {
   static const Fixture* fixture = [] {
     auto* f = new Fixture;
-    f->scene = LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
-    f->model = std::make_unique<KinematicModel>(f->scene.geometry, f->scene.terrain);
+    f->scene = LoadScene(std::string(QUASIROLL_SOURCE_DIR) +
+                         "/bench/scenes/paper.yaml");
+    f->model =
+        std::make_unique<KinematicModel>(f->scene.geometry, f->scene.terrain);
     f->theta0 = SolveInitialConfiguration(*f->model, f->scene);
     RegisterBuiltinNlpSolvers();
     return f;
@@ -77,21 +79,25 @@ bool Finite(const QuasiStaticSolution& s) {
 
 }  // namespace
 
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data,
+                                      std::size_t size) {
   const Fixture& fx = GetFixture();
   FuzzedDataProvider in(data, size);
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   constexpr double kInf = std::numeric_limits<double>::infinity();
 
   // Signed fractions in [-1, 1), 0 for zero / missing bytes.
-  auto s8 = [&in] { return static_cast<std::int8_t>(in.ConsumeIntegral<std::uint8_t>()) / 128.0; };
+  auto s8 = [&in] {
+    return static_cast<std::int8_t>(in.ConsumeIntegral<std::uint8_t>()) / 128.0;
+  };
   auto s16 = [&in] {
-    return static_cast<std::int16_t>(in.ConsumeIntegral<std::uint16_t>()) / 32768.0;
+    return static_cast<std::int16_t>(in.ConsumeIntegral<std::uint16_t>()) /
+           32768.0;
   };
 
   QuasiStaticParameters params = QuasiStaticParameters::FromScene(fx.scene);
   params.mode = in.ConsumeBool() ? ActuationMode::kPvc : ActuationMode::kPaper;
-  params.mu *= std::exp2(4.0 * s8());          // [0.03, 8)
+  params.mu *= std::exp2(4.0 * s8());            // [0.03, 8)
   params.epsilon *= std::pow(10.0, 4.0 * s8());  // [1e-12, 1e-4)
   for (double& rate : params.joint_rates) rate += s8();
   QuasiStaticOptions options;
@@ -106,9 +112,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (inject >= 252) {
     const double bad = (inject & 1) ? kNaN : kInf;
     switch (inject & 3) {
-      case 0: params.mu = bad; break;
-      case 1: params.epsilon = bad; break;
-      default: params.joint_rates[inject % 6] = bad; break;
+      case 0:
+        params.mu = bad;
+        break;
+      case 1:
+        params.epsilon = bad;
+        break;
+      default:
+        params.joint_rates[inject % 6] = bad;
+        break;
     }
     non_finite_params = true;
   }
@@ -150,13 +162,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       Bug(std::string("Solve threw ") + typeid(e).name() + ": " + e.what());
     }
     if (non_finite) Bug("non-finite configuration accepted");
-    static const bool verbose = std::getenv("QUASIROLL_FUZZ_VERBOSE") != nullptr;
+    static const bool verbose =
+        std::getenv("QUASIROLL_FUZZ_VERBOSE") != nullptr;
     if (verbose)
-      std::fprintf(stderr, "solve %d/%d (%s, mu %.3g, eps %.1e): %s, %d iterations%s%s\n",
-                   k + 1, solves, ToString(params.mode), params.mu, params.epsilon,
-                   ToString(status), solution.nlp_iterations,
-                   solution.message.empty() ? "" : ": ", solution.message.c_str());
-    if (status != solution.status) Bug("returned status differs from solution.status");
+      std::fprintf(
+          stderr,
+          "solve %d/%d (%s, mu %.3g, eps %.1e): %s, %d iterations%s%s\n", k + 1,
+          solves, ToString(params.mode), params.mu, params.epsilon,
+          ToString(status), solution.nlp_iterations,
+          solution.message.empty() ? "" : ": ", solution.message.c_str());
+    if (status != solution.status)
+      Bug("returned status differs from solution.status");
     if (status == QuasiStaticStatus::kOk) {
       if (!Finite(solution)) Bug("kOk solution with non-finite outputs");
       if (!(solution.residual <= options.residual_tolerance))

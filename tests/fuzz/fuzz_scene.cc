@@ -10,16 +10,16 @@
 // written to grid.csv in a private temporary directory that relative
 // heightmap paths resolve against, so `terrain: {type: heightmap, file:
 // grid.csv}` fuzzes the CSV reader and the spline too.
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
-#include <string>
 #include <fstream>
+#include <string>
 #include <typeinfo>
-
-#include <unistd.h>
 
 #include "core/scene.h"
 
@@ -40,7 +40,8 @@ const std::string& WorkDir() {
 }
 }  // namespace
 
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data,
+                                      std::size_t size) {
   std::string text(reinterpret_cast<const char*>(data), size);
   // Heightmap files are opened by path: keep the fuzzer away from device and
   // proc files (an endless /dev/zero is not a loader bug). Relative paths
@@ -63,10 +64,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         quasiroll::LoadSceneFromString(text, dir + "/scene.yaml");
     if (!scene.terrain) Bug("loaded scene without terrain", scene.name);
     if (!(std::isfinite(scene.mu) && scene.mu > 0 && std::isfinite(scene.dt) &&
-          scene.dt > 0 && std::isfinite(scene.t_end) && std::isfinite(scene.epsilon)))
+          scene.dt > 0 && std::isfinite(scene.t_end) &&
+          std::isfinite(scene.epsilon)))
       Bug("loaded scene with invalid numbers", scene.name);
     const double h = scene.terrain->Height(scene.x0, scene.y0);
-    if (!std::isfinite(h)) Bug("non-finite terrain height at the start", scene.name);
+    if (!std::isfinite(h))
+      Bug("non-finite terrain height at the start", scene.name);
   } catch (const quasiroll::SceneError&) {
     // Expected for bad input.
   } catch (const std::exception& e) {

@@ -17,8 +17,8 @@
 namespace quasiroll {
 namespace {
 
-using testing::FallingBodyOde;
 using testing::FailingRhsOde;
+using testing::FallingBodyOde;
 using testing::HarmonicOde;
 using testing::LinearConstraintOde;
 using testing::PendulumOde;
@@ -28,7 +28,9 @@ std::vector<std::string> Backends() {
   return IntegratorRegistry::Names();
 }
 
-std::vector<std::string> RkBackends() { return {"rk-baumgarte", "rk-projection"}; }
+std::vector<std::string> RkBackends() {
+  return {"rk-baumgarte", "rk-projection"};
+}
 
 std::string ParamName(const ::testing::TestParamInfo<std::string>& info) {
   std::string s = info.param;
@@ -105,7 +107,8 @@ class PendulumTest : public ::testing::TestWithParam<PendulumCase> {};
 TEST_P(PendulumTest, MatchesReferenceAndBoundsDrift) {
   const PendulumCase& c = GetParam();
   RegisterBuiltinIntegrators();
-  if (!IntegratorRegistry::Has(c.backend)) GTEST_SKIP() << c.backend << " not built";
+  if (!IntegratorRegistry::Has(c.backend))
+    GTEST_SKIP() << c.backend << " not built";
   auto integrator = IntegratorRegistry::Create(c.backend);
   PendulumOde ode;
   const double theta0 = 0.5, hold = 0.05;
@@ -127,10 +130,11 @@ TEST_P(PendulumTest, MatchesReferenceAndBoundsDrift) {
   const Eigen::Vector4d ref = ode.Reference(theta0, holds * hold);
   const double error = (y - ref).lpNorm<Eigen::Infinity>();
   const double drift = ConstraintNorm(ode, y);
-  std::printf("[ measured ] %-28s error %.3e  drift %.3e  steps %d rejected %d "
-              "rhs %d jac %d proj %d\n",
-              c.label.c_str(), error, drift, r.steps, r.rejected_steps,
-              r.rhs_evaluations, r.jacobian_evaluations, r.projection_iterations);
+  std::printf(
+      "[ measured ] %-28s error %.3e  drift %.3e  steps %d rejected %d "
+      "rhs %d jac %d proj %d\n",
+      c.label.c_str(), error, drift, r.steps, r.rejected_steps,
+      r.rhs_evaluations, r.jacobian_evaluations, r.projection_iterations);
   EXPECT_LE(error, c.position_tolerance);
   EXPECT_LE(drift, c.drift_bound);
   EXPECT_GT(r.steps, 0);
@@ -150,21 +154,25 @@ INSTANTIATE_TEST_SUITE_P(
         PendulumCase{"rk-projection", RkMethod::kDormandPrince54, 2, 0.0, 1e-10,
                      1e-9, 1e-10, "rk_projection_dp54"},
         // rtol 1e-8: measured 2.2e-8.
-        PendulumCase{"rk-projection", RkMethod::kBogackiShampine32, 2, 0.0, 1e-8,
-                     3e-7, 1e-10, "rk_projection_bs32"},
+        PendulumCase{"rk-projection", RkMethod::kBogackiShampine32, 2, 0.0,
+                     1e-8, 3e-7, 1e-10, "rk_projection_bs32"},
         // Baumgarte sigma = 5: error measured 1.4e-7, drift (RK local error,
         // damped at rate sigma) 1.1e-8.
-        PendulumCase{"rk-baumgarte", RkMethod::kRk4, 2, 0.01, 1e-8, 1.5e-6, 1e-7,
-                     "rk_baumgarte_rk4"},
+        PendulumCase{"rk-baumgarte", RkMethod::kRk4, 2, 0.01, 1e-8, 1.5e-6,
+                     1e-7, "rk_baumgarte_rk4"},
         // rtol 1e-10: error measured 2.2e-11, drift 9.6e-12.
         PendulumCase{"rk-baumgarte", RkMethod::kDormandPrince54, 2, 0.0, 1e-10,
                      3e-10, 1e-10, "rk_baumgarte_dp54"},
-        // IDA, rtol 1e-8 (measured 2.0e-7 / 2.8e-7: BDF global error ~ 20 rtol);
-        // index 2 ends with a projection to 1e-12; index 1 drift measured
-        // 1.3e-8.
-        PendulumCase{"ida", RkMethod::kRk4, 2, 0.0, 1e-8, 3e-6, 1e-10, "ida_index2"},
-        PendulumCase{"ida", RkMethod::kRk4, 1, 0.0, 1e-8, 3e-6, 1e-7, "ida_index1"}),
-    [](const ::testing::TestParamInfo<PendulumCase>& info) { return info.param.label; });
+        // IDA, rtol 1e-8 (measured 2.0e-7 / 2.8e-7: BDF global error ~ 20
+        // rtol); index 2 ends with a projection to 1e-12; index 1 drift
+        // measured 1.3e-8.
+        PendulumCase{"ida", RkMethod::kRk4, 2, 0.0, 1e-8, 3e-6, 1e-10,
+                     "ida_index2"},
+        PendulumCase{"ida", RkMethod::kRk4, 1, 0.0, 1e-8, 3e-6, 1e-7,
+                     "ida_index1"}),
+    [](const ::testing::TestParamInfo<PendulumCase>& info) {
+      return info.param.label;
+    });
 
 // -------------------------------------------------- RK4 convergence order
 
@@ -191,7 +199,8 @@ TEST_P(RkBackendTest, Rk4ConvergesWithOrderFour) {
   const double order1 = std::log2(errors[0] / errors[1]);
   const double order2 = std::log2(errors[1] / errors[2]);
   std::printf("[ measured ] %s RK4 errors %.3e %.3e %.3e, orders %.4f %.4f\n",
-              GetParam().c_str(), errors[0], errors[1], errors[2], order1, order2);
+              GetParam().c_str(), errors[0], errors[1], errors[2], order1,
+              order2);
   // Asymptotic order 4; +-0.1 covers the O(h^5) term at w h <= 0.2.
   EXPECT_NEAR(order1, 4.0, 0.1);
   EXPECT_NEAR(order2, 4.0, 0.1);
@@ -226,7 +235,8 @@ TEST_P(RkBackendTest, AdaptivePairsMeetTolerance) {
   auto integrator = IntegratorRegistry::Create(GetParam());
   HarmonicOde ode(1.0);
   const Eigen::Vector2d y0(1.0, 0.0);
-  for (RkMethod method : {RkMethod::kDormandPrince54, RkMethod::kBogackiShampine32}) {
+  for (RkMethod method :
+       {RkMethod::kDormandPrince54, RkMethod::kBogackiShampine32}) {
     double previous_error = 0.0;
     for (double rtol : {1e-6, 1e-9}) {
       Eigen::VectorXd y = y0;
@@ -239,9 +249,10 @@ TEST_P(RkBackendTest, AdaptivePairsMeetTolerance) {
                 IntegratorStatus::kSuccess)
           << r.message;
       const double error = (y - ode.Exact(10.0, y0)).lpNorm<Eigen::Infinity>();
-      std::printf("[ measured ] %s %s rtol %.0e: error %.3e steps %d rejected %d\n",
-                  GetParam().c_str(), ToString(method), rtol, error, r.steps,
-                  r.rejected_steps);
+      std::printf(
+          "[ measured ] %s %s rtol %.0e: error %.3e steps %d rejected %d\n",
+          GetParam().c_str(), ToString(method), rtol, error, r.steps,
+          r.rejected_steps);
       EXPECT_LE(error, 20 * (rtol * 1.0 + o.atol));
       // The first trial step is the whole interval (step = 0): rejected.
       EXPECT_GT(r.rejected_steps, 0);
@@ -306,13 +317,15 @@ TEST(RkBaumgarteTest, ConstraintDecaysAtTheBaumgarteRate) {
     ASSERT_EQ(integrator->Integrate(ode, k * 0.05, t1, y, o, &r),
               IntegratorStatus::kSuccess);
     ratio = ConstraintNorm(ode, y) / (h0 * std::exp(-5.0 * t1));
-    EXPECT_GE(ratio, 1.0 - 1e-9) << "t = " << t1;  // 1e-9: rounding of H ~ 1e-16 / 1e-3
+    EXPECT_GE(ratio, 1.0 - 1e-9)
+        << "t = " << t1;  // 1e-9: rounding of H ~ 1e-16 / 1e-3
     EXPECT_LE(ratio, 1.001) << "t = " << t1;
   }
-  const double predicted = std::pow(
-      (1 - 0.25 + 0.25 * 0.25 / 2 - std::pow(0.25, 3) / 6 + std::pow(0.25, 4) / 24) *
-          std::exp(0.25),
-      20);
+  const double predicted =
+      std::pow((1 - 0.25 + 0.25 * 0.25 / 2 - std::pow(0.25, 3) / 6 +
+                std::pow(0.25, 4) / 24) *
+                   std::exp(0.25),
+               20);
   std::printf("[ measured ] Baumgarte ratio at t = 1: %.8f (predicted %.8f)\n",
               ratio, predicted);
   EXPECT_NEAR(ratio, predicted, 1e-6);  // 1e-6: rounding of H at 1e-5 level
@@ -361,7 +374,8 @@ TEST_P(AllBackendsTest, ContinuesAfterEvent) {
   o.step = 0.05;
   IntegratorResult r;
   Eigen::VectorXd y = Eigen::Vector2d(1.0, 0.0);
-  ASSERT_EQ(integrator->Integrate(ode, 0.0, 1.0, y, o, &r), IntegratorStatus::kEvent);
+  ASSERT_EQ(integrator->Integrate(ode, 0.0, 1.0, y, o, &r),
+            IntegratorStatus::kEvent);
   const double t_event = r.t_reached;
   ASSERT_EQ(integrator->Integrate(ode, t_event, 1.0, y, o, &r),
             IntegratorStatus::kSuccess)
@@ -370,7 +384,8 @@ TEST_P(AllBackendsTest, ContinuesAfterEvent) {
   EXPECT_EQ(r.root_index, -1);
   EXPECT_LT(y(0), 0.0);
   y = Eigen::Vector2d(1.0, 0.0);
-  ASSERT_EQ(integrator->Integrate(ode, 0.0, 1.0, y, o, &r), IntegratorStatus::kEvent);
+  ASSERT_EQ(integrator->Integrate(ode, 0.0, 1.0, y, o, &r),
+            IntegratorStatus::kEvent);
   EXPECT_EQ(r.t_reached, t_event);  // same computation, same result
 }
 
@@ -414,8 +429,9 @@ TEST_P(AllBackendsTest, RobotSizedProblem) {
   const Eigen::VectorXd y = run(*integrator, o, &r);
   const double error = (y - reference).lpNorm<Eigen::Infinity>();
   const double drift = ConstraintNorm(ode, y);
-  std::printf("[ measured ] robot-sized %s: error %.3e drift %.3e steps %d rhs %d\n",
-              GetParam().c_str(), error, drift, r.steps, r.rhs_evaluations);
+  std::printf(
+      "[ measured ] robot-sized %s: error %.3e drift %.3e steps %d rhs %d\n",
+      GetParam().c_str(), error, drift, r.steps, r.rhs_evaluations);
   // Measured (one RK4 step per hold, IDA rtol 1e-8): rk-projection 2.5e-9,
   // ida 2.4e-8, rk-baumgarte 7.5e-8 (IDA at rtol 1e-11 agrees with the
   // reference to 3e-11, so the reference is good far below that); bound:
@@ -442,22 +458,28 @@ TEST_P(AllBackendsTest, InvalidInputThrows) {
   nan(2) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, nan, o, &r),
                std::invalid_argument);
-  EXPECT_THROW(integrator->Integrate(ode, 0.1, 0.1, y, o, &r), std::invalid_argument);
-  EXPECT_THROW(integrator->Integrate(ode, 0.2, 0.1, y, o, &r), std::invalid_argument);
+  EXPECT_THROW(integrator->Integrate(ode, 0.1, 0.1, y, o, &r),
+               std::invalid_argument);
+  EXPECT_THROW(integrator->Integrate(ode, 0.2, 0.1, y, o, &r),
+               std::invalid_argument);
   EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, o, nullptr),
                std::invalid_argument);
   IntegratorOptions bad = o;
   bad.baumgarte_sigma = -1.0;
-  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, bad, &r), std::invalid_argument);
+  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, bad, &r),
+               std::invalid_argument);
   bad = o;
   bad.rtol = 0.0;
-  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, bad, &r), std::invalid_argument);
+  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, bad, &r),
+               std::invalid_argument);
   bad = o;
   bad.step = -0.1;
-  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, bad, &r), std::invalid_argument);
+  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, bad, &r),
+               std::invalid_argument);
   bad = o;
   bad.max_projection_iterations = 0;
-  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, bad, &r), std::invalid_argument);
+  EXPECT_THROW(integrator->Integrate(ode, 0.0, 0.1, y, bad, &r),
+               std::invalid_argument);
   // Negative correction weight: detected by the backend, still misuse.
   class NegativeWeights : public PendulumOde {
     void CorrectionWeights(Eigen::Ref<Eigen::VectorXd> d) const override {
@@ -467,7 +489,8 @@ TEST_P(AllBackendsTest, InvalidInputThrows) {
   EXPECT_THROW(integrator->Integrate(negative, 0.0, 0.1, y, o, &r),
                std::invalid_argument);
   // After all that the integrator is still usable.
-  EXPECT_EQ(integrator->Integrate(ode, 0.0, 0.1, y, o, &r), IntegratorStatus::kSuccess)
+  EXPECT_EQ(integrator->Integrate(ode, 0.0, 0.1, y, o, &r),
+            IntegratorStatus::kSuccess)
       << r.message;
 }
 

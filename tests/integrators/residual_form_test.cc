@@ -39,7 +39,8 @@ class RotationDae final : public ConstrainedOde {
   void DifferentialIds(Eigen::Ref<Eigen::VectorXd> ids) const override {
     ids << 1, 1, 0;
   }
-  bool ConsistentDerivative(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+  bool ConsistentDerivative(double t,
+                            const Eigen::Ref<const Eigen::VectorXd>& y,
                             Eigen::Ref<Eigen::VectorXd> yp) override {
     yp << y(1) * y(2), -y(0) * y(2), 0.5 * std::cos(t);
     return true;
@@ -59,7 +60,8 @@ TEST(ResidualForm, IdaIntegratesAnIndexOneDae) {
   IntegratorResult result;
   Eigen::VectorXd y(3);
   y << 0.0, 1.0, RotationDae::W(0.0);
-  ASSERT_EQ(ida->Integrate(dae, 0.0, 2.0, y, options, &result), IntegratorStatus::kSuccess)
+  ASSERT_EQ(ida->Integrate(dae, 0.0, 2.0, y, options, &result),
+            IntegratorStatus::kSuccess)
       << result.message;
   const double t = 2.0, phi = t + 0.5 * (1.0 - std::cos(t));
   // Global error of IDA's BDF at rtol 1e-10 over 2 s: ~1e-9 (margin 10x).

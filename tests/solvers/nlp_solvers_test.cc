@@ -1,6 +1,8 @@
 // Every registered NLP backend on the reference problems of
 // core/nlp_reference_problems.h, plus input validation, NaN handling, warm
 // starts, object reuse and the registry.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -10,8 +12,6 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
-
-#include <gtest/gtest.h>
 
 #include "core/nlp.h"
 #include "core/nlp_reference_problems.h"
@@ -55,8 +55,8 @@ void Report(const std::string& backend, const ReferenceProblem& p,
   const double xerr = p.is_feasible()
                           ? (r.x - p.known_solution()).lpNorm<Eigen::Infinity>()
                           : kNaN;
-  const double ferr = p.is_feasible() ? std::abs(r.objective - p.known_objective())
-                                      : kNaN;
+  const double ferr =
+      p.is_feasible() ? std::abs(r.objective - p.known_objective()) : kNaN;
   std::printf(
       "[nlp] %-7s %-16s %-17s iter=%4d evals(f/g/J)=%d/%d/%d |x-x*|=%.2e "
       "|f-f*|=%.2e viol=%.2e t=%.0fus  [%s]\n",
@@ -107,7 +107,8 @@ TEST_P(ReferenceSolveTest, SolvesOrReportsInfeasible) {
 }
 
 std::string GridName(
-    const ::testing::TestParamInfo<std::tuple<std::string, std::string>>& info) {
+    const ::testing::TestParamInfo<std::tuple<std::string, std::string>>&
+        info) {
   return std::get<0>(info.param) + "_" + std::get<1>(info.param);
 }
 
@@ -140,7 +141,8 @@ TEST_P(BackendTest, SquareSystemsToOneEMinus12) {
     Report(GetParam(), *p, r);
     EXPECT_LE(r.max_constraint_violation, 1e-12) << name;
     // Nonsingular Jacobian with O(1) entries: |x - x*| ~ |residual|.
-    EXPECT_LE((r.x - p->known_solution()).lpNorm<Eigen::Infinity>(), 1e-10) << name;
+    EXPECT_LE((r.x - p->known_solution()).lpNorm<Eigen::Infinity>(), 1e-10)
+        << name;
   }
 }
 
@@ -178,12 +180,15 @@ TEST_P(BackendTest, ReuseAcrossProblemsMatchesFreshSolver) {
     for (const auto& p : MakeReferenceProblems()) {
       if (solver_->RequiresSquareSystem() && !p->IsSquareSystem()) continue;
       NlpResult reused, fresh;
-      const NlpStatus s1 = solver_->Solve(*p, p->starting_point(), options, &reused);
+      const NlpStatus s1 =
+          solver_->Solve(*p, p->starting_point(), options, &reused);
       auto other = NlpSolverRegistry::Create(GetParam());
-      const NlpStatus s2 = other->Solve(*p, p->starting_point(), options, &fresh);
+      const NlpStatus s2 =
+          other->Solve(*p, p->starting_point(), options, &fresh);
       EXPECT_EQ(s1, s2) << p->name() << " pass " << pass;
       if (s1 == NlpStatus::kConverged && s2 == NlpStatus::kConverged) {
-        EXPECT_LE((reused.x - fresh.x).lpNorm<Eigen::Infinity>(), 1e-9) << p->name();
+        EXPECT_LE((reused.x - fresh.x).lpNorm<Eigen::Infinity>(), 1e-9)
+            << p->name();
       }
     }
   }
@@ -263,7 +268,8 @@ TEST_P(BackendTest, BadInputThrowsInvalidArgument) {
   EXPECT_THROW(solver_->Solve(p, x0, ok, &r), std::invalid_argument);
   // Still usable afterwards.
   p.swap_first_bound = false;
-  EXPECT_EQ(solver_->Solve(p, x0, ok, &r), NlpStatus::kConverged) << r.backend_status;
+  EXPECT_EQ(solver_->Solve(p, x0, ok, &r), NlpStatus::kConverged)
+      << r.backend_status;
 }
 
 TEST_P(BackendTest, NaNFunctionsGiveNumericalFailure) {
@@ -271,16 +277,16 @@ TEST_P(BackendTest, NaNFunctionsGiveNumericalFailure) {
   p.nan_everywhere = true;
   NlpResult r;
   NlpStatus status = NlpStatus::kNotRun;
-  EXPECT_NO_THROW(status = solver_->Solve(p, p.inner().starting_point(),
-                                          NlpOptions(), &r));
+  EXPECT_NO_THROW(
+      status = solver_->Solve(p, p.inner().starting_point(), NlpOptions(), &r));
   EXPECT_EQ(status, NlpStatus::kNumericalFailure) << r.backend_status;
 
   // NaN only near the root (x1 > 1.2; the root has x1 = 1.414): no backend
   // may claim convergence or throw.
   p.nan_everywhere = false;
   p.nan_above_x0 = 1.2;
-  EXPECT_NO_THROW(status = solver_->Solve(p, p.inner().starting_point(),
-                                          NlpOptions(), &r));
+  EXPECT_NO_THROW(
+      status = solver_->Solve(p, p.inner().starting_point(), NlpOptions(), &r));
   EXPECT_NE(status, NlpStatus::kConverged) << r.backend_status;
   EXPECT_NE(status, NlpStatus::kNotRun);
 }
@@ -313,7 +319,9 @@ class SingularSystem : public NlpProblem {
     gl << 1.0, 2.0;
     gu = gl;
   }
-  double Objective(const Eigen::Ref<const Eigen::VectorXd>&) const override { return 0; }
+  double Objective(const Eigen::Ref<const Eigen::VectorXd>&) const override {
+    return 0;
+  }
   void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>&,
                          Eigen::Ref<Eigen::VectorXd> grad) const override {
     grad.setZero();
@@ -335,7 +343,8 @@ TEST(NewtonSolverTest, RankDeficientJacobianIsNumericalFailure) {
   NlpResult r;
   EXPECT_EQ(solver->Solve(p, Eigen::Vector2d(0.3, 0.1), NlpOptions(), &r),
             NlpStatus::kNumericalFailure);
-  EXPECT_NE(r.backend_status.find("rank"), std::string::npos) << r.backend_status;
+  EXPECT_NE(r.backend_status.find("rank"), std::string::npos)
+      << r.backend_status;
 }
 
 TEST(NewtonSolverTest, RejectsNonSquareProblems) {
@@ -358,7 +367,8 @@ TEST(NlpRegistryTest, UnknownNameThrowsNamingIt) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("no_such_backend"), std::string::npos)
         << e.what();
-    EXPECT_NE(std::string(e.what()).find("newton"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("newton"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -392,11 +402,13 @@ TEST(NlpReferenceProblemsTest, DerivativesAndOptimaAreConsistent) {
       Eigen::VectorXd xp = x, xm = x;
       xp(j) += h;
       xm(j) -= h;
-      EXPECT_NEAR(grad(j), (p->Objective(xp) - p->Objective(xm)) / (2 * h), 1e-6);
+      EXPECT_NEAR(grad(j), (p->Objective(xp) - p->Objective(xm)) / (2 * h),
+                  1e-6);
       p->Constraints(xp, gp);
       p->Constraints(xm, gm);
       for (int i = 0; i < m; ++i)
-        EXPECT_NEAR(jac(i, j), (gp(i) - gm(i)) / (2 * h), 1e-6) << i << "," << j;
+        EXPECT_NEAR(jac(i, j), (gp(i) - gm(i)) / (2 * h), 1e-6)
+            << i << "," << j;
     }
     if (p->HasLagrangianHessian()) {
       Eigen::VectorXd lambda = Eigen::VectorXd::LinSpaced(m, 0.5, 1.5);
@@ -426,7 +438,8 @@ TEST(NlpReferenceProblemsTest, DerivativesAndOptimaAreConsistent) {
           MaxConstraintViolation(p->known_solution(), g, xl, xu, gl, gu);
       if (p->is_feasible()) {
         EXPECT_LE(viol, 1e-12);
-        EXPECT_NEAR(p->Objective(p->known_solution()), p->known_objective(), 1e-12);
+        EXPECT_NEAR(p->Objective(p->known_solution()), p->known_objective(),
+                    1e-12);
       } else {
         EXPECT_GT(viol, 0.1);  // the root violates a bound
       }
