@@ -171,13 +171,18 @@ void QuasiStaticProblem::ObjectiveGradient(
     grad.segment<2>(nm + 3 * i) = z.segment<2>(nm + 3 * i);
 }
 
+Eigen::Matrix<double, 9, 1> QuasiStaticProblem::ContactLinearVelocities(
+    const Eigen::Ref<const Eigen::VectorXd>& z) const {
+  Eigen::Matrix<double, 9, 1> vel = vel_0_;
+  vel.noalias() += vel_m_ * z.head(num_motion());
+  return vel;
+}
+
 void QuasiStaticProblem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& z,
                                      Eigen::Ref<Eigen::VectorXd> g) const {
   const int nm = num_motion(), ns = 6 + num_passive_;
-  const auto m = z.head(nm);
   const auto f = z.segment<9>(nm);
-  Eigen::Matrix<double, 9, 1> vel = vel_0_;
-  vel.noalias() += vel_m_ * m;
+  const Eigen::Matrix<double, 9, 1> vel = ContactLinearVelocities(z);
   const double inv_v0 = 1.0 / v0_, mu = params_.mu,
                eps2 = params_.epsilon * params_.epsilon;
   for (int i = 0; i < 3; ++i) g(i) = vel(3 * i + 2) * inv_v0;  // E1
@@ -200,10 +205,8 @@ void QuasiStaticProblem::ConstraintJacobian(
     const Eigen::Ref<const Eigen::VectorXd>& z,
     Eigen::Ref<Eigen::MatrixXd> jac) const {
   const int nm = num_motion(), ns = 6 + num_passive_;
-  const auto m = z.head(nm);
   const auto f = z.segment<9>(nm);
-  Eigen::Matrix<double, 9, 1> vel = vel_0_;
-  vel.noalias() += vel_m_ * m;
+  const Eigen::Matrix<double, 9, 1> vel = ContactLinearVelocities(z);
   const double inv_v0 = 1.0 / v0_, mu = params_.mu,
                eps2 = params_.epsilon * params_.epsilon;
   jac.setZero();

@@ -110,6 +110,10 @@ class QuasiStaticProblem final : public NlpProblem {
   double rho() const { return rho_; }
 
  private:
+  // (v_x, v_y, v_z) of the three contacts [m/s] at scaled unknowns z.
+  Eigen::Matrix<double, 9, 1> ContactLinearVelocities(
+      const Eigen::Ref<const Eigen::VectorXd>& z) const;
+
   const KinematicModel& model_;
   QuasiStaticParameters params_;
   int num_passive_ = 0;

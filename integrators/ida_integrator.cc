@@ -365,7 +365,6 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
   const int n = ode.state_size();
   // In residual form the user's F(t, y, y') already encodes any constraints.
   const int m = s.residual_form ? 0 : ode.num_constraints();
-  const int nr = ode.num_roots();
   s.ode = &ode;
   s.result = result;
   s.dae_index = options.dae_index;
@@ -417,22 +416,8 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
       for (int i = 0; i < n; ++i) NV_Ith_S(s.id, i) = ids(i) != 0 ? 1.0 : 0.0;
       flag = IDASetId(s.mem, s.id);
     }
-    if (flag == IDA_SUCCESS)
-      flag = IDASStolerances(s.mem, options.rtol, options.atol);
-    if (flag == IDA_SUCCESS) flag = IDASetMaxNumSteps(s.mem, options.max_steps);
-    if (flag == IDA_SUCCESS) flag = IDASetMinStep(s.mem, options.min_step);
-    if (flag == IDA_SUCCESS && options.step > 0)
-      flag = IDASetInitStep(s.mem, options.step);
-    if (flag == IDA_SUCCESS) flag = IDASetStopTime(s.mem, t1);
-    if (flag == IDA_SUCCESS && nr != s.registered_roots) {
-      flag = IDARootInit(s.mem, nr, nr > 0 ? &Impl::RootFunction : nullptr);
-      s.registered_roots = nr;
-      s.roots_found.resize(nr);
-    }
-    if (flag != IDA_SUCCESS)
-      return fail(IntegratorStatus::kInvalidInput,
-                  "ida setup: " + FlagName(flag) + " " + s.last_error);
-    Finish(s, ode, t1, y, options, result);
+    for (int i = 0; i < n; ++i) NV_Ith_S(s.atol, i) = options.atol;
+    ConfigureAndSolve(s, ode, flag, t0, t1, y, options, result);
     return;
   }
   if (options.dae_index == 2 && m > 0) {
@@ -490,6 +475,18 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
   constexpr double kMultiplierAtol = 1e3;
   for (int i = 0; i < n + m; ++i)
     NV_Ith_S(s.atol, i) = i < n ? options.atol : kMultiplierAtol;
+  ConfigureAndSolve(s, ode, flag, t0, t1, y, options, result);
+}
+
+// Tolerances (s.atol already filled), step limits, stop time and root
+// functions, then the solve; shared by the GGL and residual forms. `flag` is
+// the result of the preceding set-up calls.
+void IdaIntegrator::ConfigureAndSolve(Impl& s, ConstrainedOde& ode, int flag,
+                                      double t0, double t1,
+                                      Eigen::Ref<Eigen::VectorXd> y,
+                                      const IntegratorOptions& options,
+                                      IntegratorResult* result) {
+  const int nr = ode.num_roots();
   if (flag == IDA_SUCCESS) flag = IDASVtolerances(s.mem, options.rtol, s.atol);
   if (flag == IDA_SUCCESS) flag = IDASetMaxNumSteps(s.mem, options.max_steps);
   if (flag == IDA_SUCCESS) flag = IDASetMinStep(s.mem, options.min_step);
@@ -500,10 +497,12 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
     s.registered_roots = nr;
     s.roots_found.resize(nr);
   }
-  if (flag != IDA_SUCCESS)
-    return fail(IntegratorStatus::kInvalidInput,
-                "ida setup: " + FlagName(flag) + " " + s.last_error);
-
+  if (flag != IDA_SUCCESS) {
+    result->status = IntegratorStatus::kInvalidInput;
+    result->t_reached = t0;
+    result->message = "ida setup: " + FlagName(flag) + " " + s.last_error;
+    return;
+  }
   Finish(s, ode, t1, y, options, result);
 }
 

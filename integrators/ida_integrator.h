@@ -54,6 +54,11 @@ class IdaIntegrator final : public Integrator {
                    IntegratorResult* result) override;
 
   struct Impl;
+  static void ConfigureAndSolve(Impl& s, ConstrainedOde& ode, int flag,
+                                double t0, double t1,
+                                Eigen::Ref<Eigen::VectorXd> y,
+                                const IntegratorOptions& options,
+                                IntegratorResult* result);
   static void Finish(Impl& s, ConstrainedOde& ode, double t1,
                      Eigen::Ref<Eigen::VectorXd> y,
                      const IntegratorOptions& options,
