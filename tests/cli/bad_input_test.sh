@@ -2,8 +2,8 @@
 # Every malformed input is rejected with exit code 2 and ONE line on stderr
 # naming the key (and value); never a signal or an uncaught exception.
 #   tests/cli/bad_input_test.sh QUASIROLL_BINARY
-# Scene corpus: tests/bad_scenes/*.yaml, each with a first-line comment
-# "# expect: <text the message must contain>".
+# Corpus: tests/bad_scenes/*.yaml (scenes) and *.suite.yaml (suites), each
+# with a first-line comment "# expect: <text the message must contain>".
 set -u
 bin=$1
 cd "$(dirname "$0")/../.."
@@ -29,7 +29,12 @@ check() {  # check NAME EXPECTED_TEXT COMMAND...
 }
 for f in tests/bad_scenes/*.yaml; do
   expect=$(sed -n 's/^# expect: //p' "$f" | head -n 1)
-  check "pose $(basename "$f")" "$expect" "$bin" pose --scene "$f"
+  case "$f" in
+    *.suite.yaml)  # suites are rejected before anything runs
+      check "bench $(basename "$f")" "$expect" "$bin" bench --suite "$f" --out /tmp/quasiroll-bad-suite ;;
+    *)
+      check "pose $(basename "$f")" "$expect" "$bin" pose --scene "$f" ;;
+  esac
 done
 # A few through the other subcommands, and bad command-line values.
 check "run mu_nan" "mu" "$bin" run --scene tests/bad_scenes/mu_nan.yaml --out /tmp/quasiroll-bad-run
