@@ -480,7 +480,7 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
   w.Key("suite_hash").Value(Hex64(suite.text_hash));
   w.Key("reference").Value(suite.reference.Canonical());
   w.Key("commit").Value(GitCommit());
-  w.Key("libraries");
+  w.Key("library_versions");
   WriteLibraryVersions(&w);
   w.Key("machine");
   WriteMachine(&w);

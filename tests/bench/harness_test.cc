@@ -228,7 +228,7 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
             std::string::npos);
   const std::string meta = ReadAll(root_ / "j1" / "meta.json");
   for (const char* k :
-       {"\"commit\"", "\"libraries\"", "\"machine\"", "\"start_time\"",
+       {"\"commit\"", "\"library_versions\"", "\"machine\"", "\"start_time\"",
         "\"end_time\"", "\"hash\"", "\"jobs\":1", "\"complete\":true"})
     EXPECT_NE(meta.find(k), std::string::npos) << k;
 }
