@@ -497,7 +497,12 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
         break;
       }
   } else {
-    if (have_warm_) {
+    if (have_warm_ && have_previous_ && options_.extrapolate_warm_start) {
+      z0_ = 2.0 * warm_z_ - previous_z_;  // linear predictor along the path
+      const int nm = problem_.num_motion();
+      for (int i = 0; i < 3; ++i)
+        z0_(nm + 3 * i + 2) = std::max(z0_(nm + 3 * i + 2), 0.0);
+    } else if (have_warm_) {
       z0_ = warm_z_;
     } else {
       problem_.ColdStartGuess(z0_);
@@ -526,6 +531,10 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
     if (ok) {
       out->status = QuasiStaticStatus::kOk;
       out->z = result_.x;
+      if (have_warm_) {
+        previous_z_ = warm_z_;
+        have_previous_ = true;
+      }
       warm_z_ = result_.x;
       have_warm_ = true;
       FillOutputs(out);

@@ -242,11 +242,20 @@ void Simulator::Record(double t, const Configuration& theta,
   result->samples.push_back(std::move(s));
 }
 
+namespace {
+// Zoh solves follow the path at regular steps: extrapolated warm starts.
+QuasiStaticOptions SolverOptions(const SimulationOptions& options) {
+  QuasiStaticOptions qs = options.quasi_static;
+  qs.extrapolate_warm_start = options.coupling == Coupling::kZoh;
+  return qs;
+}
+}  // namespace
+
 struct Simulator::Session {
   Session(const Simulator& sim)
       : solver(*sim.model_, QuasiStaticParameters::FromScene(sim.scene_),
                NlpSolverRegistry::Create(sim.options_.nlp),
-               sim.options_.quasi_static),
+               SolverOptions(sim.options_)),
         integrator(IntegratorRegistry::Create(sim.options_.dae)),
         ode(*sim.model_, sim.options_.coupling, &solver),
         y(kConfigSize) {
