@@ -7,13 +7,9 @@ namespace quasiroll {
 IntegratorStatus RkBaumgarteIntegrator::CorrectedField::Field(
     double t, const Eigen::Ref<const Eigen::VectorXd>& y,
     Eigen::Ref<Eigen::VectorXd> f, IntegratorResult* result) {
-  ++result->rhs_evaluations;
-  if (!ode->Rhs(t, y, f)) {
-    std::ostringstream os;
-    os << "Rhs returned false at t = " << t;
-    result->message = os.str();
-    return IntegratorStatus::kRhsFailure;
-  }
+  const IntegratorStatus status =
+      integrators_internal::EvaluateRhs(*ode, t, y, f, result);
+  if (status != IntegratorStatus::kSuccess) return status;
   if (correction.m() == 0) return IntegratorStatus::kSuccess;
   ode->Constraints(y, correction.h());
   if (!correction.Factorize(*ode, y, result))

@@ -1,20 +1,11 @@
 #include "integrators/rk_projection.h"
 
-#include <sstream>
-
 namespace quasiroll {
 
 IntegratorStatus RkProjectionIntegrator::System::Field(
     double t, const Eigen::Ref<const Eigen::VectorXd>& y,
     Eigen::Ref<Eigen::VectorXd> f, IntegratorResult* result) {
-  ++result->rhs_evaluations;
-  if (!ode->Rhs(t, y, f)) {
-    std::ostringstream os;
-    os << "Rhs returned false at t = " << t;
-    result->message = os.str();
-    return IntegratorStatus::kRhsFailure;
-  }
-  return IntegratorStatus::kSuccess;
+  return integrators_internal::EvaluateRhs(*ode, t, y, f, result);
 }
 
 IntegratorStatus RkProjectionIntegrator::System::PostStep(

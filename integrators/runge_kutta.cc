@@ -359,4 +359,16 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
   finish(IntegratorStatus::kSuccess);
 }
 
+IntegratorStatus EvaluateRhs(ConstrainedOde& ode, double t,
+                             const Eigen::Ref<const Eigen::VectorXd>& y,
+                             Eigen::Ref<Eigen::VectorXd> f,
+                             IntegratorResult* result) {
+  ++result->rhs_evaluations;
+  if (ode.Rhs(t, y, f)) return IntegratorStatus::kSuccess;
+  std::ostringstream os;
+  os << "Rhs returned false at t = " << t;
+  result->message = os.str();
+  return IntegratorStatus::kRhsFailure;
+}
+
 }  // namespace quasiroll::integrators_internal

@@ -39,6 +39,13 @@ struct ButcherTableau {
 
 const ButcherTableau& Tableau(RkMethod method);
 
+// f = ode.Rhs(t, y), counted in result->rhs_evaluations. Returns kSuccess, or
+// kRhsFailure with result->message set when Rhs returned false.
+IntegratorStatus EvaluateRhs(ConstrainedOde& ode, double t,
+                             const Eigen::Ref<const Eigen::VectorXd>& y,
+                             Eigen::Ref<Eigen::VectorXd> f,
+                             IntegratorResult* result);
+
 class RkSystem {
  public:
   virtual ~RkSystem() = default;
