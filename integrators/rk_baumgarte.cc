@@ -1,7 +1,5 @@
 #include "integrators/rk_baumgarte.h"
 
-#include <sstream>
-
 namespace quasiroll {
 
 IntegratorStatus RkBaumgarteIntegrator::CorrectedField::Field(
