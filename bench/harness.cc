@@ -22,6 +22,7 @@
 #include "bench/json_writer.h"
 #include "bench/metrics.h"
 #include "bench/run_output.h"
+#include "core/nlp.h"
 
 namespace quasiroll::bench {
 
@@ -297,15 +298,23 @@ std::string TerrainJson(const TerrainSpec& spec) {
 
 namespace {
 
-// Backends whose libraries are not safe to run in two threads at once
-// (Ipopt 3.11 with sequential MUMPS keeps global state; NLopt is kept serial
-// too as a precaution). Runs using one are never executed concurrently with
-// another run using the same backend.
-int ExclusiveClass(const std::string& nlp) {
-  if (nlp == "ipopt") return 1;
-  if (nlp == "slsqp") return 2;
-  return 0;
-}
+// Exclusive class of a run's NLP backend: 0 if solver objects of the backend
+// may run in parallel threads (NlpSolver::SupportsConcurrentInstances()),
+// otherwise a class > 0 of its own, so that two runs of that backend (e.g.
+// ipopt-mumps: sequential MUMPS is not thread-safe) never run at once.
+class ExclusiveClasses {
+ public:
+  int Of(const std::string& nlp) {
+    auto [it, inserted] = classes_.emplace(nlp, 0);
+    if (inserted && NlpSolverRegistry::Has(nlp) &&
+        !NlpSolverRegistry::Create(nlp)->SupportsConcurrentInstances())
+      it->second = static_cast<int>(classes_.size());
+    return it->second;
+  }
+
+ private:
+  std::map<std::string, int> classes_;
+};
 
 std::string ReadFileOr(const std::string& path, bool* ok) {
   std::ifstream in(path, std::ios::binary);
@@ -591,6 +600,7 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
     progress.Message("resume: " + std::to_string(summary.resumed) + " of " +
                      std::to_string(selected.size()) + " runs already done");
 
+  ExclusiveClasses exclusive;
   // References needed by the pending runs, computed once each.
   std::vector<RefJob> refs;
   std::map<std::string, int> ref_index;  // key -> refs index
@@ -612,7 +622,7 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
   }
   {
     std::vector<int> classes;
-    for (const RefJob& j : refs) classes.push_back(ExclusiveClass(j.nlp));
+    for (const RefJob& j : refs) classes.push_back(exclusive.Of(j.nlp));
     Scheduler(classes, jobs).Run([&](int k) {
       RefJob& j = refs[k];
       try {
@@ -629,7 +639,7 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
   // Runs.
   {
     std::vector<int> classes;
-    for (int i : pending) classes.push_back(ExclusiveClass(selected[i]->nlp));
+    for (int i : pending) classes.push_back(exclusive.Of(selected[i]->nlp));
     Scheduler(classes, jobs).Run([&](int k) {
       const int i = pending[k];
       const RunSpec& r = *selected[i];

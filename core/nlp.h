@@ -123,6 +123,11 @@ class NlpSolver {
   // square system; inequality rows and bounds are then only checked at the
   // root), e.g. plain Newton.
   virtual bool RequiresSquareSystem() const { return false; }
+  // True if separate solver objects of this backend may solve in different
+  // threads at the same time (no unsynchronised global state in the backend
+  // or its libraries). False by default, so that a plugin is serialised by
+  // the harness until it says otherwise; one object is never shared.
+  virtual bool SupportsConcurrentInstances() const { return false; }
 
  protected:
   NlpSolver() = default;

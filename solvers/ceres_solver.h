@@ -64,6 +64,8 @@ class CeresNlpSolver final : public NlpSolver {
   CeresNlpSolver();
   ~CeresNlpSolver() override;
   std::string name() const override { return "ceres"; }
+  // Ceres keeps all solver state in its Problem/Solver objects.
+  bool SupportsConcurrentInstances() const override { return true; }
 
  private:
   void DoSolve(const NlpProblem& problem,

@@ -1,4 +1,15 @@
-// Backend "ipopt": Ipopt's primal-dual interior-point method.
+// Backends "ipopt" and "ipopt-mumps": Ipopt's primal-dual interior-point
+// method, differing only in the linear solver of the KKT systems:
+//   ipopt        dense Bunch-Kaufman LDL^T (LAPACK dsytrf), plugged in through
+//                Ipopt's MA27 interface (HSLLoader.h: LSL_setMA27). For
+//                quasiroll's NLPs (n + m <= ~60) it is 3-4x faster than
+//                MUMPS, whose per-call overhead dominated
+//                (docs/performance.md), and it keeps no global state, so solver
+//                objects may run in parallel threads (Ipopt >= 3.11 keeps its
+//                tags thread-local).
+//   ipopt-mumps  Debian's sequential MUMPS, Ipopt's stock solver. MUMPS with
+//                its dummy MPI is not thread-safe: never run two ipopt-mumps
+//                solvers at once (the harness serialises them).
 //
 // One Ipopt::IpoptApplication per solver object (created and initialised in
 // the constructor without reading an ipopt.opt file) and one persistent TNLP
@@ -18,8 +29,12 @@
 // and Feasible_Point_Found (square problems) -> kConverged;
 // Infeasible_Problem_Detected -> kInfeasible; Maximum_Iterations_Exceeded ->
 // kIterationLimit; every other code -> kNumericalFailure. Multipliers are
-// Ipopt's lambda. Not thread-safe across objects if Ipopt's linear solver
-// (sequential MUMPS in Debian) is not.
+// Ipopt's lambda.
+//
+// Options that differ from Ipopt's defaults, and why (ipopt_solver.cc):
+// mu_strategy monotone (Ipopt switches to the adaptive strategy with L-BFGS;
+// its quality-function oracle cost ~40 % of a warm solve in extra
+// backsolves), bound_relax_factor 0, tol / constr_viol_tol from NlpOptions.
 #pragma once
 
 #include <memory>
@@ -29,11 +44,20 @@
 
 namespace quasiroll {
 
+enum class IpoptLinearSolver {
+  kDenseLdlt,  // "ipopt"
+  kMumps,      // "ipopt-mumps"
+};
+
 class IpoptSolver final : public NlpSolver {
  public:
-  IpoptSolver();
+  explicit IpoptSolver(
+      IpoptLinearSolver linear_solver = IpoptLinearSolver::kDenseLdlt);
   ~IpoptSolver() override;
-  std::string name() const override { return "ipopt"; }
+  std::string name() const override;
+  // True for the dense LDL^T (no global state; Ipopt's tags are
+  // thread-local), false for MUMPS.
+  bool SupportsConcurrentInstances() const override;
 
  private:
   void DoSolve(const NlpProblem& problem,

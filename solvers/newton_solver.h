@@ -30,6 +30,7 @@ class NewtonSolver final : public NlpSolver {
   ~NewtonSolver() override;
   std::string name() const override { return "newton"; }
   bool RequiresSquareSystem() const override { return true; }
+  bool SupportsConcurrentInstances() const override { return true; }
 
  private:
   void DoSolve(const NlpProblem& problem,

@@ -25,8 +25,14 @@ void RegisterBuiltinNlpSolvers() {
 #ifdef QUASIROLL_HAVE_IPOPT
     NlpSolverRegistry::Register(
         "ipopt",
-        "Ipopt interior point (exact or L-BFGS Hessian), dense Jacobian",
+        "Ipopt interior point (exact or L-BFGS Hessian), dense LDL^T KKT "
+        "solves",
         [] { return std::make_unique<IpoptSolver>(); });
+    NlpSolverRegistry::Register(
+        "ipopt-mumps",
+        "Ipopt interior point with its stock MUMPS linear solver (serial)", [] {
+          return std::make_unique<IpoptSolver>(IpoptLinearSolver::kMumps);
+        });
 #endif
 #ifdef QUASIROLL_HAVE_NLOPT
     NlpSolverRegistry::Register(

@@ -40,6 +40,9 @@ class SlsqpSolver final : public NlpSolver {
   SlsqpSolver();
   ~SlsqpSolver() override;
   std::string name() const override { return "slsqp"; }
+  // NLopt's SLSQP keeps its iteration state in a per-call struct
+  // (slsqpb_state) and each object owns its nlopt_opt.
+  bool SupportsConcurrentInstances() const override { return true; }
 
  private:
   void DoSolve(const NlpProblem& problem,

@@ -119,9 +119,9 @@ class BenchHarness : public ::testing::Test {
            "    nlp: [newton, ceres]\n"
            "    dae: [rk-projection, rk-baumgarte]\n"
            "    dt: [0.05, 0.1]\n"
-           "  ip:\n"  // ipopt runs are serialised (MUMPS)
+           "  ip:\n"  // ipopt-mumps runs are serialised (MUMPS)
            "    scenes: [paper]\n"
-           "    nlp: ipopt\n"
+           "    nlp: [ipopt, ipopt-mumps]\n"
            "    dae: [rk-projection, rk-baumgarte]\n"
            "    dt: 0.1\n"
            "  unstable:\n"  // sigma * dt = 10 >> 2.785: blows up
@@ -159,8 +159,8 @@ Suite BenchHarness::suite_;
 HarnessSummary BenchHarness::summary_j1_;
 
 TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
-  ASSERT_EQ(suite_.runs.size(), 16u + 2u + 1u + 1u);
-  EXPECT_EQ(summary_j1_.executed, 20);
+  ASSERT_EQ(suite_.runs.size(), 16u + 4u + 1u + 1u);
+  EXPECT_EQ(summary_j1_.executed, 22);
   const Table t = ReadTable(root_ / "j1" / "runs.csv");
   EXPECT_EQ(t.header, RunsCsvColumns());
   for (const char* c : {"scene",
@@ -235,7 +235,7 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
 
 TEST_F(BenchHarness, FailuresAndErrorsAreRowsAndTheSuiteFinishes) {
   const Table t = ReadTable(root_ / "j1" / "runs.csv");
-  const auto& unstable = t.rows[18];
+  const auto& unstable = t.rows[20];
   EXPECT_EQ(unstable.at("suite_group"), "unstable");
   EXPECT_NE(unstable.at("status"), "success");
   EXPECT_FALSE(unstable.at("stop_reason").empty());
@@ -243,7 +243,7 @@ TEST_F(BenchHarness, FailuresAndErrorsAreRowsAndTheSuiteFinishes) {
   // Accuracy over the time reached only.
   EXPECT_GT(std::stoi(unstable.at("common_samples")), 0);
   EXPECT_EQ(unstable.at("err_final"), "nan");
-  const auto& rough = t.rows[19];
+  const auto& rough = t.rows[21];
   EXPECT_EQ(rough.at("status"), "error");
   EXPECT_NE(rough.at("stop_reason").find("initial"), std::string::npos)
       << rough.at("stop_reason");
@@ -252,7 +252,7 @@ TEST_F(BenchHarness, FailuresAndErrorsAreRowsAndTheSuiteFinishes) {
 
 TEST_F(BenchHarness, JobsTwoGivesTheSameRunsCsvExceptTiming) {
   const HarnessSummary s = RunSuite(suite_, Options("j2", 2));
-  EXPECT_EQ(s.executed, 20);
+  EXPECT_EQ(s.executed, 22);
   EXPECT_EQ(WithoutTiming(root_ / "j1" / "runs.csv"),
             WithoutTiming(root_ / "j2" / "runs.csv"));
   // Trajectories are bit-identical too.
@@ -275,7 +275,7 @@ TEST_F(BenchHarness, ResumeAfterInterruptionGivesTheSameFiles) {
   HarnessOptions o = Options("resume", 2);
   o.resume = true;
   const HarnessSummary s = RunSuite(suite_, o);
-  EXPECT_EQ(s.resumed, 16);
+  EXPECT_EQ(s.resumed, 18);
   EXPECT_EQ(s.executed, 4);
   EXPECT_EQ(WithoutTiming(root_ / "j1" / "runs.csv"),
             WithoutTiming(dir / "runs.csv"));

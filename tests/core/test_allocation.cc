@@ -8,6 +8,7 @@
 #include <new>
 
 #include "core/simulator.h"
+#include "tests/test_names.h"
 
 namespace {
 std::atomic<long long> g_allocations{0};
@@ -55,10 +56,7 @@ TEST_P(WarmStep, AdvanceDoesNotAllocate) {
 INSTANTIATE_TEST_SUITE_P(RkBackends, WarmStep,
                          ::testing::Values("rk-projection", "rk-baumgarte"),
                          [](const auto& info) {
-                           std::string n = info.param;
-                           for (char& c : n)
-                             if (c == '-') c = '_';
-                           return n;
+                           return testing_util::GtestName(info.param);
                          });
 
 }  // namespace

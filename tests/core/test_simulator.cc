@@ -10,6 +10,7 @@
 #include "bench/run_output.h"
 #include "core/initial_configuration.h"
 #include "core/simulator.h"
+#include "tests/test_names.h"
 
 namespace quasiroll {
 namespace {
@@ -132,11 +133,9 @@ TEST_P(EveryIntegrator, O2bPvcCrabMotion) {
 INSTANTIATE_TEST_SUITE_P(AllIntegrators, EveryIntegrator,
                          ::testing::ValuesIn(AllMethods()),
                          [](const ::testing::TestParamInfo<Method>& info) {
-                           std::string n = info.param.dae + "_" +
-                                           ToString(info.param.coupling);
-                           for (char& c : n)
-                             if (c == '-') c = '_';
-                           return n;
+                           return testing_util::GtestName(
+                               info.param.dae + "_" +
+                               ToString(info.param.coupling));
                          });
 
 // O8: Baumgarte decay from a perturbed start. On flat ground the straight
