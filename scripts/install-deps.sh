@@ -5,7 +5,7 @@
 set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config git
-  libeigen3-dev coinor-libipopt-dev libnlopt-cxx-dev libceres-dev
+  libeigen3-dev coinor-libipopt-dev liblapack-dev libnlopt-cxx-dev libceres-dev
   libsundials-dev libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev
   libcli11-dev python3 python3-matplotlib python3-numpy
   chromium clang-format
