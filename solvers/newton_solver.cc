@@ -67,10 +67,26 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
     return;
   }
 
+  // An approximate root (|r| <= a loose tol) can violate an inequality row
+  // that the root itself satisfies (the friction cone is active to O(eps) on
+  // the root of a sliding contact). Before calling such a point infeasible,
+  // polish: tighten the residual target and keep iterating, and judge the
+  // bounds at the polished point. A polish that stalls keeps the last point.
+  constexpr double kPolishFloor = 1e-14;
+  double target = tol;
+  bool polishing = false;
   int iter = 0;
   for (;; ++iter) {
     const double r_max = w.r.lpNorm<Eigen::Infinity>();
-    if (r_max <= tol) break;
+    if (r_max <= target) {
+      if (target <= kPolishFloor) break;
+      if (MaxConstraintViolation(x, w.g, w.x_lb, w.x_ub, w.g_lb, w.g_ub) <= tol)
+        break;
+      polishing = true;
+      target = std::max(kPolishFloor, 1e-4 * r_max);
+      if (r_max <= target) break;
+    }
+    if (polishing && iter >= options.max_iterations) break;
     if (iter >= options.max_iterations) {
       result->status = NlpStatus::kIterationLimit;
       std::snprintf(msg, sizeof msg, "max_iterations reached, |r|_inf = %.3e",
@@ -83,6 +99,7 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
     ++result->jacobian_evaluations;
     for (int k = 0; k < n; ++k) w.jac_eq.row(k) = w.jac.row(w.eq_rows[k]);
     if (!w.jac_eq.allFinite()) {
+      if (polishing) break;
       result->status = NlpStatus::kNumericalFailure;
       result->backend_status = "non-finite Jacobian";
       result->iterations = iter;
@@ -95,6 +112,7 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
     const auto u_diag = w.lu.matrixLU().diagonal().cwiseAbs();
     const double pivot_max = u_diag.maxCoeff(), pivot_min = u_diag.minCoeff();
     if (!(pivot_min > 1e-13 * pivot_max)) {
+      if (polishing) break;
       result->status = NlpStatus::kNumericalFailure;
       std::snprintf(
           msg, sizeof msg,
@@ -126,7 +144,7 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
       if (Residual(w.g_trial, w.g_lb, w.eq_rows, &w.r_trial)) {
         const double phi_trial = w.r_trial.squaredNorm();
         if (phi_trial <= (1.0 - 2e-4 * alpha) * phi ||
-            w.r_trial.lpNorm<Eigen::Infinity>() <= tol) {
+            w.r_trial.lpNorm<Eigen::Infinity>() <= target) {
           accepted = true;
           break;
         }
@@ -138,6 +156,7 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
       }
       alpha *= 0.5;
     }
+    if (!accepted && polishing) break;  // |r| <= tol already holds
     if (!accepted) {
       result->status = NlpStatus::kNumericalFailure;
       std::snprintf(msg, sizeof msg,

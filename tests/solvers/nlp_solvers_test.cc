@@ -350,6 +350,68 @@ TEST(NewtonSolverTest, RankDeficientJacobianIsNumericalFailure) {
       << r.backend_status;
 }
 
+// x^3 = 1 with the inequality 1e3 (1 - x) >= 0, active at the root x* = 1.
+// Newton from x0 = 2 approaches from above (x^3 convex), so an iterate that
+// meets a loose residual tolerance still violates the scaled inequality by
+// 1e3 (x - 1) >> tol although the root satisfies it.
+class ActiveInequalityAtRoot : public NlpProblem {
+ public:
+  int num_variables() const override { return 1; }
+  int num_constraints() const override { return 2; }
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> xl, Eigen::Ref<Eigen::VectorXd> xu,
+                 Eigen::Ref<Eigen::VectorXd> gl,
+                 Eigen::Ref<Eigen::VectorXd> gu) const override {
+    xl.setConstant(-std::numeric_limits<double>::infinity());
+    xu.setConstant(std::numeric_limits<double>::infinity());
+    gl << 1.0, 0.0;
+    gu << 1.0, std::numeric_limits<double>::infinity();
+  }
+  double Objective(const Eigen::Ref<const Eigen::VectorXd>&) const override {
+    return 0;
+  }
+  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>&,
+                         Eigen::Ref<Eigen::VectorXd> grad) const override {
+    grad.setZero();
+  }
+  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                   Eigen::Ref<Eigen::VectorXd> g) const override {
+    g << x(0) * x(0) * x(0), 1e3 * (1.0 - x(0));
+  }
+  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
+    jac << 3.0 * x(0) * x(0), -1e3;
+  }
+};
+
+TEST(NewtonSolverTest, LooseToleranceJudgesInequalitiesAtThePolishedRoot) {
+  RegisterBuiltinNlpSolvers();
+  auto solver = NlpSolverRegistry::Create("newton");
+  ActiveInequalityAtRoot p;
+  NlpOptions options;
+  options.feasibility_tolerance = 1e-6;
+  NlpResult r;
+  // Without the polish the first iterate with |x^3 - 1| <= 1e-6 has
+  // x - 1 ~ 3e-7 > 0, i.e. an inequality violation ~3e-4 > tol: "infeasible".
+  EXPECT_EQ(solver->Solve(p, Eigen::VectorXd::Constant(1, 2.0), options, &r),
+            NlpStatus::kConverged)
+      << r.backend_status;
+  EXPECT_NEAR(r.x(0), 1.0, 1e-9) << r.backend_status;
+  // A problem whose root really violates the inequality stays infeasible.
+  class Shifted : public ActiveInequalityAtRoot {
+    void GetBounds(Eigen::Ref<Eigen::VectorXd> xl,
+                   Eigen::Ref<Eigen::VectorXd> xu,
+                   Eigen::Ref<Eigen::VectorXd> gl,
+                   Eigen::Ref<Eigen::VectorXd> gu) const override {
+      ActiveInequalityAtRoot::GetBounds(xl, xu, gl, gu);
+      gl(0) = gu(0) = 1.1;  // root x = 1.1^(1/3) > 1
+    }
+  } shifted;
+  EXPECT_EQ(
+      solver->Solve(shifted, Eigen::VectorXd::Constant(1, 2.0), options, &r),
+      NlpStatus::kInfeasible)
+      << r.backend_status;
+}
+
 TEST(NewtonSolverTest, RejectsNonSquareProblems) {
   RegisterBuiltinNlpSolvers();
   auto solver = NlpSolverRegistry::Create("newton");
