@@ -1,6 +1,8 @@
 #include "solvers/newton_solver.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -10,8 +12,10 @@ namespace quasiroll {
 struct NewtonSolver::Workspace {
   Eigen::VectorXd x_lb, x_ub, g_lb, g_ub;
   Eigen::VectorXd g, g_trial, r, r_trial, dx, dx_bar, x_trial;
-  Eigen::MatrixXd jac, jac_eq;
+  Eigen::MatrixXd jac, jac_eq, jtj, jtj_damped;
+  Eigen::VectorXd jtr, jtj_diag;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+  Eigen::LLT<Eigen::MatrixXd> llt;
   std::vector<int> eq_rows;
 
   void Resize(int n, int m) {
@@ -28,6 +32,12 @@ struct NewtonSolver::Workspace {
     x_trial.resize(n);
     jac.resize(m, n);
     jac_eq.resize(n, n);
+    jtj.resize(n, n);
+    jtj_damped.resize(n, n);
+    jtr.resize(n);
+    jtj_diag.resize(n);
+    if (lu.rows() != n) lu = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
+    if (llt.rows() != n) llt = Eigen::LLT<Eigen::MatrixXd>(n);
     eq_rows.reserve(static_cast<size_t>(n));
   }
 };
@@ -44,6 +54,44 @@ bool Residual(const Eigen::VectorXd& g, const Eigen::VectorXd& g_lb,
 }
 }  // namespace
 
+// Levenberg-Marquardt fallback (Marquardt's scaling D = diag(J^T J)):
+//   (J^T J + lambda D) dx = -J^T r,  lambda = lambda_k, 10 lambda_k, ...
+// taking the first dx with |r(x + dx)|^2 < |r(x)|^2 (for large lambda dx is
+// a short step along the steepest-descent direction -J^T r, so one exists
+// unless x is stationary for |r|^2). Used when no damped Newton step is
+// acceptable: far from the root J can be nearly singular (a slip component
+// passing zero makes dC/df_t = sigma ~ eps in the creep law; cond 1.7e12
+// seen on the paper scene at t = 2.907 s, against 4e6 at the root), and the
+// Newton direction is then huge and useless. lambda_k is kept between calls
+// and divided by 10 after each success. On success x, g, r hold the new
+// point.
+bool NewtonSolver::LevenbergMarquardtStep(const NlpProblem& problem,
+                                          Workspace* w, double phi,
+                                          NlpResult* result) {
+  w->jtj.noalias() = w->jac_eq.transpose() * w->jac_eq;
+  w->jtr.noalias() = w->jac_eq.transpose() * w->r;
+  w->jtj_diag = w->jtj.diagonal().cwiseMax(1e-300);
+  const int n = static_cast<int>(w->r.size());
+  for (lm_lambda_ = std::clamp(lm_lambda_, 1e-12, 1.0); lm_lambda_ <= 1e12;
+       lm_lambda_ *= 10.0) {
+    w->jtj_damped = w->jtj;
+    for (int i = 0; i < n; ++i)
+      w->jtj_damped(i, i) += lm_lambda_ * w->jtj_diag(i);
+    w->llt.compute(w->jtj_damped);
+    if (w->llt.info() != Eigen::Success) continue;
+    w->dx = w->llt.solve(w->jtr);
+    w->x_trial = result->x - w->dx;
+    problem.Constraints(w->x_trial, w->g_trial);
+    ++result->constraint_evaluations;
+    if (Residual(w->g_trial, w->g_lb, w->eq_rows, &w->r_trial) &&
+        w->r_trial.squaredNorm() < phi) {
+      lm_lambda_ *= 0.1;
+      return true;
+    }
+  }
+  return false;
+}
+
 void NewtonSolver::DoSolve(const NlpProblem& problem,
                            const Eigen::Ref<const Eigen::VectorXd>& x0,
                            const NlpOptions& options, NlpResult* result) {
@@ -56,6 +104,7 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
     if (w.g_lb(i) == w.g_ub(i)) w.eq_rows.push_back(i);  // n rows (validated)
 
   const double tol = options.feasibility_tolerance;
+  lm_lambda_ = 1e-3;
   char msg[160];
   Eigen::VectorXd& x = result->x;
   x = x0;
@@ -157,11 +206,13 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
       alpha *= 0.5;
     }
     if (!accepted && polishing) break;  // |r| <= tol already holds
+    if (!accepted) accepted = LevenbergMarquardtStep(problem, &w, phi, result);
     if (!accepted) {
       result->status = NlpStatus::kNumericalFailure;
-      std::snprintf(msg, sizeof msg,
-                    "line search failed at iteration %d, |r|_inf = %.3e", iter,
-                    r_max);
+      std::snprintf(
+          msg, sizeof msg,
+          "line search and LM step failed at iteration %d, |r|_inf = %.3e",
+          iter, r_max);
       result->backend_status = msg;
       result->iterations = iter;
       return;

@@ -12,7 +12,10 @@
 // is ignored (the root is isolated); bounds and inequality rows are checked at
 // the root: if the root violates them the status is kInfeasible (the root of
 // a nonsingular square system is locally unique).
-// A (numerically) rank-deficient Jacobian, a failed line search or a
+// When no damped step is acceptable (J nearly singular away from the root),
+// one Levenberg-Marquardt step (J^T J + lambda diag(J^T J)) dx = -J^T r with
+// increasing lambda is taken instead, and Newton resumes from there.
+// A (numerically) rank-deficient Jacobian, a failed LM step or a
 // non-finite residual give kNumericalFailure. Multipliers are left at zero.
 // After the first call with given sizes DoSolve() does not allocate.
 #pragma once
@@ -38,7 +41,11 @@ class NewtonSolver final : public NlpSolver {
                const NlpOptions& options, NlpResult* result) override;
 
   struct Workspace;
+  bool LevenbergMarquardtStep(const NlpProblem& problem, Workspace* w,
+                              double phi, NlpResult* result);
+
   std::unique_ptr<Workspace> ws_;
+  double lm_lambda_ = 1e-3;  // Levenberg-Marquardt damping, reset per solve
 };
 
 }  // namespace quasiroll
