@@ -309,18 +309,16 @@ INSTANTIATE_TEST_SUITE_P(AllBackends, BackendTest,
                          });
 
 // --------------------------------------------------------- newton-only ---
-// Two parallel lines: singular Jacobian everywhere.
-class SingularSystem : public NlpProblem {
+// Test systems for newton: no objective, free variables; subclasses give the
+// rows and their bounds.
+class FreeVariableSystem : public NlpProblem {
  public:
-  int num_variables() const override { return 2; }
-  int num_constraints() const override { return 2; }
   void GetBounds(Eigen::Ref<Eigen::VectorXd> xl, Eigen::Ref<Eigen::VectorXd> xu,
                  Eigen::Ref<Eigen::VectorXd> gl,
-                 Eigen::Ref<Eigen::VectorXd> gu) const override {
+                 Eigen::Ref<Eigen::VectorXd> gu) const final {
     xl.setConstant(-std::numeric_limits<double>::infinity());
     xu.setConstant(std::numeric_limits<double>::infinity());
-    gl << 1.0, 2.0;
-    gu = gl;
+    RowBounds(gl, gu);
   }
   double Objective(const Eigen::Ref<const Eigen::VectorXd>&) const override {
     return 0;
@@ -328,6 +326,22 @@ class SingularSystem : public NlpProblem {
   void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>&,
                          Eigen::Ref<Eigen::VectorXd> grad) const override {
     grad.setZero();
+  }
+
+ protected:
+  virtual void RowBounds(Eigen::Ref<Eigen::VectorXd> gl,
+                         Eigen::Ref<Eigen::VectorXd> gu) const = 0;
+};
+
+// Two parallel lines: singular Jacobian everywhere.
+class SingularSystem : public FreeVariableSystem {
+ public:
+  int num_variables() const override { return 2; }
+  int num_constraints() const override { return 2; }
+  void RowBounds(Eigen::Ref<Eigen::VectorXd> gl,
+                 Eigen::Ref<Eigen::VectorXd> gu) const override {
+    gl << 1.0, 2.0;
+    gu = gl;
   }
   void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
                    Eigen::Ref<Eigen::VectorXd> g) const override {
@@ -354,24 +368,14 @@ TEST(NewtonSolverTest, RankDeficientJacobianIsNumericalFailure) {
 // Newton from x0 = 2 approaches from above (x^3 convex), so an iterate that
 // meets a loose residual tolerance still violates the scaled inequality by
 // 1e3 (x - 1) >> tol although the root satisfies it.
-class ActiveInequalityAtRoot : public NlpProblem {
+class ActiveInequalityAtRoot : public FreeVariableSystem {
  public:
   int num_variables() const override { return 1; }
   int num_constraints() const override { return 2; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> xl, Eigen::Ref<Eigen::VectorXd> xu,
-                 Eigen::Ref<Eigen::VectorXd> gl,
+  void RowBounds(Eigen::Ref<Eigen::VectorXd> gl,
                  Eigen::Ref<Eigen::VectorXd> gu) const override {
-    xl.setConstant(-std::numeric_limits<double>::infinity());
-    xu.setConstant(std::numeric_limits<double>::infinity());
     gl << 1.0, 0.0;
     gu << 1.0, std::numeric_limits<double>::infinity();
-  }
-  double Objective(const Eigen::Ref<const Eigen::VectorXd>&) const override {
-    return 0;
-  }
-  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>&,
-                         Eigen::Ref<Eigen::VectorXd> grad) const override {
-    grad.setZero();
   }
   void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
                    Eigen::Ref<Eigen::VectorXd> g) const override {
@@ -398,11 +402,9 @@ TEST(NewtonSolverTest, LooseToleranceJudgesInequalitiesAtThePolishedRoot) {
   EXPECT_NEAR(r.x(0), 1.0, 1e-9) << r.backend_status;
   // A problem whose root really violates the inequality stays infeasible.
   class Shifted : public ActiveInequalityAtRoot {
-    void GetBounds(Eigen::Ref<Eigen::VectorXd> xl,
-                   Eigen::Ref<Eigen::VectorXd> xu,
-                   Eigen::Ref<Eigen::VectorXd> gl,
+    void RowBounds(Eigen::Ref<Eigen::VectorXd> gl,
                    Eigen::Ref<Eigen::VectorXd> gu) const override {
-      ActiveInequalityAtRoot::GetBounds(xl, xu, gl, gu);
+      ActiveInequalityAtRoot::RowBounds(gl, gu);
       gl(0) = gu(0) = 1.1;  // root x = 1.1^(1/3) > 1
     }
   } shifted;
