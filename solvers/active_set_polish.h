@@ -10,7 +10,9 @@
 //                  decomposition, so dependent rows are harmless).
 // Moves x by O(current violation), i.e. changes the objective only at second
 // order, and brings feasibility from ~1e-8 (typical SQP/AL answers) to
-// round-off. Allocates (it runs once per solve, after the backend finished).
+// round-off. Never returns a point whose violation exceeds that of its
+// (box-projected) start. Allocates (it runs once per solve, after the backend
+// finished).
 //
 // LooksLocallyInfeasible: true if x is a stationary point of the squared
 // constraint violation 0.5 |v(x)|^2 (bounds by projection) at which the

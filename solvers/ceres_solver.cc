@@ -337,9 +337,11 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
       if (square) {
         // LM's cost-decrease test can stall on ill-conditioned roots (cond
         // ~1e7-1e8); finish with affine-invariant Newton steps from nearby.
+        // active_tol = 0: the root is isolated, so a variable merely close to
+        // a bound must stay free (freezing it drops a column of a square J).
         if (viol <= 1e-6) {
           const internal::PolishStats ps = internal::PolishActiveConstraints(
-              problem, s.b, /*active_tol=*/1e-7, feas_tol,
+              problem, s.b, /*active_tol=*/0.0, feas_tol,
               /*max_iterations=*/20, &x);
           s.g_evals += ps.constraint_evaluations;
           s.j_evals += ps.jacobian_evaluations;

@@ -15,6 +15,7 @@
 
 #include "core/nlp.h"
 #include "core/nlp_reference_problems.h"
+#include "solvers/active_set_polish.h"
 #include "tests/test_names.h"
 
 namespace quasiroll {
@@ -412,6 +413,51 @@ TEST(NewtonSolverTest, LooseToleranceJudgesInequalitiesAtThePolishedRoot) {
       solver->Solve(shifted, Eigen::VectorXd::Constant(1, 2.0), options, &r),
       NlpStatus::kInfeasible)
       << r.backend_status;
+}
+
+// K (x1 + x2^3) = 0, x2 = 0 from x = (0, a): the full Newton step goes to
+// (2 a^3, 0), where the max-norm violation is 2 K a^3, twice the start's
+// K a^3 (for K a^2 > 1), yet the simplified correction 2 a^3 passes the
+// natural-monotonicity test (<= 0.75 |dx| ~ 0.75 a). One such step is all a
+// one-iteration polish takes, so it must hand back the start.
+class NaturalStepRaisesViolation : public FreeVariableSystem {
+ public:
+  static constexpr double kScale = 1e3;
+  int num_variables() const override { return 2; }
+  int num_constraints() const override { return 2; }
+  void RowBounds(Eigen::Ref<Eigen::VectorXd> gl,
+                 Eigen::Ref<Eigen::VectorXd> gu) const override {
+    gl.setZero();
+    gu.setZero();
+  }
+  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                   Eigen::Ref<Eigen::VectorXd> g) const override {
+    g << kScale * (x(0) + x(1) * x(1) * x(1)), x(1);
+  }
+  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
+    jac << kScale, 3.0 * kScale * x(1) * x(1), 0.0, 1.0;
+  }
+};
+
+TEST(ActiveSetPolishTest, NeverReturnsAPointWorseThanItsStart) {
+  NaturalStepRaisesViolation p;
+  internal::NlpBounds bounds;
+  bounds.Load(p);
+  const double a = 0.1;
+  Eigen::VectorXd x = Eigen::Vector2d(0.0, a), g(2);
+  p.Constraints(x, g);
+  const double start_violation = g.lpNorm<Eigen::Infinity>();  // K a^3 = 1
+  internal::PolishStats one_step = internal::PolishActiveConstraints(
+      p, bounds, /*active_tol=*/0.0, /*feasibility_tolerance=*/1e-12,
+      /*max_iterations=*/1, &x);
+  EXPECT_FALSE(one_step.success);
+  EXPECT_LE(one_step.max_violation, start_violation);
+  EXPECT_EQ(x, Eigen::Vector2d(0.0, a));
+  // Given iterations, the same polish reaches the root (x2 = 0, then linear).
+  internal::PolishStats full = internal::PolishActiveConstraints(
+      p, bounds, 0.0, 1e-12, /*max_iterations=*/20, &x);
+  EXPECT_TRUE(full.success) << full.max_violation;
 }
 
 TEST(NewtonSolverTest, RejectsNonSquareProblems) {
