@@ -29,8 +29,10 @@ class ConstrainedOde {
   virtual int num_constraints() const = 0;
 
   // y' = F(t, y). Returns false if F cannot be evaluated at (t, y) (e.g. the
-  // quasi-static problem behind it has no solution there); integrators then
-  // stop with IntegratorStatus::kRhsFailure.
+  // quasi-static problem behind it has no solution there). Explicit backends
+  // then stop with IntegratorStatus::kRhsFailure; `ida` first retries with
+  // smaller steps (the point may be a trial point off the path) and stops
+  // with kRhsFailure only when the retries fail too.
   virtual bool Rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> ydot) = 0;
 

@@ -62,6 +62,9 @@ class Simulator::RobotOde final : public ConstrainedOde {
 
   bool Rhs(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y,
            Eigen::Ref<Eigen::VectorXd> ydot) override {
+    // nlp_failed_ describes the latest call only: an implicit integrator may
+    // recover from a failed solve at a trial point (see core/dae.h).
+    nlp_failed_ = false;
     const Configuration q = y;
     if (!q.allFinite()) return false;
     Vec12 w = w_;

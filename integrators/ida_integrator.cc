@@ -61,13 +61,18 @@ struct IdaIntegrator::Impl {
   static void ErrorHandler(int error_code, const char* module,
                            const char* function, char* msg, void* user_data);
 
+  // rhs_failed tracks the latest Rhs / Residual call only: IDA recovers from
+  // a failure at a trial point (see Residual), so an earlier failure must not
+  // label a later, unrelated IDA failure as kRhsFailure.
   bool CallRhs(double t, const Eigen::Ref<const VectorXd>& x,
                Eigen::Ref<VectorXd> f) {
     ++result->rhs_evaluations;
-    if (ode->Rhs(t, x, f)) return true;
-    rhs_failed = true;
-    rhs_failure_time = t;
-    return false;
+    return Track(t, ode->Rhs(t, x, f));
+  }
+  bool Track(double t, bool ok) {
+    rhs_failed = !ok;
+    if (!ok) rhs_failure_time = t;
+    return ok;
   }
 
   // SUNDIALS objects.
@@ -140,15 +145,17 @@ int IdaIntegrator::Impl::Residual(double t, N_Vector yy, N_Vector yp,
   const int n = s.n, m = s.m;
   Map<const VectorXd> y(NV_DATA_S(yy), n + m), ydot(NV_DATA_S(yp), n + m);
   Map<VectorXd> r(NV_DATA_S(rr), n + m);
+  // A residual that cannot be evaluated returns +1, IDA's recoverable error:
+  // IDA retries with a smaller step (or a new Newton iterate). The failing
+  // point is often a trial point off the solution path (a corrector iterate
+  // or a long step past a stick/slip transition, where the quasi-static NLP
+  // is singular); where the path itself leaves the feasible set, the retries
+  // end in IDA_REP_RES_ERR just before that point -> kRhsFailure.
   if (s.residual_form) {
     ++s.result->rhs_evaluations;
-    if (s.ode->Residual(t, y, ydot, r)) return 0;
-    s.rhs_failed = true;
-    s.rhs_failure_time = t;
-    return -1;
+    return s.Track(t, s.ode->Residual(t, y, ydot, r)) ? 0 : 1;
   }
-  // Unrecoverable (-1): kRhsFailure as for the RK backends.
-  if (!s.CallRhs(t, y.head(n), s.f)) return -1;
+  if (!s.CallRhs(t, y.head(n), s.f)) return 1;
   r.head(n) = ydot.head(n) - s.f;
   if (m == 0) return 0;
   s.ode->ConstraintJacobian(y.head(n), s.jac);
@@ -191,31 +198,28 @@ int IdaIntegrator::Impl::Jacobian(double t, double cj, N_Vector yy, N_Vector yp,
     Map<const VectorXd> yd(NV_DATA_S(yp), n);
     const double sqrt_eps = std::sqrt(std::numeric_limits<double>::epsilon());
     s.result->rhs_evaluations += 1 + 2 * n;
-    auto failed = [&s, t] {
-      s.rhs_failed = true;
-      s.rhs_failure_time = t;
-      return -1;
-    };
-    if (!s.ode->Residual(t, y, yd, s.r0)) return failed();
+    // Recoverable (+1) as in Residual.
+    auto ok = [&s, t](bool evaluated) { return s.Track(t, evaluated); };
+    if (!ok(s.ode->Residual(t, y, yd, s.r0))) return 1;
     s.x_pert = y;
     s.yp_pert = yd;
     for (int j = 0; j < n; ++j) {
       const double xj = s.x_pert(j), vj = s.yp_pert(j);
       const double dx = sqrt_eps * std::max(1.0, std::abs(xj));
       s.x_pert(j) = xj + dx;
-      if (!s.ode->Residual(t, s.x_pert, yd, s.r_pert)) return failed();
+      if (!ok(s.ode->Residual(t, s.x_pert, yd, s.r_pert))) return 1;
       a.col(j) = (s.r_pert - s.r0) / (s.x_pert(j) - xj);
       s.x_pert(j) = xj;
       const double dv = sqrt_eps * std::max(1.0, std::abs(vj));
       s.yp_pert(j) = vj + dv;
-      if (!s.ode->Residual(t, y, s.yp_pert, s.r_pert)) return failed();
+      if (!ok(s.ode->Residual(t, y, s.yp_pert, s.r_pert))) return 1;
       a.col(j) += cj * (s.r_pert - s.r0) / (s.yp_pert(j) - vj);
       s.yp_pert(j) = vj;
     }
     return 0;
   }
   if (!s.ode->RhsJacobian(t, y.head(n), s.dfdx)) {
-    if (!s.CallRhs(t, y.head(n), s.f)) return -1;
+    if (!s.CallRhs(t, y.head(n), s.f)) return 1;
     const double sqrt_eps = std::sqrt(std::numeric_limits<double>::epsilon());
     s.x_pert = y.head(n);
     for (int j = 0; j < n; ++j) {
@@ -223,7 +227,7 @@ int IdaIntegrator::Impl::Jacobian(double t, double cj, N_Vector yy, N_Vector yp,
       const double dx = sqrt_eps * std::max(1.0, std::abs(xj));
       s.x_pert(j) = xj + dx;
       const double step = s.x_pert(j) - xj;  // exactly representable increment
-      if (!s.CallRhs(t, s.x_pert, s.f_pert)) return -1;
+      if (!s.CallRhs(t, s.x_pert, s.f_pert)) return 1;
       s.dfdx.col(j) = (s.f_pert - s.f) / step;
       s.x_pert(j) = xj;
     }

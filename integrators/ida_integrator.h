@@ -21,12 +21,15 @@
 // ode.RhsJacobian or forward differences.
 // Status mapping: IDA_TOO_MUCH_WORK / IDA_TOO_MUCH_ACC / IDA_ERR_FAIL ->
 // kStepSizeTooSmall; corrector / linear solver / residual failures ->
-// kConvergenceFailure, or kRhsFailure whenever Rhs returned false (the
-// residual then returns -1, unrecoverable, as the RK backends stop too);
-// setup errors -> kInvalidInput. Counters: steps = IDAGetNumSteps,
-// rejected_steps = IDAGetNumErrTestFails, rhs_evaluations = Rhs calls
-// (including finite differences), jacobian_evaluations = J evaluations plus
-// IDA Jacobian evaluations.
+// kConvergenceFailure, or kRhsFailure when the last Rhs call returned false;
+// setup errors -> kInvalidInput. Rhs returning false is IDA's recoverable
+// residual error (+1): IDA cuts the step and retries, so a failure at a trial
+// point (corrector iterate, finite-difference perturbation, a step across a
+// stick/slip transition) costs a retry, and only a path that really leaves
+// the domain of F stops, with IDA_REP_RES_ERR just short of where it leaves.
+// Counters: steps = IDAGetNumSteps, rejected_steps = IDAGetNumErrTestFails,
+// rhs_evaluations = Rhs calls (including finite differences),
+// jacobian_evaluations = J evaluations plus IDA Jacobian evaluations.
 //
 // The IDA memory, vectors, dense matrix / linear solver and the SUNContext
 // live as long as this object and are reused via IDAReInit while

@@ -19,6 +19,7 @@ namespace {
 
 using testing::FailingRhsOde;
 using testing::FallingBodyOde;
+using testing::FlakyRhsOde;
 using testing::HarmonicOde;
 using testing::LinearConstraintOde;
 using testing::PendulumOde;
@@ -550,6 +551,84 @@ TEST_P(AllBackendsTest, ReuseAcrossProblemSizes) {
 
 INSTANTIATE_TEST_SUITE_P(All, AllBackendsTest, ::testing::ValuesIn(Backends()),
                          ParamName);
+
+// ------------------------------------------------------------------- ida
+
+// ida treats Rhs == false as IDA's recoverable residual error: it retries with
+// a smaller step instead of stopping (explicit backends stop at once). Same
+// problem and options as PendulumTest's ida_index2 case, so the same
+// tolerance (BDF global error ~20 rtol, x10 slack) applies.
+TEST(IdaTest, RecoversFromRhsFailuresAtTrialPoints) {
+  RegisterBuiltinIntegrators();
+  if (!IntegratorRegistry::Has("ida")) GTEST_SKIP() << "built without SUNDIALS";
+  // Past IDA's start-up (its first steps are ~1e-11 long, so failures there
+  // would push h below min_step = 1e-12 and stop it, correctly); three in a
+  // row at call 100 (IDA gives up after maxncf = 10 on one step).
+  const std::vector<int> failing_calls = {100, 101, 102, 300, 500, 501, 900};
+  IntegratorOptions o;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  const double theta0 = 0.5, t_end = 2.0;
+  FlakyRhsOde ode(failing_calls);
+  Eigen::VectorXd y = ode.AtAngle(theta0);
+  IntegratorResult r;
+  auto ida = IntegratorRegistry::Create("ida");
+  ASSERT_EQ(ida->Integrate(ode, 0.0, t_end, y, o, &r),
+            IntegratorStatus::kSuccess)
+      << r.message;
+  EXPECT_EQ(ode.failures(), static_cast<int>(failing_calls.size()));
+  EXPECT_EQ(r.t_reached, t_end);
+  EXPECT_LE((y - ode.Reference(theta0, t_end)).lpNorm<Eigen::Infinity>(), 3e-6);
+  EXPECT_LE(ConstraintNorm(ode, y), 1e-10);
+
+  for (const char* explicit_backend : {"rk-projection", "rk-baumgarte"}) {
+    FlakyRhsOde flaky({100});
+    Eigen::VectorXd z = flaky.AtAngle(theta0);
+    IntegratorOptions rk4;  // h = 0.01: 800 Rhs calls over [0, 2]
+    rk4.step = 0.01;
+    IntegratorResult rk;
+    EXPECT_EQ(IntegratorRegistry::Create(explicit_backend)
+                  ->Integrate(flaky, 0.0, t_end, z, rk4, &rk),
+              IntegratorStatus::kRhsFailure)
+        << explicit_backend;
+  }
+}
+
+// Where the path really leaves the domain of F, the retries end just short
+// of the boundary (each retry cuts h by 4, up to 10 times per step).
+TEST(IdaTest, StopsJustShortOfWhereRhsFails) {
+  RegisterBuiltinIntegrators();
+  if (!IntegratorRegistry::Has("ida")) GTEST_SKIP() << "built without SUNDIALS";
+  const double boundary = 0.7;
+  FailingRhsOde ode(boundary);
+  Eigen::VectorXd y = ode.AtAngle(0.5);
+  IntegratorResult r;
+  EXPECT_EQ(IntegratorRegistry::Create("ida")->Integrate(
+                ode, 0.0, 2.0, y, IntegratorOptions{}, &r),
+            IntegratorStatus::kRhsFailure)
+      << r.message;
+  EXPECT_LE(r.t_reached, boundary);
+  EXPECT_GT(r.t_reached, boundary - 1e-3);
+  EXPECT_NE(r.message.find("Rhs returned false"), std::string::npos)
+      << r.message;
+}
+
+// A failure IDA recovered from must not relabel a later, unrelated stop.
+TEST(IdaTest, RecoveredRhsFailureDoesNotMaskALaterStop) {
+  RegisterBuiltinIntegrators();
+  if (!IntegratorRegistry::Has("ida")) GTEST_SKIP() << "built without SUNDIALS";
+  FlakyRhsOde ode({12});
+  Eigen::VectorXd y = ode.AtAngle(0.5);
+  IntegratorOptions o;
+  o.step = 1e-4;
+  o.max_steps = 8;
+  IntegratorResult r;
+  EXPECT_EQ(
+      IntegratorRegistry::Create("ida")->Integrate(ode, 0.0, 2.0, y, o, &r),
+      IntegratorStatus::kStepSizeTooSmall)
+      << r.message;
+  EXPECT_EQ(ode.failures(), 1);
+}
 
 // ------------------------------------------------------------ projection
 

@@ -4,7 +4,10 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "core/dae.h"
 
@@ -220,6 +223,32 @@ class FailingRhsOde : public PendulumOde {
 
  private:
   double fail_after_;
+};
+
+// A pendulum whose Rhs fails on the listed call numbers (1-based) and nowhere
+// else: a stand-in for an F that cannot be evaluated at some trial points
+// (a corrector iterate, a finite-difference perturbation) although the
+// solution path itself stays inside its domain.
+class FlakyRhsOde : public PendulumOde {
+ public:
+  explicit FlakyRhsOde(std::vector<int> failing_calls)
+      : failing_calls_(std::move(failing_calls)) {}
+  bool Rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+           Eigen::Ref<Eigen::VectorXd> ydot) override {
+    ++calls_;
+    if (std::find(failing_calls_.begin(), failing_calls_.end(), calls_) !=
+        failing_calls_.end()) {
+      ++failures_;
+      return false;
+    }
+    return PendulumOde::Rhs(t, y, ydot);
+  }
+  int failures() const { return failures_; }
+
+ private:
+  std::vector<int> failing_calls_;
+  int calls_ = 0;
+  int failures_ = 0;
 };
 
 }  // namespace quasiroll::testing

@@ -1,6 +1,7 @@
 // Every registered NLP backend on the reference problems of
 // core/nlp_reference_problems.h, plus input validation, NaN handling, warm
 // starts, object reuse and the registry.
+#include <dlfcn.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -471,6 +472,22 @@ TEST(NewtonSolverTest, RejectsNonSquareProblems) {
 }
 
 // ------------------------------------------------------------- registry ---
+#ifdef QUASIROLL_REFERENCE_LAPACK_DIR
+// The build pins the netlib reference LAPACK (CMakeLists.txt): with ATLAS's,
+// an ipopt run's result depended on what the process had run before
+// (docs/performance.md). Checks that the pin took effect in this binary:
+// the dsytrf_ the ipopt backend calls comes from the reference directory.
+TEST(IpoptBackendTest, UsesTheReferenceLapack) {
+  void* dsytrf = dlsym(RTLD_DEFAULT, "dsytrf_");
+  ASSERT_NE(dsytrf, nullptr) << "no LAPACK loaded";
+  Dl_info where{};
+  ASSERT_NE(dladdr(dsytrf, &where), 0);
+  const std::string dir = std::string(QUASIROLL_REFERENCE_LAPACK_DIR) + "/";
+  EXPECT_EQ(std::string(where.dli_fname).rfind(dir, 0), 0u)
+      << "dsytrf_ comes from " << where.dli_fname << ", not from " << dir;
+}
+#endif
+
 TEST(NlpRegistryTest, UnknownNameThrowsNamingIt) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinNlpSolvers();  // idempotent
