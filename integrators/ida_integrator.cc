@@ -199,20 +199,19 @@ int IdaIntegrator::Impl::Jacobian(double t, double cj, N_Vector yy, N_Vector yp,
     const double sqrt_eps = std::sqrt(std::numeric_limits<double>::epsilon());
     s.result->rhs_evaluations += 1 + 2 * n;
     // Recoverable (+1) as in Residual.
-    auto ok = [&s, t](bool evaluated) { return s.Track(t, evaluated); };
-    if (!ok(s.ode->Residual(t, y, yd, s.r0))) return 1;
+    if (!s.Track(t, s.ode->Residual(t, y, yd, s.r0))) return 1;
     s.x_pert = y;
     s.yp_pert = yd;
     for (int j = 0; j < n; ++j) {
       const double xj = s.x_pert(j), vj = s.yp_pert(j);
       const double dx = sqrt_eps * std::max(1.0, std::abs(xj));
       s.x_pert(j) = xj + dx;
-      if (!ok(s.ode->Residual(t, s.x_pert, yd, s.r_pert))) return 1;
+      if (!s.Track(t, s.ode->Residual(t, s.x_pert, yd, s.r_pert))) return 1;
       a.col(j) = (s.r_pert - s.r0) / (s.x_pert(j) - xj);
       s.x_pert(j) = xj;
       const double dv = sqrt_eps * std::max(1.0, std::abs(vj));
       s.yp_pert(j) = vj + dv;
-      if (!ok(s.ode->Residual(t, y, s.yp_pert, s.r_pert))) return 1;
+      if (!s.Track(t, s.ode->Residual(t, y, s.yp_pert, s.r_pert))) return 1;
       a.col(j) += cj * (s.r_pert - s.r0) / (s.yp_pert(j) - vj);
       s.yp_pert(j) = vj;
     }
