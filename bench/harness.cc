@@ -491,6 +491,8 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
   w.Key("commit").Value(GitCommit());
   w.Key("library_versions");
   WriteLibraryVersions(&w);
+  w.Key("numerical_libraries");
+  WriteNumericalLibraries(&w);
   w.Key("machine");
   WriteMachine(&w);
   w.Key("jobs").Value(jobs);

@@ -1,5 +1,6 @@
 #include "bench/run_output.h"
 
+#include <dlfcn.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -155,6 +156,22 @@ void WriteLibraryVersions(JsonWriter* json) {
   json->EndObject();
 }
 
+std::string LoadedLibraryProviding(const char* symbol) {
+  void* address = ::dlsym(RTLD_DEFAULT, symbol);
+  Dl_info where{};
+  if (address == nullptr || ::dladdr(address, &where) == 0 ||
+      where.dli_fname == nullptr)
+    return "none";
+  return where.dli_fname;
+}
+
+void WriteNumericalLibraries(JsonWriter* json) {
+  json->BeginObject();
+  json->Key("blas").Value(LoadedLibraryProviding("ddot_"));
+  json->Key("lapack").Value(LoadedLibraryProviding("dsytrf_"));
+  json->EndObject();
+}
+
 void WriteMachine(JsonWriter* json) {
   char host[256] = {0};
   if (::gethostname(host, sizeof(host) - 1) != 0) host[0] = 0;
@@ -234,6 +251,8 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.Key("commit").Value(GitCommit());
   j.Key("library_versions");
   WriteLibraryVersions(&j);
+  j.Key("numerical_libraries");
+  WriteNumericalLibraries(&j);
   j.Key("machine");
   WriteMachine(&j);
   j.Key("written_at").Value(IsoTimeNow());

@@ -329,6 +329,19 @@ TEST_F(BenchHarness, CliExitCodes) {
   const Table t = ReadTable(root_ / "cli" / "runs.csv");
   ASSERT_EQ(t.rows.size(), 1u);
   EXPECT_NE(t.rows[0].at("status"), "success");
+#ifdef QUASIROLL_REFERENCE_BLAS_DIR
+  // The CLI binds BLAS and LAPACK to the reference libraries the build pins
+  // (CMakeLists.txt, QUASIROLL_REFERENCE_LAPACK), and says so in meta.json.
+  const std::string meta = ReadAll(root_ / "cli" / "meta.json");
+  EXPECT_NE(meta.find("\"numerical_libraries\":{\"blas\":\"" +
+                      std::string(QUASIROLL_REFERENCE_BLAS_DIR) + "/"),
+            std::string::npos)
+      << meta;
+  EXPECT_NE(meta.find("\"lapack\":\"" +
+                      std::string(QUASIROLL_REFERENCE_LAPACK_DIR) + "/"),
+            std::string::npos)
+      << meta;
+#endif
   EXPECT_EQ(RunCli("bench --suite " + suite_path_ + " --out x --filter '(['"),
             2);
   EXPECT_EQ(

@@ -2,9 +2,12 @@
 // core/nlp_reference_problems.h, plus input validation, NaN handling, warm
 // starts, object reuse and the registry.
 #include <dlfcn.h>
+#include <link.h>
+#include <sys/resource.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -13,10 +16,14 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include "core/nlp.h"
 #include "core/nlp_reference_problems.h"
 #include "solvers/active_set_polish.h"
+#ifdef QUASIROLL_HAVE_IPOPT
+#include "solvers/ipopt_solver.h"
+#endif
 #include "tests/test_names.h"
 
 namespace quasiroll {
@@ -473,18 +480,102 @@ TEST(NewtonSolverTest, RejectsNonSquareProblems) {
 
 // ------------------------------------------------------------- registry ---
 #ifdef QUASIROLL_REFERENCE_LAPACK_DIR
-// The build pins the netlib reference LAPACK (CMakeLists.txt): with ATLAS's,
-// an ipopt run's result depended on what the process had run before
-// (docs/performance.md). Checks that the pin took effect in this binary:
-// the dsytrf_ the ipopt backend calls comes from the reference directory.
-TEST(IpoptBackendTest, UsesTheReferenceLapack) {
-  void* dsytrf = dlsym(RTLD_DEFAULT, "dsytrf_");
-  ASSERT_NE(dsytrf, nullptr) << "no LAPACK loaded";
+// The build pins the netlib reference LAPACK and BLAS (CMakeLists.txt): with
+// ATLAS's, an ipopt run's result depended on what the process had run before,
+// and `bench --jobs 2` differed from `--jobs 1` in a few ipopt rows
+// (docs/performance.md). Checks that the pin took effect in this binary: the
+// LAPACK and BLAS routines the ipopt backend (dsytrf_) and the reference
+// LAPACK itself (ddot_, dger_, dgemm_, ...) call come from the reference
+// directories, and no ATLAS library is loaded at all.
+std::string LibraryProviding(const char* symbol) {
+  void* address = dlsym(RTLD_DEFAULT, symbol);
   Dl_info where{};
-  ASSERT_NE(dladdr(dsytrf, &where), 0);
-  const std::string dir = std::string(QUASIROLL_REFERENCE_LAPACK_DIR) + "/";
-  EXPECT_EQ(std::string(where.dli_fname).rfind(dir, 0), 0u)
-      << "dsytrf_ comes from " << where.dli_fname << ", not from " << dir;
+  if (address == nullptr || dladdr(address, &where) == 0) return "";
+  return where.dli_fname;
+}
+
+TEST(IpoptBackendTest, UsesTheReferenceLapackAndBlas) {
+  const std::string lapack_dir =
+      std::string(QUASIROLL_REFERENCE_LAPACK_DIR) + "/";
+  const std::string blas_dir = std::string(QUASIROLL_REFERENCE_BLAS_DIR) + "/";
+  for (const char* symbol : {"dsytrf_", "dsytrs_", "dpotrf_"}) {
+    const std::string from = LibraryProviding(symbol);
+    EXPECT_EQ(from.rfind(lapack_dir, 0), 0u)
+        << symbol << " comes from '" << from << "', not from " << lapack_dir;
+  }
+  for (const char* symbol : {"ddot_", "daxpy_", "dgemm_", "dger_", "dsyr_",
+                             "dtrsm_", "dswap_", "idamax_"}) {
+    const std::string from = LibraryProviding(symbol);
+    EXPECT_EQ(from.rfind(blas_dir, 0), 0u)
+        << symbol << " comes from '" << from << "', not from " << blas_dir;
+  }
+  std::vector<std::string> atlas;
+  dl_iterate_phdr(
+      [](dl_phdr_info* info, size_t, void* data) {
+        const std::string name = info->dlpi_name ? info->dlpi_name : "";
+        if (name.find("atlas") != std::string::npos ||
+            name.find("f77blas") != std::string::npos)
+          static_cast<std::vector<std::string>*>(data)->push_back(name);
+        return 0;
+      },
+      &atlas);
+  EXPECT_TRUE(atlas.empty()) << "ATLAS loaded: " << atlas.front();
+}
+#endif
+
+#ifdef QUASIROLL_HAVE_IPOPT
+// Ipopt 3.11's task timers (getrusage around every phase) are answered
+// without a system call (solvers/ipopt_solver.cc). Eliding them must change
+// no result: every reference problem gives bit-identical answers, statuses
+// and iteration counts with the real timers and without, on fresh solvers.
+TEST(IpoptBackendTest, ElidedTaskTimersChangeNoResult) {
+  RegisterBuiltinNlpSolvers();
+  struct Outcome {
+    NlpStatus status;
+    int iterations;
+    Eigen::VectorXd x;
+  };
+  auto solve_all = [](bool timers_enabled) {
+    SetIpoptTaskTimersEnabled(timers_enabled);
+    std::vector<Outcome> out;
+    for (const auto& p : MakeReferenceProblems()) {
+      auto solver = NlpSolverRegistry::Create("ipopt");
+      NlpResult r;
+      const NlpStatus status =
+          solver->Solve(*p, p->starting_point(), NlpOptions(), &r);
+      out.push_back({status, r.iterations, r.x});
+    }
+    SetIpoptTaskTimersEnabled(false);
+    return out;
+  };
+  const long before = IpoptTaskTimerCallsElidedOnThisThread();
+  const std::vector<Outcome> real = solve_all(true);
+  EXPECT_EQ(IpoptTaskTimerCallsElidedOnThisThread(), before)
+      << "timers enabled, yet calls were elided";
+  const std::vector<Outcome> elided = solve_all(false);
+  // Each Ipopt iteration starts and ends several timed tasks.
+  EXPECT_GT(IpoptTaskTimerCallsElidedOnThisThread(), before + 100)
+      << "Ipopt's getrusage calls did not reach quasiroll's definition";
+  ASSERT_EQ(real.size(), elided.size());
+  const auto problems = MakeReferenceProblems();
+  for (size_t i = 0; i < real.size(); ++i) {
+    const std::string name = problems[i]->name();
+    EXPECT_EQ(real[i].status, elided[i].status) << name;
+    EXPECT_EQ(real[i].iterations, elided[i].iterations) << name;
+    EXPECT_EQ(real[i].x, elided[i].x) << name;  // bitwise
+  }
+}
+
+// Callers outside libipopt still get the kernel's answer.
+TEST(IpoptBackendTest, OtherGetrusageCallersAreForwarded) {
+  const long before = IpoptTaskTimerCallsElidedOnThisThread();
+  rusage usage{};
+  ASSERT_EQ(getrusage(RUSAGE_SELF, &usage), 0);
+  EXPECT_GT(usage.ru_maxrss, 0) << "a zero answer, not the kernel's";
+  EXPECT_EQ(IpoptTaskTimerCallsElidedOnThisThread(), before);
+  errno = 0;
+  EXPECT_EQ(getrusage(12345, &usage), -1);  // invalid `who`, as libc says
+  EXPECT_EQ(errno, EINVAL);
 }
 #endif
 
