@@ -26,7 +26,8 @@ std::string GitCommit();
 void WriteLibraryVersions(JsonWriter* json);
 // The file the process's BLAS (ddot_) and LAPACK (dsytrf_) calls bind to, or
 // "none": {"blas": "/usr/lib/.../blas/libblas.so.3", "lapack": ...}. Which
-// implementation is loaded can change Ipopt's last digits (docs/performance.md).
+// implementation is loaded can change Ipopt's last digits
+// (docs/performance.md).
 std::string LoadedLibraryProviding(const char* symbol);
 void WriteNumericalLibraries(JsonWriter* json);
 // Host name, CPU model, core count.

@@ -25,4 +25,17 @@ echo "test-plugin: installed into $tmp/prefix ($(grep -c Installing "$tmp/instal
 cmake -S "$src/examples/external_plugin" -B "$tmp/build" \
   -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$tmp/prefix"
 cmake --build "$tmp/build" -j "$jobs"
+# A pinned build (QUASIROLL_REFERENCE_LAPACK, docs/performance.md) passes the
+# pin on: the plugin's executable loads the reference BLAS and no ATLAS.
+if grep -q '^QUASIROLL_REFERENCE_BLAS_DIR:PATH=/' "$build/CMakeCache.txt" &&
+   grep -q '^QUASIROLL_REFERENCE_LAPACK:BOOL=ON' "$build/CMakeCache.txt"; then
+  libs=$(ldd "$tmp/build/plugin_demo")
+  if grep -E 'atlas|f77blas' <<< "$libs" ||
+     ! grep -qE 'libblas\.so\.3 => /usr/lib/[^ ]*/blas/' <<< "$libs"; then
+    echo "test-plugin: plugin_demo does not load the reference BLAS:" >&2
+    echo "$libs" >&2
+    exit 1
+  fi
+  echo "test-plugin: plugin_demo loads the reference BLAS and LAPACK, no ATLAS"
+fi
 "$tmp/build/plugin_demo" "$@"

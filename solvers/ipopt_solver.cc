@@ -11,11 +11,11 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
-#include <cerrno>
-#include <cstring>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <mutex>
 #include <vector>

@@ -2,9 +2,9 @@
 // core/nlp_reference_problems.h, plus input validation, NaN handling, warm
 // starts, object reuse and the registry.
 #include <dlfcn.h>
+#include <gtest/gtest.h>
 #include <link.h>
 #include <sys/resource.h>
-#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cerrno>
