@@ -255,6 +255,8 @@ def write_meta(out_dir, seed):
             "library_versions": {"eigen": "3.4.0", "ipopt": "3.14.10",
                                  "nlopt": "2.7.1", "ceres": "2.1.0",
                                  "sundials": "6.4.1"},
+            "numerical_libraries": {"blas": "/fixture/blas/libblas.so.3",
+                                    "lapack": "/fixture/lapack/liblapack.so.3"},
             "suite": "fixture", "suite_hash": f"seed-{seed}",
             "start_time": "2024-01-01T00:00:00Z", "end_time": "2024-01-01T00:05:00Z",
             "options": {"t_end": T_END, "repeats": 3}}

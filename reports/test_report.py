@@ -163,6 +163,7 @@ class GoodReportTest(unittest.TestCase):
     def test_metadata_and_failure_table(self):
         html = self.html()
         for text in ("0123abc (fixture)", "fixture-host", "ipopt 3.14.10",
+                     "blas: /fixture/blas/libblas.so.3",
                      "2024-01-01T00:05:00Z", "INFEASIBLE_FRICTION", "μ_min"):
             self.assertIn(text, html)
         self.assertIn('<table class="map">', html)

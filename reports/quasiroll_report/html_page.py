@@ -66,6 +66,11 @@ def metadata_table(meta):
     else:
         cells = escape(_text(versions))
     out.append(f"<tr><th>library versions</th><td>{cells}</td></tr>")
+    numerical = meta.get("numerical_libraries")  # absent in older results
+    if isinstance(numerical, dict) and numerical:
+        cells = "<br>".join(f"{escape(str(k))}: {escape(_text(v))}"
+                            for k, v in sorted(numerical.items()))
+        out.append(f"<tr><th>BLAS / LAPACK loaded</th><td>{cells}</td></tr>")
     out.append("</table>")
     if meta.get("_warning"):
         out.append(f'<p class="note">{escape(meta["_warning"])}</p>')
