@@ -156,6 +156,7 @@ void WriteLibraryVersions(JsonWriter* json) {
   json->EndObject();
 }
 
+namespace {
 std::string LoadedLibraryProviding(const char* symbol) {
   void* address = ::dlsym(RTLD_DEFAULT, symbol);
   Dl_info where{};
@@ -164,6 +165,7 @@ std::string LoadedLibraryProviding(const char* symbol) {
     return "none";
   return where.dli_fname;
 }
+}  // namespace
 
 void WriteNumericalLibraries(JsonWriter* json) {
   json->BeginObject();

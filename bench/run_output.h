@@ -24,11 +24,10 @@ std::string TrajectoryCsv(const SimulationResult& result);
 std::string GitCommit();
 // {"eigen": "3.4.0", "ipopt": ..., ...}: versions seen at configure time.
 void WriteLibraryVersions(JsonWriter* json);
-// The file the process's BLAS (ddot_) and LAPACK (dsytrf_) calls bind to, or
+// The files the process's BLAS (ddot_) and LAPACK (dsytrf_) calls bind to, or
 // "none": {"blas": "/usr/lib/.../blas/libblas.so.3", "lapack": ...}. Which
 // implementation is loaded can change Ipopt's last digits
 // (docs/performance.md).
-std::string LoadedLibraryProviding(const char* symbol);
 void WriteNumericalLibraries(JsonWriter* json);
 // Host name, CPU model, core count.
 void WriteMachine(JsonWriter* json);

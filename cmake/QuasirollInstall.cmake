@@ -65,4 +65,5 @@ write_basic_package_version_file(
   VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/quasirollConfig.cmake
               ${PROJECT_BINARY_DIR}/quasirollConfigVersion.cmake
+              ${CMAKE_CURRENT_LIST_DIR}/QuasirollReferenceBlas.cmake
         DESTINATION ${QUASIROLL_INSTALL_CMAKEDIR} COMPONENT devel)
