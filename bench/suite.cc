@@ -1,9 +1,11 @@
 #include "bench/suite.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
@@ -266,7 +268,151 @@ std::string CanonicalRunKey(const RunSpec& r) {
      << ";seed=" << (r.seed ? std::to_string(*r.seed) : "-")
      << ";roughness=" << Num(r.roughness) << ";t_end=" << Num(r.t_end)
      << ";repeats=" << r.repeats;
+  // Generic axes are appended only when a group has them, so the keys (and
+  // run ids) of suites without them are those of the original fixed grid.
+  for (const auto& [field, value] : r.scene_fields)
+    os << ";scene." << field << "=" << value;
   return os.str();
+}
+
+// ------------------------------------------------------------ grid axes ----
+//
+// A group's runs are the Cartesian product of its axes, the last axis
+// varying fastest. Each axis value carries its canonical text (duplicate
+// check) and how it sets a RunSpec.
+struct AxisValue {
+  std::string canon;
+  std::function<void(RunSpec*)> apply;
+};
+struct Axis {
+  std::string key;
+  std::vector<AxisValue> values;
+};
+
+template <typename T, typename Set>
+Axis MakeAxis(std::string key, const std::vector<T>& values, Set set) {
+  Axis axis{std::move(key), {}};
+  for (const T& v : values)
+    axis.values.push_back({std::string(), [set, v](RunSpec* r) { set(r, v); }});
+  return axis;
+}
+
+// Scene fields that can be swept through `scene_fields` (dotted paths of the
+// scene schema, docs/scenes.md). The others have group keys of their own
+// (mu, eps, t_end, dt, seed, roughness) or are not numbers of the motion.
+const std::vector<std::string>& SweepableSceneFields() {
+  static const std::vector<std::string> fields = {"mode",
+                                                  "mass",
+                                                  "gravity",
+                                                  "joint_rates",
+                                                  "robot.a",
+                                                  "robot.b",
+                                                  "robot.track",
+                                                  "robot.z_h",
+                                                  "robot.major_radius",
+                                                  "robot.tube_radius",
+                                                  "robot.camber_offset",
+                                                  "initial.x",
+                                                  "initial.y",
+                                                  "initial.yaw",
+                                                  "initial.joint_angles"};
+  return fields;
+}
+
+// {a: {b: value}} for the dotted path "a.b".
+YAML::Node SceneFieldNode(const std::string& field, const YAML::Node& value) {
+  YAML::Node root(YAML::NodeType::Map);
+  const std::size_t dot = field.find('.');
+  if (dot == std::string::npos) {
+    root[field] = value;
+  } else {
+    YAML::Node inner(YAML::NodeType::Map);
+    inner[field.substr(dot + 1)] = value;
+    root[field.substr(0, dot)] = inner;
+  }
+  return root;
+}
+
+std::string FlowText(const YAML::Node& node) {
+  YAML::Emitter e;
+  e << YAML::Flow << node;
+  return e.c_str();
+}
+
+// Applies the swept scene fields of a run ("<path>" -> YAML flow text).
+void ApplySceneFields(
+    const std::vector<std::pair<std::string, std::string>>& fields,
+    Scene* scene) {
+  for (const auto& [field, text] : fields)
+    yaml::ReadSceneNode(SceneFieldNode(field, YAML::Load(text)), "", "", scene);
+}
+
+// The `scene_fields` mapping: dotted scene path -> a value or a sequence of
+// values (a field whose value is itself a sequence, e.g. joint_rates, is
+// swept by a sequence of sequences). One axis per field, in file order.
+std::vector<Axis> ReadSceneFieldAxes(const YAML::Node& node,
+                                     const std::string& path,
+                                     const std::vector<int>& scene_idx,
+                                     const Suite& suite) {
+  std::vector<Axis> axes;
+  auto map = Child(node, "scene_fields");
+  if (!map) return axes;
+  const std::string mp = JoinKey(path, "scene_fields");
+  if (!map->IsMap() || map->size() == 0)
+    Fail(mp, "expected a non-empty mapping of scene fields to values, got " +
+                 yaml::DescribeNode(*map));
+  const auto& allowed = SweepableSceneFields();
+  for (auto it = map->begin(); it != map->end(); ++it) {
+    const std::string field = it->first.as<std::string>();
+    const std::string fp = JoinKey(mp, field);
+    if (std::find(allowed.begin(), allowed.end(), field) == allowed.end()) {
+      std::string hint;
+      if (field == "mu") hint = " (use the group key mu)";
+      if (field == "epsilon") hint = " (use the group key eps)";
+      if (field == "time.dt" || field == "time.t_end")
+        hint = " (use the group keys dt / t_end)";
+      if (field.rfind("terrain", 0) == 0)
+        hint = " (use seed / roughness, or a scene entry per terrain)";
+      std::string list;
+      for (const std::string& a : allowed)
+        list += (list.empty() ? "" : ", ") + a;
+      Fail(fp, "not a sweepable scene field" + hint + " (allowed: " + list +
+                   "), got \"" + field + "\"");
+    }
+    std::vector<YAML::Node> values;
+    const YAML::Node v = it->second;
+    if (v.IsSequence()) {
+      if (v.size() == 0) Fail(fp, "empty grid axis, got []");
+      for (std::size_t i = 0; i < v.size(); ++i) values.push_back(v[i]);
+    } else if (v.IsScalar()) {
+      values.push_back(v);
+    } else {
+      Fail(fp, "expected a value or a non-empty sequence, got " +
+                   yaml::DescribeNode(v));
+    }
+    Axis axis{"scene_fields." + field, {}};
+    std::vector<std::string> canon;
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      const std::string vp = v.IsSequence() ? JoinIndex(fp, i) : fp;
+      const std::string text = FlowText(values[i]);
+      // Checked on every scene of the group, with the scene loader's rules.
+      for (int si : scene_idx) {
+        Scene probe = suite.scenes[si].scene;
+        try {
+          yaml::ReadSceneNode(SceneFieldNode(field, values[i]), "", "", &probe);
+        } catch (const SceneError& e) {
+          Fail(vp, "for scene \"" + suite.scenes[si].name + "\": " + e.what());
+        }
+      }
+      canon.push_back(text);
+      axis.values.push_back({text, [field, text](RunSpec* r) {
+                               r->scene_fields.emplace_back(field, text);
+                             }});
+    }
+    if (v.IsSequence()) CheckNoDuplicates(canon, fp);
+    axes.push_back(std::move(axis));
+  }
+  return axes;
 }
 
 void ExpandGroup(const YAML::Node& node, const std::string& path,
@@ -276,7 +422,8 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
                    "coupling",    "rk_method",     "dt",        "tol",
                    "atol_ratio",  "nlp_tol",       "sigma",     "eps",
                    "mu",          "seed",          "roughness", "dae_index",
-                   "substeps",    "contact_check", "t_end",     "repeats"});
+                   "substeps",    "contact_check", "t_end",     "repeats",
+                   "scene_fields"});
   if (auto n = Child(node, "description"))
     yaml::ReadString(*n, JoinKey(path, "description"));
 
@@ -345,6 +492,8 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
   if (auto n = Child(node, "repeats"))
     repeats =
         static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "repeats"), 1, 1000));
+  const std::vector<Axis> generic_axes =
+      ReadSceneFieldAxes(node, path, scene_idx, *suite);
 
   for (int si : scene_idx) {
     const SuiteScene& sc = suite->scenes[si];
@@ -381,56 +530,86 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
       sc_seeds.emplace_back(std::nullopt);
     }
 
-    for (double mu : sc_mu)
-      for (const auto& seed : sc_seeds)
-        for (double rough : roughness)
-          for (double eps : sc_eps)
-            for (const std::string& nlp : nlps)
-              for (const std::string& dae : daes)
-                for (const std::string& coupling : couplings)
-                  for (const std::string& rk : rks)
-                    for (std::int64_t di : dae_indices)
-                      for (double sigma : sigmas)
-                        for (double tol : tols)
-                          for (double nlp_tol : nlp_tols)
-                            for (double dt : sc_dts)
-                              for (std::int64_t sub : substeps)
-                                for (std::int64_t cc : contact_checks) {
-                                  RunSpec r;
-                                  r.index =
-                                      static_cast<int>(suite->runs.size());
-                                  r.group = group;
-                                  r.scene_index = si;
-                                  r.scene = sc.name;
-                                  r.nlp = nlp;
-                                  r.dae = dae;
-                                  r.coupling = CouplingFromString(coupling);
-                                  r.rk_method = RkMethodFromString(rk);
-                                  r.dt = dt;
-                                  r.tol = tol;
-                                  r.atol = tol * atol_ratio;
-                                  r.nlp_tol = nlp_tol;
-                                  r.sigma = sigma;
-                                  r.eps = eps;
-                                  r.dae_index = static_cast<int>(di);
-                                  r.substeps = static_cast<int>(sub);
-                                  r.contact_check = static_cast<int>(cc);
-                                  r.mu = mu;
-                                  r.seed = seed;
-                                  r.roughness = rough;
-                                  r.t_end = t_end;
-                                  r.repeats = repeats;
-                                  r.key = CanonicalRunKey(r);
-                                  r.run_id = group + "-" + sc.name + "-" + nlp +
-                                             "-" + dae + "-" + coupling + "-" +
-                                             Hex64(Fnv1a64(r.key)).substr(0, 8);
-                                  std::string why;
-                                  if (!r.Options().IsValid(&why))
-                                    Fail(path, "invalid method options (" +
-                                                   why + ") for " + scene_ref +
-                                                   ", got " + r.key);
-                                  suite->runs.push_back(std::move(r));
-                                }
+    // Axes in grid order (docs/harness.md): the order of the original nested
+    // loops, then the generic axes in file order.
+    std::vector<Axis> axes;
+    axes.push_back(
+        MakeAxis("mu", sc_mu, [](RunSpec* r, double v) { r->mu = v; }));
+    axes.push_back(
+        MakeAxis("seed", sc_seeds,
+                 [](RunSpec* r, const std::optional<std::uint64_t>& v) {
+                   r->seed = v;
+                 }));
+    axes.push_back(MakeAxis("roughness", roughness,
+                            [](RunSpec* r, double v) { r->roughness = v; }));
+    axes.push_back(
+        MakeAxis("eps", sc_eps, [](RunSpec* r, double v) { r->eps = v; }));
+    axes.push_back(MakeAxis(
+        "nlp", nlps, [](RunSpec* r, const std::string& v) { r->nlp = v; }));
+    axes.push_back(MakeAxis(
+        "dae", daes, [](RunSpec* r, const std::string& v) { r->dae = v; }));
+    axes.push_back(
+        MakeAxis("coupling", couplings, [](RunSpec* r, const std::string& v) {
+          r->coupling = CouplingFromString(v);
+        }));
+    axes.push_back(
+        MakeAxis("rk_method", rks, [](RunSpec* r, const std::string& v) {
+          r->rk_method = RkMethodFromString(v);
+        }));
+    axes.push_back(
+        MakeAxis("dae_index", dae_indices, [](RunSpec* r, std::int64_t v) {
+          r->dae_index = static_cast<int>(v);
+        }));
+    axes.push_back(
+        MakeAxis("sigma", sigmas, [](RunSpec* r, double v) { r->sigma = v; }));
+    axes.push_back(MakeAxis("tol", tols, [atol_ratio](RunSpec* r, double v) {
+      r->tol = v;
+      r->atol = v * atol_ratio;
+    }));
+    axes.push_back(MakeAxis("nlp_tol", nlp_tols,
+                            [](RunSpec* r, double v) { r->nlp_tol = v; }));
+    axes.push_back(
+        MakeAxis("dt", sc_dts, [](RunSpec* r, double v) { r->dt = v; }));
+    axes.push_back(MakeAxis(
+        "substeps", substeps,
+        [](RunSpec* r, std::int64_t v) { r->substeps = static_cast<int>(v); }));
+    axes.push_back(MakeAxis("contact_check", contact_checks,
+                            [](RunSpec* r, std::int64_t v) {
+                              r->contact_check = static_cast<int>(v);
+                            }));
+    for (const Axis& a : generic_axes) axes.push_back(a);
+
+    RunSpec base;
+    base.group = group;
+    base.scene_index = si;
+    base.scene = sc.name;
+    base.t_end = t_end;
+    base.repeats = repeats;
+    std::vector<std::size_t> at(axes.size(), 0);
+    for (bool more = true; more;) {
+      RunSpec r = base;
+      for (std::size_t k = 0; k < axes.size(); ++k)
+        axes[k].values[at[k]].apply(&r);
+      r.index = static_cast<int>(suite->runs.size());
+      r.key = CanonicalRunKey(r);
+      r.run_id = group + "-" + sc.name + "-" + r.nlp + "-" + r.dae + "-" +
+                 ToString(r.coupling) + "-" +
+                 Hex64(Fnv1a64(r.key)).substr(0, 8);
+      std::string why;
+      if (!r.Options().IsValid(&why))
+        Fail(path, "invalid method options (" + why + ") for " + scene_ref +
+                       ", got " + r.key);
+      suite->runs.push_back(std::move(r));
+      // Odometer step: the last axis varies fastest.
+      more = false;
+      for (std::size_t k = axes.size(); k-- > 0;) {
+        if (++at[k] < axes[k].values.size()) {
+          more = true;
+          break;
+        }
+        at[k] = 0;
+      }
+    }
   }
 }
 
@@ -534,6 +713,7 @@ namespace {
 Scene SweptScene(const Suite& suite, const RunSpec& run) {
   const SuiteScene& sc = suite.scenes.at(run.scene_index);
   Scene s = sc.scene;
+  ApplySceneFields(run.scene_fields, &s);
   s.mu = run.mu;
   s.t_end = run.t_end;
   if (s.dt > s.t_end) s.dt = run.dt;

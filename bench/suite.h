@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/dae.h"
@@ -91,6 +92,10 @@ struct RunSpec {
   double roughness = 1.0;             // gaussian amplitude scale factor
   double t_end = 0;
   int repeats = 1;
+  // Generic axes: swept scene fields (suite key `scene_fields`), dotted path
+  // -> the value as YAML flow text, in file order; applied to the scene with
+  // the scene loader's rules.
+  std::vector<std::pair<std::string, std::string>> scene_fields;
 
   std::string key;     // canonical text of every parameter above
   std::string run_id;  // <group>-<scene>-<nlp>-<dae>-<coupling>-<8 hex>

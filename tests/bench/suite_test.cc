@@ -98,6 +98,62 @@ TEST(BenchSuite, RunIdsAreDeterministic) {
     EXPECT_EQ(a.runs[i].run_id, b.runs[i].run_id);
 }
 
+TEST(BenchSuite, SceneFieldsAreGenericAxes) {
+  const Suite s = Load(std::string(kBase) + R"(
+groups:
+  g:
+    scenes: [paper]
+    dt: [0.1, 0.05]
+    scene_fields:
+      mass: [5, 10]
+      initial.yaw: 0.3
+      joint_rates: [[0, 0.6, 0, 0.6, 0, 0.6], [0, 0.3, 0, 0.3, 0, 0.3]]
+)");
+  // dt x mass x yaw x joint_rates, the generic axes innermost in file order.
+  ASSERT_EQ(s.runs.size(), 2u * 2u * 1u * 2u);
+  EXPECT_EQ(s.runs[0].dt, 0.1);
+  EXPECT_EQ(s.runs[4].dt, 0.05);
+  ASSERT_EQ(s.runs[3].scene_fields.size(), 3u);
+  EXPECT_EQ(s.runs[3].scene_fields[0].first, "mass");
+  EXPECT_EQ(s.runs[3].scene_fields[0].second, "10");
+  EXPECT_EQ(s.runs[3].scene_fields[1].first, "initial.yaw");
+  EXPECT_EQ(s.runs[1].scene_fields[2].second, "[0, 0.3, 0, 0.3, 0, 0.3]");
+  const Scene scene = RunScene(s, s.runs[3]);
+  EXPECT_EQ(scene.mass, 10.0);
+  EXPECT_EQ(scene.yaw0, 0.3);
+  EXPECT_EQ(scene.joint_rates[1], 0.3);
+  EXPECT_EQ(RunScene(s, s.runs[0]).mass, 5.0);
+  // The swept fields are part of the key, hence of the run id, and only
+  // appended: a group without them keeps the fixed grid's key.
+  EXPECT_NE(s.runs[0].key.find(";scene.mass=5;scene.initial.yaw=0.3;"),
+            std::string::npos)
+      << s.runs[0].key;
+  std::set<std::string> ids;
+  for (const RunSpec& r : s.runs) EXPECT_TRUE(ids.insert(r.run_id).second);
+  // The reference scene carries them too (they change the motion).
+  EXPECT_EQ(ReferenceScene(s, s.runs[3]).mass, 10.0);
+}
+
+TEST(BenchSuite, RejectsBadSceneFieldAxes) {
+  const std::string base = std::string(kBase) + "groups:\n  g:\n";
+  ExpectRejected(base + "    scene_fields: {mu: [0.2, 0.3]}\n",
+                 {"groups.g.scene_fields.mu", "use the group key mu",
+                  "allowed:", "got \"mu\""});
+  ExpectRejected(base + "    scene_fields: {terrain.height: 1}\n",
+                 {"groups.g.scene_fields.terrain.height", "seed / roughness"});
+  ExpectRejected(base + "    scene_fields: {mass: [5, -1]}\n",
+                 {"groups.g.scene_fields.mass[1]", "mass", "> 0", "-1"});
+  ExpectRejected(base + "    scene_fields: {mass: [5, 5]}\n",
+                 {"groups.g.scene_fields.mass[1]", "duplicate"});
+  ExpectRejected(base + "    scene_fields: {robot.tube_radius: 0.09}\n",
+                 {"groups.g.scene_fields.robot.tube_radius",
+                  "must be < robot.major_radius"});
+  ExpectRejected(base + "    scene_fields: {mass: []}\n",
+                 {"groups.g.scene_fields.mass", "empty grid axis"});
+  ExpectRejected(base + "    scene_fields: []\n",
+                 {"groups.g.scene_fields", "non-empty mapping"});
+}
+
 TEST(BenchSuite, ToleranceLadderSetsRtolAtolAndNlpTolerance) {
   const Suite s = Load(std::string(kBase) + R"(
 groups:
