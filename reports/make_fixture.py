@@ -3,13 +3,18 @@
 
     /usr/bin/python3 reports/make_fixture.py DIR [--seed N]
 
-Contents (deterministic for a seed): runs.csv with a work-precision ladder
-(3 methods x 3 Δt/tol rungs on the paper scene at μ = 0.5), a μ sweep
-(2 methods x μ in {0.2, 0.3, 0.5, 0.8}; μ = 0.2 is below μ_min and fails with
-INFEASIBLE_FRICTION), stability sweeps over Δt, σΔt and roughness with some
-failures, and a method (ceres/rk-baumgarte/coupled) whose runs all fail;
-trajectories/<run_id>.csv for every successful run; meta.json;
-terrains/paper.json with a few Gaussian bumps.
+Contents (deterministic for a seed): runs.csv with a zoh work-precision
+ladder (3 methods x 3 Δt on the paper scene, μ = 0.5, T_END s) and a coupled
+ladder on a shorter problem (T_END_CPL s: must never share a chart with the
+first); a μ sweep on `paper` and `paper_pvc` (pvc slips ~1000x less and needs
+μ >= 0.43; stops report a different μ_min on purpose); stability groups
+stability_dt (with a blow-up that ends in INFEASIBLE_FRICTION but is classed
+numerical/drift_blowup), stability_sigma_dt, stability_mu and
+stability_roughness; a method (ceres/rk-baumgarte/coupled) whose runs all
+fail; the issue-#14 columns (timing spread, causes, ref_mu_min, ref_err_est,
+qs_inertia_ratio, kkt_residual, host) unless --legacy; trajectories for every
+successful run; meta.json with a suite file and scene under inputs/;
+terrains/*.json.
 """
 
 import argparse
@@ -24,14 +29,29 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from quasiroll_report.data import REQUIRED_COLUMNS, TRAJECTORY_COLUMNS  # noqa: E402
 
-RUN_COLUMNS = ["run_id", "suite_group"] + REQUIRED_COLUMNS + ["mu_min", "roughness", "t_end"]
+LEGACY_COLUMNS = (["run_id", "suite_group"] + REQUIRED_COLUMNS
+                  + ["mu_min", "roughness", "t_end"])
+# Columns of issue #14 (docs/harness.md); --legacy leaves them out.
+RUN_COLUMNS = LEGACY_COLUMNS + [
+    "terrain", "rk_method", "ref_hash", "kkt_residual", "cause", "cause_detail",
+    "t_reached_frac", "wall_s_median", "wall_s_min", "wall_s_max", "wall_s_all",
+    "wall_per_sim_s", "qs_inertia_ratio", "ref_mu_min", "ref_err_est", "host",
+    "cpu_model"]
 
 A, B, TRACK = 0.25, 0.25, 0.4       # robot geometry of bench/scenes/paper.yaml
 WHEEL_RADIUS = 0.10                 # major + tube radius
 SPIN = 0.6                          # wheel spin [rad/s]
 MASS, G = 5.0, 9.8
 T_END = 8.0
+T_END_CPL = 2.0                     # the coupled ladder is a shorter problem
 MU_MIN = 0.27
+# The friction each scene needs along its reference (ref_mu_min), and what a
+# stop reports (mu_min at the stop: a different number on purpose, so a test
+# can tell which one a figure used).
+REF_MU_MIN = {"paper": 0.27, "paper_pvc": 0.43, "rough": 0.3}
+STOP_MU_MIN = 0.25
+PVC_SLIP_FACTOR = 1e-3              # pvc slips ~1000x less than paper mode
+REF_ERR_EST = {T_END: 2e-9, T_END_CPL: 5e-10}
 
 # method -> (order p, error constant, wall constant, drift level)
 METHODS = {
@@ -67,7 +87,8 @@ def _wheel_offsets():
     return [(A, 0.0), (-B, TRACK / 2), (-B, -TRACK / 2)]
 
 
-def synth_trajectory(rng, terrain, dt, mu, error_scale, drift_level, t_end=T_END):
+def synth_trajectory(rng, terrain, dt, mu, error_scale, drift_level, t_end=T_END,
+                     slip_factor=1.0):
     """Dict of columns for one run (numbers) plus nlp_status strings."""
     t = np.arange(0.0, t_end + 1e-9, dt)
     speed = SPIN * WHEEL_RADIUS
@@ -101,7 +122,7 @@ def synth_trajectory(rng, terrain, dt, mu, error_scale, drift_level, t_end=T_END
         lon = weight * shares[i - 1] * np.sin(pitch) + 0.4 * np.sin(0.9 * t + i)
         lat = scrub * (weight * shares[i - 1] * np.sin(roll) + 0.2 * np.cos(0.7 * t + i))
         use = np.hypot(lon, lat) / (mu * normal)
-        slip = 1e-7 / mu * np.exp(4 * use) * (1 + 0.2 * rng.random(t.size))
+        slip = slip_factor * 1e-7 / mu * np.exp(4 * use) * (1 + 0.2 * rng.random(t.size))
         cols.update({f"c{i}_x": cx, f"c{i}_y": cy, f"c{i}_z": cz, f"n{i}": normal,
                      f"t{i}_lon": lon, f"t{i}_lat": lat, f"slip{i}": slip,
                      f"use{i}": use})
@@ -129,22 +150,33 @@ def write_trajectory(path, cols):
 
 # -------------------------------------------------------------------- runs
 
-def base_run(run_id, group, method, dt, mu, scene="paper"):
+def base_run(run_id, group, method, dt, mu, scene="paper", t_end=T_END):
     nlp, dae, coupling = method
     return {"run_id": run_id, "suite_group": group, "scene": scene, "nlp": nlp,
             "dae": dae, "coupling": coupling, "dt": dt,
             "tol": 1e-6 if dae != "ida" else dt ** 2 * 1e-2,
             "sigma": 5.0 if dae == "rk-baumgarte" else "",
-            "eps": 1e-8, "mu": mu, "seed": 1, "repeats": 3, "mu_min": MU_MIN,
-            "roughness": "", "t_end": T_END}
+            "eps": 1e-8, "mu": mu, "seed": 1, "repeats": 3, "mu_min": "",
+            "roughness": "", "t_end": t_end, "terrain": scene, "rk_method": "rk4",
+            "host": "fixture-host", "cpu_model": "synthetic CPU"}
 
 
-def success_fields(rng, method, dt, drift_level):
+def ref_hash(run):
+    """The fixture's stand-in for the harness's reference hash: one per
+    problem (scene, μ, roughness, t_end)."""
+    text = f"{run['scene']}|{run['mu']}|{run['roughness']}|{run['t_end']}"
+    value = 0xcbf29ce484222325
+    for byte in text.encode():
+        value = ((value ^ byte) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+    return f"{value:016x}"
+
+
+def success_fields(rng, method, dt, drift_level, t_end=T_END):
     order, err_c, wall_c, _ = METHODS[method]
     err = err_c * dt ** order * (1 + 0.1 * rng.random())
-    steps = int(round(T_END / dt))
-    return {"status": "success", "stop_reason": "", "t_reached": T_END,
-            "wall_s": wall_c * 0.05 / dt * (1 + 0.1 * rng.random()),
+    steps = int(round(t_end / dt))
+    return {"status": "success", "stop_reason": "", "t_reached": t_end,
+            "wall_s": wall_c * 0.05 / dt * (1 + 0.1 * rng.random()) * t_end / T_END,
             "nlp_solves": steps * (4 if method[2] == "coupled" else 1),
             "nlp_iters": steps * 7, "rhs_evals": steps * 4, "steps": steps,
             "rejected_steps": 0, "err_pos_rms": err, "err_pos_max": 3 * err,
@@ -154,8 +186,9 @@ def success_fields(rng, method, dt, drift_level):
             "drift_final": drift_level, "gap_max": 2e-7}
 
 
-def failure_fields(status, t_reached, reason):
+def failure_fields(status, t_reached, reason, cause="", detail=""):
     return {"status": status, "stop_reason": reason, "t_reached": t_reached,
+            "cause": cause, "cause_detail": detail,
             "wall_s": 0.05, "nlp_solves": 3, "nlp_iters": 40, "rhs_evals": 12,
             "steps": 3, "rejected_steps": 1, "err_pos_rms": "nan",
             "err_pos_max": "nan", "err_final": "nan", "err_rot_max": "nan",
@@ -164,7 +197,9 @@ def failure_fields(status, t_reached, reason):
 
 
 def plan_runs():
-    """(run dict without results, outcome) for the whole fixture suite."""
+    """(run dict without results, outcome) for the whole fixture suite.
+
+    outcome = None (success) or (status, t_reached, reason, cause, detail)."""
     plan = []
     ladders = {"rk-baumgarte": [0.2, 0.1, 0.05], "rk-projection": [0.2, 0.1, 0.05],
                "ida": [0.2, 0.1, 0.05]}
@@ -172,48 +207,112 @@ def plan_runs():
         for dt in ladders[method[1]]:
             plan.append((base_run(f"wp-{method[0]}-{method[1]}-dt{dt:g}",
                                   "work_precision", method, dt, 0.5), None))
+    # The coupled ladder of the default suite is a shorter problem (5 s there,
+    # T_END_CPL here): its runs must never share a chart with the ones above.
+    for method in list(METHODS)[:2]:
+        cpl = (method[0], method[1], "coupled")
+        for dt in (0.1, 0.05):
+            plan.append((base_run(f"wpc-{cpl[0]}-{cpl[1]}-dt{dt:g}", "work_precision_cpl",
+                                  cpl, dt, 0.5, t_end=T_END_CPL), None))
     for dt in (0.2, 0.1):
         plan.append((base_run(f"wp-ceres-dt{dt:g}", "work_precision",
                               FAILING_METHOD, dt, 0.5),
-                     ("SOLVER_FAILURE", 0.0, "t=0, ceres: no convergence, iters=200")))
-    for method in list(METHODS)[:2]:
-        for mu in (0.2, 0.3, 0.5, 0.8):
-            outcome = None if mu > MU_MIN else (
-                "INFEASIBLE_FRICTION", 0.0,
-                f"t=0, mu={mu:g} < mu_min={MU_MIN:g}, wheel 1")
-            plan.append((base_run(f"mu-{method[0]}-mu{mu:g}", "mu_sweep", method,
-                                  0.1, mu), outcome))
+                     ("SOLVER_FAILURE", 0.0, "t=0, ceres: no convergence, iters=200",
+                      "numerical", "solver_failure")))
+    for scene in ("paper", "paper_pvc"):
+        for method in list(METHODS)[:2]:
+            for mu in (0.2, 0.3, 0.5, 0.8):
+                need = REF_MU_MIN[scene]
+                outcome = None if mu > need else (
+                    "INFEASIBLE_FRICTION", 0.0,
+                    f"t=0, mu={mu:g} < mu_min={STOP_MU_MIN:g}, wheel 1",
+                    "physical", "friction_limit")
+                tag = "" if scene == "paper" else "pvc-"
+                plan.append((base_run(f"mu-{tag}{method[0]}-mu{mu:g}", "mu_sweep", method,
+                                      0.1, mu, scene=scene), outcome))
     for method in list(METHODS) + [FAILING_METHOD]:
         for dt in (0.2, 0.4, 0.8):
             run = base_run(f"stab-{method[0]}-{method[1]}-dt{dt:g}", "stability_dt",
                            method, dt, 0.5)
             outcome = None
             if method == FAILING_METHOD:
-                outcome = ("convergence_failure", 0.0, "t=0, Newton diverged")
+                outcome = ("SOLVER_FAILURE", 0.0, "t=0, Newton diverged",
+                           "numerical", "solver_failure")
             elif dt >= 0.8 and method[1] != "ida":
-                outcome = ("constraint_failure", 2.4, "t=2.4, ||H|| > 1e-3")
+                # What the harness used to show as a friction limit: a blow-up
+                # that ends in a quasi-static INFEASIBLE_FRICTION.
+                outcome = ("INFEASIBLE_FRICTION", 2.4,
+                           "t=2.4, mu=0.5 < mu_min=6.3, wheel 2",
+                           "numerical", "drift_blowup")
             elif dt >= 0.4 and method[1] == "ida":
-                outcome = ("step_size_too_small", 1.1, "t=1.1, IDA_TOO_MUCH_WORK")
+                outcome = ("step_size_too_small", 1.1, "t=1.1, IDA_TOO_MUCH_WORK",
+                           "numerical", "integrator_failure")
             plan.append((run, outcome))
     baum = list(METHODS)[0]
     for sigma in (5.0, 15.0, 30.0):
-        run = base_run(f"stab-sigma{sigma:g}", "stability_sigma", baum, 0.1, 0.5)
+        run = base_run(f"stab-sigma{sigma:g}", "stability_sigma_dt", baum, 0.1, 0.5)
         run["sigma"] = sigma
-        outcome = ("constraint_failure", 0.9, "t=0.9, sigma*dt beyond RK4 limit") \
-            if sigma * 0.1 > 2.785 else None
+        outcome = ("DEGENERATE_CONTACT", 0.9, "t=0.9, sigma*dt beyond RK4 limit",
+                   "numerical", "baumgarte_instability") if sigma * 0.1 > 2.785 else None
         plan.append((run, outcome))
+    newton = list(METHODS)[1]
+    for scene in ("paper", "paper_pvc"):
+        for mu in (0.1, 0.3, 0.5):
+            outcome = None if mu > REF_MU_MIN[scene] else (
+                "INFEASIBLE_FRICTION", 0.0, f"t=0, mu={mu:g} < mu_min, wheel 1",
+                "physical", "friction_limit")
+            plan.append((base_run(f"stabmu-{scene}-mu{mu:g}", "stability_mu", newton,
+                                  0.1, mu, scene=scene), outcome))
     for method in list(METHODS)[:2]:
         for rough in (0.01, 0.02, 0.04):
             run = base_run(f"rough-{method[0]}-r{rough:g}", "stability_roughness",
                            method, 0.1, 0.5, scene="rough")
             run["roughness"] = rough
-            outcome = ("LIFT_OFF", 3.3, "t=3.3, wheel 2 lifts off") if rough > 0.03 else None
+            outcome = ("LIFT_OFF", 3.3, "t=3.3, wheel 2 lifts off",
+                       "physical", "lift_off") if rough > 0.03 else None
             plan.append((run, outcome))
     return plan
 
 
-def build_fixture(out_dir, seed=7):
-    """Write the fixture into out_dir (created); return out_dir."""
+def trust_fields(run, rng):
+    """The issue-#14 columns of one row (timing spread over 3 repeats, ...)."""
+    t_end = float(run["t_end"])
+    fields = {"ref_hash": ref_hash(run), "t_reached_frac": run["t_reached"] / t_end,
+              "ref_mu_min": REF_MU_MIN.get(run["scene"], MU_MIN),
+              "ref_err_est": REF_ERR_EST.get(t_end, 1e-9),
+              "qs_inertia_ratio": (0.08 if run["scene"] == "rough" else 0.004)
+              * (1 + 0.1 * rng.random()) if run["status"] == "success" else "",
+              "kkt_residual": 1e-11 * (1 + rng.random()) if run["status"] == "success" else ""}
+    wall = float(run["wall_s"])
+    repeats = [wall * 1.3, wall, wall * 1.08]
+    fields.update({"wall_s_all": ";".join(f"{w:.6g}" for w in repeats),
+                   "wall_s_min": min(repeats), "wall_s_max": max(repeats),
+                   "wall_s_median": sorted(repeats)[1]})
+    fields["wall_per_sim_s"] = fields["wall_s_median"] / run["t_reached"] \
+        if run["t_reached"] > 0 else ""
+    if run["status"] == "success":
+        run["cause"] = run["cause_detail"] = ""
+    if run["status"] == "INFEASIBLE_FRICTION":
+        run["mu_min"] = STOP_MU_MIN
+    return fields
+
+
+def write_inputs(out_dir):
+    """A suite file and its scene file, as the harness's meta.json names them."""
+    inputs = os.path.join(out_dir, "inputs")
+    os.makedirs(os.path.join(inputs, "scenes"), exist_ok=True)
+    with open(os.path.join(inputs, "scenes", "paper.yaml"), "w") as handle:
+        handle.write("name: paper\nmode: paper\nmu: 0.5\n")
+    suite = os.path.join(inputs, "fixture.yaml")
+    with open(suite, "w") as handle:
+        handle.write("name: fixture\nscenes:\n  - {name: paper, file: scenes/paper.yaml}\n"
+                     "  - {name: paper_pvc, file: scenes/paper.yaml, overrides: {mode: pvc}}\n")
+    return suite
+
+
+def build_fixture(out_dir, seed=7, legacy=False):
+    """Write the fixture into out_dir (created); return out_dir. legacy=True
+    writes runs.csv without the issue-#14 columns (older harness output)."""
     rng = np.random.default_rng(seed)
     os.makedirs(os.path.join(out_dir, "trajectories"), exist_ok=True)
     os.makedirs(os.path.join(out_dir, "terrains"), exist_ok=True)
@@ -223,23 +322,30 @@ def build_fixture(out_dir, seed=7):
     rows = []
     for run, outcome in plan_runs():
         method = (run["nlp"], run["dae"], run["coupling"])
+        base = (method[0], method[1], "zoh") if method not in METHODS else method
         if outcome is None:
-            drift = METHODS[method][3]
-            run.update(success_fields(rng, method, run["dt"], drift))
-            order, err_c, _, _ = METHODS[method]
+            drift = METHODS[base][3]
+            run.update(success_fields(rng, base, run["dt"], drift, run["t_end"]))
+            order, err_c, _, _ = METHODS[base]
             cols = synth_trajectory(rng, terrain, run["dt"], run["mu"],
-                                    err_c * run["dt"] ** order, drift)
+                                    err_c * run["dt"] ** order, drift, run["t_end"],
+                                    PVC_SLIP_FACTOR if run["scene"] == "paper_pvc" else 1.0)
             write_trajectory(os.path.join(out_dir, "trajectories",
                                           f"{run['run_id']}.csv"), cols)
         else:
             run.update(failure_fields(*outcome))
+        run.update(trust_fields(run, rng))
         rows.append(run)
+    columns = LEGACY_COLUMNS if legacy else RUN_COLUMNS
     with open(os.path.join(out_dir, "runs.csv"), "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=RUN_COLUMNS)
+        writer = csv.DictWriter(handle, fieldnames=columns)
         writer.writeheader()
         for row in rows:
-            writer.writerow({k: _cell(row.get(k, "")) for k in RUN_COLUMNS})
-    write_meta(out_dir, seed)
+            writer.writerow({k: _cell(row.get(k, "")) for k in columns})
+    for scene in ("paper_pvc", "rough"):
+        with open(os.path.join(out_dir, "terrains", f"{scene}.json"), "w") as handle:
+            json.dump(terrain, handle, indent=1)
+    write_meta(out_dir, seed, write_inputs(out_dir))
     return out_dir
 
 
@@ -249,7 +355,7 @@ def _cell(value):
     return value
 
 
-def write_meta(out_dir, seed):
+def write_meta(out_dir, seed, suite_path):
     meta = {"commit": "0123abc (fixture)",
             "machine": {"hostname": "fixture-host", "cpu": "synthetic CPU", "cores": 4},
             "library_versions": {"eigen": "3.4.0", "ipopt": "3.14.10",
@@ -257,7 +363,9 @@ def write_meta(out_dir, seed):
                                  "sundials": "6.4.1"},
             "numerical_libraries": {"blas": "/fixture/blas/libblas.so.3",
                                     "lapack": "/fixture/lapack/liblapack.so.3"},
-            "suite": "fixture", "suite_hash": f"seed-{seed}",
+            "suite": {"name": "fixture", "path": suite_path,
+                      "absolute_path": os.path.abspath(suite_path)},
+            "suite_hash": f"seed-{seed}",
             "start_time": "2024-01-01T00:00:00Z", "end_time": "2024-01-01T00:05:00Z",
             "options": {"t_end": T_END, "repeats": 3}}
     with open(os.path.join(out_dir, "meta.json"), "w") as handle:
@@ -268,8 +376,10 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out_dir", metavar="DIR")
     parser.add_argument("--seed", type=int, default=7)
+    parser.add_argument("--legacy", action="store_true",
+                        help="leave out the issue-#14 runs.csv columns")
     args = parser.parse_args(argv)
-    print(os.path.abspath(build_fixture(args.out_dir, args.seed)))
+    print(os.path.abspath(build_fixture(args.out_dir, args.seed, args.legacy)))
     return 0
 
 

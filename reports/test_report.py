@@ -22,8 +22,14 @@ os.environ["MPLBACKEND"] = "Agg"
 
 import make_fixture  # noqa: E402
 from quasiroll_report import selection as sel  # noqa: E402
-from quasiroll_report.data import read_runs  # noqa: E402
+from quasiroll_report import plotting  # noqa: E402
+from quasiroll_report.data import read_references, read_runs  # noqa: E402
 from quasiroll_report.report import FIGURE_NAMES  # noqa: E402
+
+# The fixture's stability groups: one chart (figure) each.
+STABILITY_FIGURES = ["fig_stability_dt", "fig_stability_mu", "fig_stability_roughness",
+                     "fig_stability_sigma_dt"]
+DRAWN_FIGURES = [n for n in FIGURE_NAMES if n != "fig_stability"] + STABILITY_FIGURES
 
 PYTHON = "/usr/bin/python3"
 MAKE_REPORT = os.path.join(HERE, "make_report.py")
@@ -66,11 +72,17 @@ class Fixture:
     good = None
     result = None
 
+    legacy = None
+    legacy_result = None
+
     @classmethod
     def setup(cls):
         cls.root = tempfile.mkdtemp(prefix="quasiroll_report_test_")
         cls.good = make_fixture.build_fixture(os.path.join(cls.root, "good"), seed=7)
         cls.result = run_report(cls.good)
+        cls.legacy = make_fixture.build_fixture(os.path.join(cls.root, "legacy"), seed=7,
+                                                legacy=True)
+        cls.legacy_result = run_report(cls.legacy)
 
     @classmethod
     def copy(cls, name):
@@ -114,7 +126,7 @@ class GoodReportTest(unittest.TestCase):
 
     def test_index_references_every_figure(self):
         html = self.html()
-        for name in FIGURE_NAMES:
+        for name in DRAWN_FIGURES:
             self.assertIn(f'src="{name}.png"', html, name)
             self.assertIn(f'href="{name}.svg"', html, name)
         self.assertNotIn("<script", html.lower())
@@ -122,7 +134,7 @@ class GoodReportTest(unittest.TestCase):
     def test_pngs_are_valid_with_expected_size(self):
         import matplotlib.image
         manifest = self.manifest()
-        self.assertEqual(sorted(manifest), sorted(FIGURE_NAMES))
+        self.assertEqual(sorted(manifest), sorted(DRAWN_FIGURES))
         for name, entry in manifest.items():
             path = os.path.join(self.report_dir, f"{name}.png")
             self.assertGreater(os.path.getsize(path), 5000, name)
@@ -137,12 +149,12 @@ class GoodReportTest(unittest.TestCase):
     def test_fixed_figure_sizes(self):
         manifest = self.manifest()
         width, height = png_size(os.path.join(self.report_dir, "fig_work_precision.png"))
-        self.assertLessEqual(abs(width - 1100), 2)   # figsize 11 x 4.6 in at 100 dpi
-        self.assertLessEqual(abs(height - 460), 2)
+        self.assertLessEqual(abs(width - 1300), 2)   # 13 in x (0.6 + 3.9 per problem)
+        self.assertLessEqual(abs(height - 840), 2)   # two problems
         self.assertEqual(manifest["fig09_normal_forces"]["figsize_in"], [8.0, 4.2])
 
     def test_svgs_exist(self):
-        for name in FIGURE_NAMES:
+        for name in DRAWN_FIGURES:
             path = os.path.join(self.report_dir, f"{name}.svg")
             self.assertTrue(os.path.isfile(path), name)
             with open(path, encoding="utf-8") as handle:
@@ -168,6 +180,145 @@ class GoodReportTest(unittest.TestCase):
             self.assertIn(text, html)
         self.assertIn('<table class="map">', html)
 
+    # ---- issue #14: like with like
+
+    def test_work_precision_facets_never_mix_problems(self):
+        panels = self.manifest()["fig_work_precision"]["data"]["panels"]
+        # two problems (8 s zoh ladder, 2 s coupled ladder) x two metrics
+        self.assertEqual(len(panels), 4)
+        self.assertEqual(sorted({tuple(p["t_end"]) for p in panels}),
+                         [(make_fixture.T_END_CPL,), (make_fixture.T_END,)])
+        runs = read_runs(Fixture.good)[0]
+        for panel in panels:
+            self.assertEqual(len(panel["t_end"]), 1, panel["problem"])
+            self.assertEqual(len(panel["ref_hashes"]), 1, panel["problem"])
+            # every point of the Pareto front is a run of this panel's problem
+            mine = [r for r in runs if r["ref_hash"] == panel["ref_hashes"][0]
+                    and r["status"] == "success"]
+            errs = {round(r[panel["metric"]], 15) for r in mine}
+            for err, _ in panel["front"]:
+                self.assertIn(round(err, 15), errs, panel["problem"])
+        cpl = [p for p in panels if p["t_end"] == [make_fixture.T_END_CPL]]
+        self.assertTrue(all(line.endswith("/coupled") for p in cpl for line in p["lines"]))
+
+    def test_bands_table_per_problem(self):
+        runs = read_runs(Fixture.good)[0]
+        bands = sel.accuracy_bands(runs)
+        self.assertEqual(len(bands), 2)
+        for problem, rows in bands:
+            self.assertTrue(rows)
+            for _, fastest, _ in rows:
+                self.assertEqual(fastest["t_end"], problem["t_end"])
+                self.assertEqual(fastest["ref_hash"], problem["ref_hash"])
+        html = self.html()
+        self.assertEqual(html.count("<h3>paper · "), 2, "one bands table per problem")
+
+    def test_timing_median_with_error_bars(self):
+        data = self.manifest()["fig_work_precision"]["data"]
+        self.assertEqual(data["timing"], "median")
+        caption = self.manifest()["fig_work_precision"]["caption"]
+        self.assertIn("median wall time over the repeats", caption)
+        runs = read_runs(Fixture.good)[0]
+        run = next(r for r in runs if r["status"] == "success")
+        point, low, high = sel.timing(run)
+        self.assertEqual(point, run["wall_s_median"])
+        self.assertLess(low, point)
+        self.assertGreater(high, point)
+
+    def test_mu_sweep_per_mode_not_pooled(self):
+        for name in ("fig13_traction_vs_mu", "fig14_total_slip_vs_mu"):
+            panels = self.manifest()[name]["data"]["panels"]
+            self.assertEqual([p["scene"] for p in panels], ["paper", "paper_pvc"], name)
+            # μ_min per scene from ref_mu_min, not from the stop values (0.25)
+            self.assertAlmostEqual(panels[0]["mu_min"], make_fixture.REF_MU_MIN["paper"])
+            self.assertAlmostEqual(panels[1]["mu_min"], make_fixture.REF_MU_MIN["paper_pvc"])
+        slip = self.manifest()["fig14_total_slip_vs_mu"]["data"]
+        # pooled curves would average the two modes; per mode the fixture's
+        # 1000x slip difference must survive
+        ratio = slip["per_scene"]["paper"] / slip["per_scene"]["paper_pvc"]
+        self.assertGreater(ratio, 100)
+        pvc = slip["panels"][1]["curves"]
+        for curve in pvc.values():
+            self.assertTrue(all(mu > make_fixture.REF_MU_MIN["paper_pvc"] for mu, _ in curve))
+        self.assertIn("slips", self.html())
+
+    def test_blowup_is_numerical_not_friction_limit(self):
+        data = self.manifest()["fig_stability_dt"]["data"]
+        cells = [c for p in data["panels"] for c in p["cells"]
+                 if c["status"] == "INFEASIBLE_FRICTION"]
+        self.assertTrue(cells)
+        for cell in cells:
+            self.assertEqual(cell["cls"], "numerical", cell)
+            self.assertEqual(cell["detail"], "drift_blowup", cell)
+            self.assertIn(cell["colour"], plotting.NUMERICAL_COLOURS.values())
+            self.assertNotIn(cell["colour"], plotting.PHYSICAL_COLOURS.values())
+        mu = self.manifest()["fig_stability_mu"]["data"]
+        physical = [c for p in mu["panels"] for c in p["cells"] if c["cls"] == "physical"]
+        self.assertTrue(physical)
+        self.assertTrue(all(c["colour"] == plotting.PHYSICAL_COLOURS["friction_limit"]
+                            for c in physical))
+
+    def test_stability_charts_only_methods_that_ran(self):
+        data = self.manifest()["fig_stability_sigma_dt"]["data"]
+        self.assertEqual([p["rows"] for p in data["panels"]],
+                         [["ipopt/rk-baumgarte/zoh"]])
+        for panel in data["panels"]:
+            labels = [c["label"] for c in panel["cells"]]
+            self.assertIn("1", labels)
+            self.assertTrue(any(label.startswith(".") for label in labels), labels)
+
+    def test_references_findings_validity_and_repro(self):
+        html = self.html()
+        self.assertIn('id="findings"', html)
+        self.assertIn("For RMS position error ≤", html)
+        self.assertIn("References</h2>", html)
+        self.assertIn("estimated error", html)
+        self.assertIn("Quasi-static validity", html)
+        self.assertIn("quasi-static valid", html)
+        self.assertIn("matplotlib", html)
+        self.assertTrue(os.path.isfile(os.path.join(self.report_dir, "repro", "fixture.yaml")))
+        self.assertTrue(os.path.isfile(os.path.join(self.report_dir, "repro", "scenes",
+                                                    "paper.yaml")))
+        self.assertNotIn("Mixed hosts", html)
+
+
+class LegacyResultsTest(unittest.TestCase):
+    """Results written before the issue-#14 columns existed."""
+
+    def manifest(self):
+        with open(os.path.join(Fixture.legacy, "report", "figures.json")) as handle:
+            return {entry["name"]: entry for entry in json.load(handle)}
+
+    def test_report_works_and_says_what_is_missing(self):
+        result = Fixture.legacy_result
+        self.assertEqual(result.returncode, 0, result.stderr)
+        with open(os.path.join(Fixture.legacy, "report", "index.html"), encoding="utf-8") as f:
+            html = f.read()
+        for column in ("cause", "wall_s_median", "ref_err_est", "ref_mu_min"):
+            self.assertIn(f"no <code>{column}</code> column", html)
+        self.assertEqual(self.manifest()["fig_work_precision"]["data"]["timing"], "min")
+
+    def test_legacy_blowup_is_unclassified_not_friction(self):
+        data = self.manifest()["fig_stability_dt"]["data"]
+        cells = [c for p in data["panels"] for c in p["cells"]
+                 if c["status"] == "INFEASIBLE_FRICTION"]
+        self.assertTrue(cells)
+        for cell in cells:
+            self.assertEqual(cell["cls"], "unknown")
+            self.assertEqual(cell["colour"], plotting.UNKNOWN_COLOUR)
+        self.assertIn("do not read them as physical limits",
+                      self.manifest()["fig_stability_dt"]["caption"])
+
+    def test_legacy_strict_still_passes(self):
+        result = run_report(Fixture.legacy, "--strict", "--out",
+                            os.path.join(Fixture.root, "legacy_strict"))
+        self.assertEqual(result.returncode, 0, result.stderr)
+
+    def test_legacy_mu_min_not_from_stops(self):
+        panels = self.manifest()["fig14_total_slip_vs_mu"]["data"]["panels"]
+        for panel in panels:
+            self.assertTrue(panel["mu_min"] != panel["mu_min"], "nan without ref_mu_min")
+
 
 class SelectionTest(unittest.TestCase):
     def runs(self):
@@ -177,8 +328,11 @@ class SelectionTest(unittest.TestCase):
         runs = self.runs()
         self.assertEqual(sel.failed_only_methods(runs), [FAILED_ONLY])
         self.assertIn(FAILED_ONLY, [row["method"] for row in sel.method_summary(runs)])
+        problems = sel.work_precision_problems(runs)
+        self.assertEqual([p["t_end"] for p in problems],
+                         [make_fixture.T_END, make_fixture.T_END_CPL])
         for metric in ("err_pos_rms", "err_force_rms"):
-            series = sel.work_precision_series(runs, metric)
+            series = sel.work_precision_series(runs, metric, rows=problems[0]["rows"])
             self.assertNotIn(FAILED_ONLY, series)
             self.assertEqual(len(series), 3)
             for points in series.values():
@@ -187,7 +341,8 @@ class SelectionTest(unittest.TestCase):
     def test_work_precision_rows_only_work_precision_group(self):
         rows = sel.work_precision_rows(self.runs())
         self.assertTrue(rows)
-        self.assertEqual({r["suite_group"] for r in rows}, {"work_precision"})
+        self.assertEqual({r["suite_group"] for r in rows},
+                         {"work_precision", "work_precision_cpl"})
         self.assertTrue(all(r["status"] == "success" for r in rows))
 
     def test_pareto_front(self):
@@ -200,14 +355,23 @@ class SelectionTest(unittest.TestCase):
         self.assertEqual(list(styles), sorted(styles))
         self.assertEqual(len(set(styles.values())), len(styles))
         self.assertEqual(styles, sel.method_styles(list(reversed(runs))))
+        # colour per NLP, marker per integrator, whatever else is in the report
+        self.assertEqual(styles["newton/rk-projection/zoh"][:2],
+                         sel.method_styles(runs[-3:] + [dict(runs[0], method=
+                                           "newton/rk-projection/zoh")])
+                         ["newton/rk-projection/zoh"][:2])
+        self.assertEqual(styles["newton/rk-projection/zoh"][0],
+                         styles["newton/rk-projection/coupled"][0])
+        self.assertNotEqual(styles["newton/rk-projection/zoh"][2],
+                            styles["newton/rk-projection/coupled"][2])
 
-    def test_stability_map_marks_mu_min(self):
-        smap = sel.stability_map(self.runs())
-        x, mu_min = sel.mu_min_position(smap["columns"], "mu_sweep")
-        self.assertAlmostEqual(mu_min, 0.27)
-        self.assertIsNotNone(x)
-        self.assertIn("INFEASIBLE_FRICTION", smap["statuses"])
-        self.assertEqual(smap["statuses"][0], "success")
+    def test_stability_mu_line_from_reference(self):
+        charts = {c["group"]: c for c in sel.stability_charts(self.runs(),
+                                                              read_references(Fixture.good))}
+        panels = {p["scene"]: p for p in charts["stability_mu"]["panels"]}
+        self.assertAlmostEqual(panels["paper"]["mu_min"], 0.27)
+        self.assertAlmostEqual(panels["paper_pvc"]["mu_min"], 0.43)
+        self.assertEqual(sel.value_position([0.1, 0.3, 0.5], 0.4), 1.5)
 
     def test_paper_run_is_most_accurate_at_mu_half(self):
         run = sel.paper_run(self.runs(), lambda r: True)

@@ -26,8 +26,19 @@ REQUIRED_COLUMNS = [
 
 # Columns kept as strings; every other known column is parsed as a float.
 STRING_COLUMNS = {"scene", "nlp", "dae", "coupling", "status", "stop_reason",
-                  "run_id", "suite_group", "seed"}
+                  "run_id", "suite_group", "seed", "terrain", "rk_method",
+                  "ref_kind", "ref_status", "ref_hash", "cause", "cause_detail",
+                  "wall_s_all", "host", "cpu_model", "nlp_options",
+                  "dae_options"}
 OPTIONAL_NUMERIC_COLUMNS = ["mu_min", "roughness", "t_end"]
+
+# Columns added for issue #14 (docs/harness.md). Every one is optional: the
+# report omits what needs a missing one and says so on the page.
+TRUST_NUMERIC_COLUMNS = ["kkt_residual", "t_reached_frac", "wall_s_median",
+                         "wall_s_min", "wall_s_max", "wall_per_sim_s",
+                         "qs_inertia_ratio", "ref_mu_min", "ref_err_est"]
+TRUST_STRING_COLUMNS = ["cause", "cause_detail", "wall_s_all", "host",
+                        "cpu_model"]
 
 WHEEL_COLUMNS = ("c{i}_x", "c{i}_y", "c{i}_z", "n{i}", "t{i}_lon", "t{i}_lat",
                  "slip{i}", "use{i}")
@@ -85,7 +96,7 @@ def _check_columns(header, required, label):
 
 
 NUMERIC_COLUMNS = ({c for c in REQUIRED_COLUMNS if c not in STRING_COLUMNS}
-                   | set(OPTIONAL_NUMERIC_COLUMNS))
+                   | set(OPTIONAL_NUMERIC_COLUMNS) | set(TRUST_NUMERIC_COLUMNS))
 
 
 def _typed_run(record, line_no):
@@ -129,12 +140,28 @@ def read_runs(results_dir):
         run.setdefault("run_id", f"row{index + 1}")
         if not run["run_id"]:
             run["run_id"] = f"row{index + 1}"
-        for column in OPTIONAL_NUMERIC_COLUMNS:
+        for column in OPTIONAL_NUMERIC_COLUMNS + TRUST_NUMERIC_COLUMNS:
             run.setdefault(column, math.nan)
+        for column in TRUST_STRING_COLUMNS + ["ref_hash", "terrain", "rk_method"]:
+            run.setdefault(column, "")
+        run["timings"] = parse_timings(run.get("wall_s_all", ""))
         run["method"] = method_name(run)
         run["row"] = index + 1
         runs.append(run)
     return runs, header
+
+
+def parse_timings(text):
+    """wall_s_all ("0.1;0.12;...") as a list of floats; [] when absent."""
+    values = []
+    for part in (text or "").split(";"):
+        try:
+            value = parse_number(part)
+        except ValueError:
+            continue
+        if math.isfinite(value):
+            values.append(value)
+    return values
 
 
 def has_column(header, name):
@@ -195,6 +222,25 @@ def read_meta(results_dir):
     except (OSError, ValueError):
         return {"_warning": "meta.json is not valid JSON"}
     return meta if isinstance(meta, dict) else {}
+
+
+def read_references(results_dir):
+    """{hash: dict} of DIR/references/<hash>.json (unreadable files skipped)."""
+    folder = os.path.join(results_dir, "references")
+    refs = {}
+    if not os.path.isdir(folder):
+        return refs
+    for name in sorted(os.listdir(folder)):
+        if not name.endswith(".json"):
+            continue
+        try:
+            with open(os.path.join(folder, name), encoding="utf-8") as handle:
+                spec = json.load(handle)
+        except (OSError, ValueError):
+            continue
+        if isinstance(spec, dict):
+            refs[spec.get("hash", name[:-5])] = spec
+    return refs
 
 
 def read_terrain(results_dir, scene):

@@ -1,15 +1,19 @@
-"""Method-comparison figures: work-precision, constraint drift, failure map."""
+"""Method-comparison figures: work-precision (one facet per problem),
+constraint drift, and the stability charts (one per stability_<axis> group).
+"""
 
 import math
 
 import numpy as np
-from matplotlib.colors import ListedColormap
+from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from . import selection as sel
 from .data import is_finite
-from .plotting import (MissingData, NOT_RUN_COLOUR, fmt, new_figure, no_data,
-                       positive, save_figure, status_colours)
+from .plotting import (MissingData, NOT_RUN_COLOUR, UNKNOWN_COLOUR, cause_colour,
+                       fmt, new_figure, no_data, positive, save_figure,
+                       text_colour)
+from .problems import coupling_line, dae_marker, nlp_colour, problem_label
 
 WP_METRICS = [
     ("err_pos_rms", "RMS position error vs reference [m]"),
@@ -24,62 +28,154 @@ def _failed_note(ctx):
             + ", ".join(ctx.failed_only) + ".")
 
 
+def style_legend_handles(rows, extra=()):
+    """Legend proxies: colour = NLP, marker = integrator, line = coupling."""
+    handles = []
+    for nlp in sorted({r["nlp"] for r in rows}):
+        handles.append(Line2D([], [], color=nlp_colour(nlp), linewidth=3,
+                              label=f"NLP {nlp}"))
+    for dae in sorted({r["dae"] for r in rows}):
+        handles.append(Line2D([], [], color="#444444", marker=dae_marker(dae),
+                              linestyle="none", label=f"DAE {dae}"))
+    for coupling in sorted({r["coupling"] for r in rows}):
+        handles.append(Line2D([], [], color="#444444", linestyle=coupling_line(coupling),
+                              label=f"coupling {coupling}"))
+    return handles + list(extra)
+
+
+def _legend_axes(fig, gs_cell, handles, title=None):
+    ax = fig.add_subplot(gs_cell)
+    ax.axis("off")
+    ax.legend(handles=handles, loc="upper left", frameon=False, title=title,
+              borderaxespad=0.0)
+    return ax
+
+
 # ---------------------------------------------------------- work-precision
 
-def _plot_work_precision_panel(ax, ctx, metric, label):
-    series = sel.work_precision_series(ctx.runs, metric)
+def _plot_series(ax, series):
     points = []
-    for method, rungs in series.items():
-        colour, marker = ctx.styles[method]
-        errs = [p[2] for p in rungs]
-        walls = [p[3] for p in rungs]
-        ax.plot(errs, walls, color=colour, marker=marker, label=method)
-        points += list(zip(errs, walls))
+    for line, rungs in series.items():
+        first = rungs[0]
+        colour = nlp_colour(first["nlp"])
+        adaptive = "(" in line
+        errs = np.array([p["err"] for p in rungs])
+        walls = np.array([p["wall"] for p in rungs])
+        spread = np.array([[p["wall"] - p["wall_lo"] for p in rungs],
+                           [p["wall_hi"] - p["wall"] for p in rungs]])
+        ax.errorbar(errs, walls, yerr=spread if np.any(spread > 0) else None,
+                    color=colour, marker=dae_marker(first["dae"]),
+                    linestyle=coupling_line(first["coupling"]),
+                    markerfacecolor="white" if adaptive else colour,
+                    capsize=2, elinewidth=0.8, label=line)
+        points += list(zip(errs.tolist(), walls.tolist()))
+    return points
+
+
+def _front_methods(series, front):
+    members = set(front)
+    return sorted(line for line, rungs in series.items()
+                  if any((p["err"], p["wall"]) in members for p in rungs))
+
+
+def _draw_floor(ax, estimate):
+    if not is_finite(estimate) or estimate <= 0:
+        return False
+    ax.axvspan(ax.get_xlim()[0] if ax.get_xlim()[0] < estimate else estimate / 10,
+               estimate, color="#bbbbbb", alpha=0.35, zorder=0, linewidth=0)
+    ax.axvline(estimate, color="#555555", linestyle=":", linewidth=1.2)
+    return True
+
+
+def _work_precision_panel(ax, problem, metric, label, spread):
+    series = sel.work_precision_series(None, metric, rows=problem["rows"])
+    points = _plot_series(ax, series)
+    ax.set_title(f"{problem['label']} — {metric}", fontsize=9)
     if not points:
         no_data(ax, f"no successful run with finite {metric}")
         return series, []
     front = sel.pareto_front(points)
     fx, fy = zip(*front)
-    ax.step(fx, fy, where="post", color="black", linestyle="--", linewidth=1.0,
-            label="Pareto front", zorder=1)
+    ax.step(fx, fy, where="post", color="black", linestyle=(0, (4, 2)),
+            linewidth=1.0, zorder=1)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel(label)
-    ax.set_ylabel("wall time [s]")
-    ax.set_title(metric)
+    ax.set_ylabel("wall time [s]" + (" (median, bars min–max)" if spread else " (min)"))
+    t_end = problem["t_end"]
+    if is_finite(t_end) and t_end > 0:
+        sec = ax.secondary_yaxis("right", functions=(lambda w: w / t_end,
+                                                     lambda s: s * t_end))
+        sec.set_ylabel("wall time per simulated second [s/s]")
+    if metric == "err_pos_rms":
+        _draw_floor(ax, problem["ref_err_est"])
     return series, front
 
 
 def figure_work_precision(ctx):
-    fig = new_figure(11, 4.6)
-    axes = fig.subplots(1, 2)
-    details = []
-    for ax, (metric, label) in zip(axes, WP_METRICS):
-        series, front = _plot_work_precision_panel(ax, ctx, metric, label)
-        details.append((metric, series, front))
-    if not any(series for _, series, _ in details):
+    problems = sel.work_precision_problems(ctx.runs, ctx.references)
+    if not problems:
         raise MissingData("no successful run for figure 'work_precision'")
-    axes[-1].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0))
-    pos = details[0]
-    best = min(pos[2], key=lambda p: p[0]) if pos[2] else None
-    front_methods = _front_methods(pos[1], pos[2])
+    spread = sel.has_timing_spread(ctx.runs)
+    n = len(problems)
+    fig = new_figure(13, 0.6 + 3.9 * n)
+    gs = fig.add_gridspec(n, 3, width_ratios=[1, 1, 0.42])
+    details, panels = [], []
+    for i, problem in enumerate(problems):
+        for j, (metric, label) in enumerate(WP_METRICS):
+            ax = fig.add_subplot(gs[i, j])
+            series, front = _work_precision_panel(ax, problem, metric, label, spread)
+            if metric == "err_pos_rms":
+                details.append((problem, series, front))
+            panels.append({"problem": problem["label"], "metric": metric,
+                           "problem_key": list(problem["key"]),
+                           "t_end": sorted({r["t_end"] for r in problem["rows"]
+                                            if is_finite(r["t_end"])}),
+                           "scenes": sorted({r["scene"] for r in problem["rows"]}),
+                           "ref_hashes": sorted({r.get("ref_hash", "") for r in problem["rows"]}),
+                           "lines": list(series), "front": [list(p) for p in front],
+                           "ref_err_est": problem["ref_err_est"]})
+    extra = [Line2D([], [], color="black", linestyle=(0, (4, 2)),
+                    label="Pareto front (this problem)"),
+             Line2D([], [], color="#444444", marker="o", markerfacecolor="white",
+                    linestyle="none", label="adaptive RK (tolerance ladder)")]
+    if any(is_finite(p["ref_err_est"]) for p in problems):
+        extra.append(Patch(facecolor="#bbbbbb", alpha=0.5,
+                           label="below the reference's\nestimated error"))
+    rows = [r for p in problems for r in p["rows"]]
+    _legend_axes(fig, gs[:, 2], style_legend_handles(rows, extra))
+    parts = []
+    for problem, series, front in details:
+        best = min(front, key=lambda p: p[0]) if front else None
+        parts.append(
+            f"{problem['label']} (groups {', '.join(problem['groups'])}): "
+            f"{sum(len(s) for s in series.values())} rungs of {len(series)} lines, "
+            f"most accurate err_pos_rms {fmt(best[0]) if best else 'n/a'} m in "
+            f"{fmt(best[1]) if best else 'n/a'} s, on the front: "
+            f"{', '.join(_front_methods(series, front)) or 'none'}; reference error "
+            + (f"estimate {fmt(problem['ref_err_est'])} m (grey band)"
+               if is_finite(problem["ref_err_est"]) else "not estimated"))
+    timing_text = (
+        "The point is the median wall time over the repeats, the bars span "
+        "their minimum to maximum." if spread else
+        "Wall time is the minimum over the repeats (these results carry no "
+        "timing spread: written before wall_s_median existed), so no error bars.")
     caption = (
-        "Work-precision diagram (SciMLBenchmarks convention): each line is one "
-        "method through its Δt/tolerance ladder (median over repeats), the "
-        "dashed black step is the Pareto front over all methods. "
-        f"This run: {sum(len(s) for s in pos[1].values())} rungs of "
-        f"{len(pos[1])} methods; most accurate err_pos_rms {fmt(best[0]) if best else 'n/a'} m "
-        f"in {fmt(best[1]) if best else 'n/a'} s; on the position front: "
-        f"{', '.join(front_methods) or 'none'}." + _failed_note(ctx))
-    return save_figure(fig, ctx.out_dir, "fig_work_precision",
-                       "1. Work-precision", caption)
-
-
-def _front_methods(series, front):
-    members = set(front)
-    names = [m for m, rungs in series.items()
-             if any((p[2], p[3]) in members for p in rungs)]
-    return sorted(names)
+        "Work-precision diagrams, one row per problem (scene, mode, μ, terrain, "
+        "t_end: runs of different problems are never on one chart or front). "
+        "Each line is one method through its Δt (or rtol) ladder, median error "
+        "over repeats; dashed black step = that problem's Pareto front. "
+        + timing_text + " The right axis is the same time per simulated second. "
+        "Errors are against the problem's reference; a zoh method holds the "
+        "quasi-static twist over each Δt, so its error falls only as O(Δt) "
+        "(hold error) however accurate its integrator, while the coupled "
+        "methods converge at their integrator's order down to the reference's "
+        "own error (grey band: not resolvable). "
+        + " ".join(p + "." for p in parts) + _failed_note(ctx))
+    record = save_figure(fig, ctx.out_dir, "fig_work_precision",
+                         "1. Work-precision", caption)
+    record.data = {"panels": panels, "timing": "median" if spread else "min"}
+    return record
 
 
 # ------------------------------------------------------------------ drift
@@ -91,10 +187,11 @@ def _plot_drift_vs_time(ax, ctx):
         traj = ctx.trajectories.get(run)
         if traj is None:
             continue
-        colour, marker = ctx.styles[run["method"]]
+        colour, marker, line = ctx.styles[run["method"]]
         drift = positive(traj["drift"])
-        ax.plot(traj["t"], drift, color=colour, marker=marker, markevery=0.1,
-                label=f"{dae} ({run['method']}, Δt={fmt(run['dt'])} s)")
+        ax.plot(traj["t"], drift, color=colour, marker=marker, linestyle=line,
+                markevery=0.1,
+                label=f"{run['method']}, Δt={fmt(run['dt'])} s ({problem_label(run, ctx.references)})")
         summary.append((dae, np.nanmax(drift) if np.any(np.isfinite(drift)) else math.nan))
     if not summary:
         no_data(ax, "no trajectory of a successful run")
@@ -102,23 +199,22 @@ def _plot_drift_vs_time(ax, ctx):
     ax.set_yscale("log")
     ax.set_xlabel("t [s]")
     ax.set_ylabel("‖H‖∞ [m, rad]")
-    ax.set_title("loop-closure drift, one run per integrator")
-    ax.legend(loc="best")
+    ax.set_title("loop-closure drift, one run per integrator", fontsize=9)
+    ax.legend(loc="lower right", fontsize=7)
     return summary
 
 
-def _plot_drift_vs_dt(ax, ctx):
-    rows = [r for r in sel.work_precision_rows(ctx.runs)
+def _plot_drift_vs_dt(ax, ctx, problem):
+    rows = [r for r in problem["rows"]
             if is_finite(r["drift_max"]) and r["drift_max"] > 0 and is_finite(r["dt"])]
-    if not rows:
-        rows = [r for r in sel.successful(ctx.runs)
-                if is_finite(r["drift_max"]) and r["drift_max"] > 0 and is_finite(r["dt"])]
-    for method in sel.method_names(rows):
-        mine = sorted((r["dt"], r["drift_max"]) for r in rows if r["method"] == method)
-        dts = sorted({d for d, _ in mine})
-        med = [float(np.median([v for d, v in mine if d == dt])) for dt in dts]
-        colour, marker = ctx.styles[method]
-        ax.plot(dts, med, color=colour, marker=marker, label=method)
+    for line in sorted({sel.line_key(r) for r in rows}):
+        mine = [r for r in rows if sel.line_key(r) == line]
+        dts = sorted({r["dt"] for r in mine})
+        med = [float(np.median([r["drift_max"] for r in mine if r["dt"] == dt])) for dt in dts]
+        colour, marker, style = ctx.styles[mine[0]["method"]]
+        ax.plot(dts, med, color=colour, marker=marker, linestyle=style,
+                markerfacecolor="white" if "(" in line else colour)
+    ax.set_title(f"drift_max vs Δt — {problem['label']}", fontsize=9)
     if not rows:
         no_data(ax, "no finite drift_max")
         return 0
@@ -126,123 +222,155 @@ def _plot_drift_vs_dt(ax, ctx):
     ax.set_yscale("log")
     ax.set_xlabel("Δt [s]")
     ax.set_ylabel("max ‖H‖∞ over the run [m, rad]")
-    ax.set_title("drift_max vs Δt per method")
-    # Up to 24 methods: the legend goes beside the panel, not over the data.
-    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize="small")
     return len(rows)
 
 
 def figure_drift(ctx):
-    fig = new_figure(14, 4.6)
-    ax_t, ax_dt = fig.subplots(1, 2)
-    summary = _plot_drift_vs_time(ax_t, ctx)
-    n_rows = _plot_drift_vs_dt(ax_dt, ctx)
+    problems = sel.work_precision_problems(ctx.runs, ctx.references)
+    n = 1 + len(problems)
+    fig = new_figure(4.6 * n + 2.6, 4.6)
+    gs = fig.add_gridspec(1, n + 1, width_ratios=[1.25] + [1] * (n - 1) + [0.5])
+    summary = _plot_drift_vs_time(fig.add_subplot(gs[0, 0]), ctx)
+    n_rows = sum(_plot_drift_vs_dt(fig.add_subplot(gs[0, k + 1]), ctx, p)
+                 for k, p in enumerate(problems))
     if not summary and not n_rows:
         raise MissingData("no successful run for figure 'drift'")
+    rows = [r for p in problems for r in p["rows"]]
+    _legend_axes(fig, gs[0, n], style_legend_handles(rows or sel.successful(ctx.runs)))
     parts = [f"{dae} max {fmt(v)}" for dae, v in summary]
     caption = (
         "Loop-closure constraint drift ‖H(Θ)‖∞: left over time for one "
         "representative run per integrator (smallest-Δt successful zoh run on "
-        "the paper scene where available), right its maximum against Δt per "
-        f"method. This run: {'; '.join(parts) or 'no trajectories'}."
-        + _failed_note(ctx))
-    return save_figure(fig, ctx.out_dir, "fig_drift", "2. Constraint drift",
-                       caption)
+        "the paper scene where available, its problem in the legend); then its "
+        "maximum against Δt per method, one panel per work-precision problem. "
+        f"This run: {'; '.join(parts) or 'no trajectories'}." + _failed_note(ctx))
+    record = save_figure(fig, ctx.out_dir, "fig_drift", "2. Constraint drift", caption)
+    record.data = {"panels": [p["label"] for p in problems]}
+    return record
 
 
-# ------------------------------------------------------------ failure map
+# ------------------------------------------------------- stability charts
 
-def _status_grid(smap, colours):
-    order = ["(not run)"] + list(colours)
-    index = {s: i for i, s in enumerate(order)}
-    grid = np.zeros((len(smap["methods"]), len(smap["columns"])), dtype=int)
-    for i, method in enumerate(smap["methods"]):
-        for j, cell in enumerate(smap["cells"][method]):
-            grid[i, j] = index[cell[0]] if cell else 0
-    cmap = ListedColormap([NOT_RUN_COLOUR] + [colours[s] for s in colours])
-    return grid, cmap, len(order)
+def _cell_colour(cell):
+    return cause_colour(cell["cls"], cell["detail"])
 
 
-def _label_cells(ax, smap):
-    for i, method in enumerate(smap["methods"]):
-        for j, cell in enumerate(smap["cells"][method]):
-            if cell and cell[1]:
-                ax.text(j, i, cell[1], ha="center", va="center", fontsize=7,
-                        color="white")
-
-
-def _mark_groups(ax, smap):
-    columns = smap["columns"]
-    starts = [j for j, c in enumerate(columns)
-              if j == 0 or c["group"] != columns[j - 1]["group"]]
-    for k, start in enumerate(starts):
-        end = starts[k + 1] if k + 1 < len(starts) else len(columns)
-        if start > 0:
-            ax.axvline(start - 0.5, color="black", linewidth=1.5)
-        ax.text((start + end - 1) / 2, -0.7, columns[start]["group"],
-                ha="center", va="bottom", fontsize=8, fontweight="bold")
-    return [columns[s]["group"] for s in starts]
-
-
-def _mark_mu_min(ax, smap, groups):
-    marks = []
-    for group in groups:
-        x, mu_min = sel.mu_min_position(smap["columns"], group)
-        if x is None:
-            continue
-        ax.axvline(x, color="black", linestyle=":", linewidth=2)
-        ax.text(x, len(smap["methods"]) - 0.5, f" μ_min={fmt(mu_min)}",
-                ha="left", va="bottom", fontsize=8, rotation=0,
-                bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none"})
-        marks.append((group, mu_min))
-    return marks
-
-
-def figure_failure_map(ctx):
-    smap = sel.stability_map(ctx.runs)
-    if not smap["columns"]:
-        raise MissingData("no runs for figure 'failure_map'")
-    colours = status_colours(smap["statuses"])
-    n_rows, n_cols = len(smap["methods"]), len(smap["columns"])
-    width = min(30.0, max(8.0, 4.0 + 0.42 * n_cols))
-    height = max(3.2, 2.4 + 0.32 * n_rows)
-    fig = new_figure(width, height)
-    ax = fig.add_subplot()
-    grid, cmap, n_colours = _status_grid(smap, colours)
-    ax.imshow(grid, cmap=cmap, vmin=-0.5, vmax=n_colours - 0.5, aspect="auto",
-              interpolation="nearest")
-    ax.set_xticks(range(n_cols))
-    ax.set_xticklabels([c["label"] for c in smap["columns"]], rotation=60,
-                       ha="right", fontsize=7)
-    ax.set_yticks(range(n_rows))
-    ax.set_yticklabels(smap["methods"], fontsize=8)
-    ax.set_xticks(np.arange(-0.5, n_cols), minor=True)
-    ax.set_yticks(np.arange(-0.5, n_rows), minor=True)
-    ax.grid(which="minor", color="white", linewidth=1.0)
+def _draw_stability_panel(ax, panel, axis_label, axis):
+    rows, values = panel["rows"], panel["values"]
+    image = np.ones((len(rows), len(values), 3))
+    for i, row in enumerate(rows):
+        for j in range(len(values)):
+            cell = panel["cells"].get((row, j))
+            colour = _cell_colour(cell) if cell else NOT_RUN_COLOUR
+            image[i, j] = [int(colour[k:k + 2], 16) / 255 for k in (1, 3, 5)]
+    ax.imshow(image, aspect="auto", interpolation="nearest")
+    for (row, j), cell in panel["cells"].items():
+        i = rows.index(row)
+        ax.text(j, i, cell["label"], ha="center", va="center", fontsize=7,
+                color=text_colour(_cell_colour(cell)))
+    ax.set_xticks(range(len(values)))
+    many = len(values) > 8
+    ax.set_xticklabels([sel.format_value(v) for v in values],
+                       rotation=45 if many else 0, ha="right" if many else "center",
+                       fontsize=8)
+    ax.set_yticks(range(len(rows)))
+    ax.set_yticklabels(rows, fontsize=8)
+    ax.set_xticks(np.arange(-0.5, len(values)), minor=True)
+    ax.set_yticks(np.arange(-0.5, len(rows)), minor=True)
+    ax.grid(which="minor", color="white", linewidth=1.5)
     ax.grid(which="major", visible=False)
     ax.tick_params(which="minor", length=0)
-    ax.set_ylim(n_rows - 0.5, -1.0)
-    _label_cells(ax, smap)
-    groups = _mark_groups(ax, smap)
-    marks = _mark_mu_min(ax, smap, groups)
-    handles = [Patch(facecolor=colours[s], label=s) for s in colours]
-    handles.append(Patch(facecolor=NOT_RUN_COLOUR, edgecolor="#999999",
-                         label="not run"))
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0),
-              title="status")
-    ax.set_xlabel("condition (Δt [s], σΔt [-], μ [-], roughness)")
-    ax.set_ylabel("method (nlp/dae/coupling)")
-    n_fail = sum(1 for m in smap["methods"] for c in smap["cells"][m]
-                 if c and c[0] != "success")
-    n_cells = sum(1 for m in smap["methods"] for c in smap["cells"][m] if c)
+    ax.set_xlabel(axis_label)
+    ax.set_title(panel["label"], fontsize=9, loc="left")
+    if axis == "mu" and is_finite(panel["mu_min"]):
+        x = sel.value_position(values, panel["mu_min"])
+        if x is not None:
+            ax.axvline(x, color="black", linestyle=":", linewidth=2)
+            ax.text(x, -0.6, f"μ_min(ref) = {fmt(panel['mu_min'])}", ha="center",
+                    va="bottom", fontsize=8,
+                    bbox={"facecolor": "white", "alpha": 0.85, "edgecolor": "none"})
+
+
+def _cause_handles(charts):
+    present = {}
+    for chart in charts:
+        for panel in chart["panels"]:
+            for cell in panel["cells"].values():
+                present[(cell["cls"], cell["detail"])] = _cell_colour(cell)
+    order = {"success": 0, "physical": 1, "numerical": 2, "unknown": 3}
+    handles = []
+    for (cls, detail), colour in sorted(present.items(),
+                                        key=lambda kv: (order[kv[0][0]], kv[0][1])):
+        if cls == "success":
+            label = "success"
+        elif cls == "unknown":
+            label = f"cause not recorded ({detail})"
+        else:
+            label = f"{cls}: {detail}"
+        handles.append(Patch(facecolor=colour, edgecolor="#777777", label=label))
+    handles.append(Patch(facecolor=NOT_RUN_COLOUR, edgecolor="#777777", label="not run"))
+    return handles
+
+
+def _stability_figure(ctx, chart):
+    panels = chart["panels"]
+    n_cols = max(len(p["values"]) for p in panels)
+    longest = max(len(r) for p in panels for r in p["rows"])
+    width = min(22.0, 3.2 + 0.06 * longest + 0.62 * n_cols)
+    heights = [1.3 + 0.3 * len(p["rows"]) for p in panels]
+    fig = new_figure(width, max(3.0, sum(heights) + 0.4))
+    gs = fig.add_gridspec(len(panels), 2, width_ratios=[max(1.0, width - 3.2), 3.0],
+                          height_ratios=heights)
+    for k, panel in enumerate(panels):
+        _draw_stability_panel(fig.add_subplot(gs[k, 0]), panel, chart["axis_label"],
+                              chart["axis"])
+    _legend_axes(fig, gs[:, 1], _cause_handles([chart]), title="cell colour = outcome")
+    cells = [c for p in panels for c in p["cells"].values()]
+    counts = {cls: sum(1 for c in cells if c["cls"] == cls)
+              for cls in ("success", "physical", "numerical", "unknown")}
+    methods = sorted({r["method"] for r in sel.in_group(ctx.runs, chart["group"])})
+    mu_text = "; ".join(f"{p['scene']}: μ_min(ref) {fmt(p['mu_min'])}" for p in panels
+                        if chart["axis"] == "mu" and is_finite(p["mu_min"]))
     caption = (
-        "Stability/failure map: rows are methods, columns the conditions of each "
-        "stability-sweep group; a cell is coloured by the run's status "
-        "(the most common failure when repeats differ, labelled k/n failed). "
-        f"This run: {n_fail} of {n_cells} cells failed"
-        + ("; μ_min " + ", ".join(f"{fmt(m)} ({g})" for g, m in marks)
-           + " marked by the dotted line" if marks else "") + ".")
-    record = save_figure(fig, ctx.out_dir, "fig_failure_map",
-                         "3. Stability / failure map", caption)
-    record.notes.append(smap)
+        f"Stability along {chart['axis_label'].split(' [')[0]} (group {chart['group']}): "
+        "rows are the methods that ran (nlp/dae/coupling), columns the axis "
+        "values; colour = outcome (green success; cool colours physical causes, "
+        "where the reference or the analytic μ_min fails at the same place; warm "
+        "colours numerical causes, where the method fails and the reference "
+        "does not; grey = the harness did not classify the failure); text = "
+        "fraction of t_end reached (worst run of the cell, k/n failed when "
+        f"repeats differ). This run: {len(methods)} methods, {counts['success']} "
+        f"cells succeeded, {counts['physical']} physical, {counts['numerical']} "
+        f"numerical, {counts['unknown']} unclassified."
+        + (f" Dotted line: the friction the scene needs, {mu_text} (the solver's "
+           "μ_min maximised over the reference trajectory)." if mu_text else "")
+        + (" Unclassified failures (old results without the `cause` column) "
+           "show the status the run reported; a numerical blow-up can report a "
+           "quasi-static status such as INFEASIBLE_FRICTION, so do not read "
+           "them as physical limits." if counts["unknown"] else ""))
+    name = "fig_stability_" + chart["group"][len(sel.STABILITY_PREFIX):]
+    title = f"3. Stability — {chart['axis_label'].split(' [')[0]}"
+    record = save_figure(fig, ctx.out_dir, name, title, caption)
+    record.data = {"group": chart["group"], "axis": chart["axis"], "panels": [
+        {"scene": p["scene"], "rows": p["rows"],
+         "values": [sel.format_value(v) for v in p["values"]],
+         "mu_min": p["mu_min"],
+         "cells": [{"row": row, "value": sel.format_value(p["values"][j]),
+                    "cls": c["cls"], "detail": c["detail"], "label": c["label"],
+                    "colour": _cell_colour(c), "status": c["status"]}
+                   for (row, j), c in sorted(p["cells"].items())]}
+        for p in panels]}
+    record.notes.append(chart)
     return record
+
+
+def figure_stability(ctx):
+    """One figure per stability_<axis> group (a list of records)."""
+    charts = sel.stability_charts(ctx.runs, ctx.references)
+    if not charts:
+        raise MissingData("no stability_<axis> group in these results")
+    return [_stability_figure(ctx, chart) for chart in charts]
+
+
+__all__ = ["figure_work_precision", "figure_drift", "figure_stability",
+           "style_legend_handles", "UNKNOWN_COLOUR"]

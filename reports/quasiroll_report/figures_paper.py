@@ -5,6 +5,8 @@ import math
 
 import numpy as np
 from matplotlib import cm
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 from matplotlib.transforms import blended_transform_factory
 
 from . import selection as sel
@@ -12,6 +14,9 @@ from .data import is_finite, is_success
 from .plotting import (COMPONENT_STYLES, MissingData, WHEEL_STYLES, fmt,
                        new_figure, no_data, positive, save_figure,
                        spans_decades)
+from .figures_methods import style_legend_handles
+from . import robot
+from .problems import method_style, robot_geometry, scene_mode
 from .terrain import describe_terrain, terrain_height
 
 WHEELS = (1, 2, 3)
@@ -58,78 +63,119 @@ def _snapshot_indices(traj, count=5):
     return sorted({int(rows[int(round(p))]) for p in picks})
 
 
-def _draw_snapshots(ax, traj, indices):
-    colours = cm.viridis(np.linspace(0.0, 0.9, max(len(indices), 1)))
-    for colour, k in zip(colours, indices):
-        px = [traj[f"c{i}_x"][k] for i in WHEELS + (1,)]
-        py = [traj[f"c{i}_y"][k] for i in WHEELS + (1,)]
-        pz = [traj[f"c{i}_z"][k] for i in WHEELS + (1,)]
-        ax.plot(px, py, pz, color=colour, linewidth=2.0, zorder=10,
-                label=f"platform t={traj['t'][k]:.3g} s")
-        for i, (wc, _) in zip(WHEELS, WHEEL_STYLES):
-            ax.scatter([traj[f"c{i}_x"][k]], [traj[f"c{i}_y"][k]],
-                       [traj[f"c{i}_z"][k]], color=wc, s=22, depthshade=False,
-                       zorder=11)
+CHASSIS_COLOUR = "#c51b7d"
+WHEEL_COLOUR = "#404040"
+
+
+def _draw_robot(ax, geom, row, alpha=1.0):
+    """Chassis (triangle through the three joint mounts, COM post) and the
+    three torus wheels at their steer and camber angles."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    rot, pos = robot.platform_pose(row)
+    mounts = [pos + rot @ b for b in robot.mount_points(geom)]
+    plate = Poly3DCollection([mounts], facecolor=CHASSIS_COLOUR, edgecolor="black",
+                             alpha=0.85 * alpha, linewidths=0.8, zorder=20)
+    ax.add_collection3d(plate)
+    for b in mounts:
+        ax.plot(*zip(pos, b), color=CHASSIS_COLOUR, linewidth=1.5, zorder=21)
+    grid = robot.torus_grid(geom)
+    for rot_w, centre in robot.wheel_frames_world(geom, row):
+        world = grid @ rot_w.T + centre
+        ax.plot_surface(world[..., 0], world[..., 1], world[..., 2], color=WHEEL_COLOUR,
+                        alpha=0.9 * alpha, linewidth=0, shade=True, zorder=22)
+    ax.scatter([pos[0]], [pos[1]], [pos[2]], color="black", s=10, zorder=23,
+               depthshade=False)
+
+
+def _snapshot_panel(ax, ctx, run, traj, geom):
+    spec = ctx.terrain_of(run)
+    ax.computed_zorder = False
+    box = _terrain_box(traj, margin=0.3)
+    finite = _finite_rows(traj)
+    zs = np.concatenate([traj[f"c{i}_z"][finite] for i in WHEELS] + [traj["z"]])
+    if spec is not None:
+        gx, gy, gz = _terrain_grid(spec, box, 60)
+        ax.plot_surface(gx, gy, gz, cmap="gist_earth", alpha=0.6, linewidth=0,
+                        antialiased=True, rstride=1, cstride=1, zorder=0)
+        zs = np.concatenate([zs, gz.ravel()])
+    for i, (wc, _) in zip(WHEELS, WHEEL_STYLES):
+        ax.plot(traj[f"c{i}_x"][finite], traj[f"c{i}_y"][finite],
+                traj[f"c{i}_z"][finite], color=wc, linewidth=1.2, zorder=5)
+    ax.plot(traj["x"], traj["y"], traj["z"], color="black", linewidth=1.0, zorder=5)
+    indices = [k for k in _snapshot_indices(traj, 3)
+               if robot.finite_pose(robot.row_at(traj, k))]
+    for n, k in enumerate(indices):
+        _draw_robot(ax, geom, robot.row_at(traj, k), alpha=0.45 + 0.55 * (n + 1) / len(indices))
+    top = float(np.nanmax(traj["z"])) + geom["z_h"]
+    low = float(np.nanmin(zs))
+    dx, dy, dz = box[1] - box[0], box[3] - box[2], top - low
+    ax.set_box_aspect((dx, dy, dz), zoom=1.15)  # true scale: wheels undistorted
+    ax.set_xlim(box[0], box[1])
+    ax.set_ylim(box[2], box[3])
+    ax.set_zlim(low, top)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_zlabel("z [m]", labelpad=-2)
+    ax.set_zticks([round(low, 2), round(top, 2)])
+    ax.view_init(elev=32, azim=-65)
+    cambers = np.concatenate([traj["delta2"][finite], traj["delta3"][finite]])
+    cambers = cambers[np.isfinite(cambers)]
+    mode = scene_mode(run, ctx.references) or run["scene"]
+    ax.set_title(f"{run['scene']} ({mode} mode)", fontsize=10)
+    return {"run": run, "times": [float(traj["t"][k]) for k in indices],
+            "max_camber_deg": float(np.degrees(np.max(np.abs(cambers)))) if cambers.size
+            else math.nan, "spec": spec}
 
 
 def figure_snapshots(ctx):
     run, traj = _primary(ctx)
-    spec = ctx.terrain(run["scene"])
-    fig = new_figure(9, 7)
-    ax = fig.add_subplot(projection="3d")
-    box = _terrain_box(traj)
-    finite = _finite_rows(traj)
-    zs = np.concatenate([traj[f"c{i}_z"][finite] for i in WHEELS] + [traj["z"]])
-    if spec is not None:
-        gx, gy, gz = _terrain_grid(spec, box, 70)
-        ax.plot_surface(gx, gy, gz, cmap="gist_earth", alpha=0.55, linewidth=0,
-                        antialiased=True, rstride=2, cstride=2)
-        zs = np.concatenate([zs, gz.ravel()])
-    else:
-        for i, (wc, _) in zip(WHEELS, WHEEL_STYLES):
-            ax.scatter(traj[f"c{i}_x"][finite], traj[f"c{i}_y"][finite],
-                       traj[f"c{i}_z"][finite], color=wc, s=3, alpha=0.5,
-                       label=f"contact locus wheel {i}")
-    ax.plot(traj["x"], traj["y"], traj["z"], color="black", linewidth=1.0,
-            label="platform centre path")
-    indices = _snapshot_indices(traj)
-    _draw_snapshots(ax, traj, indices)
-    dx, dy = box[1] - box[0], box[3] - box[2]
-    dz = max(float(np.nanmax(zs) - np.nanmin(zs)), 1e-6)
-    dz_box = 0.3 * max(dx, dy)
-    ax.set_box_aspect((dx, dy, dz_box))
-    ax.set_xlim(box[0], box[1])
-    ax.set_ylim(box[2], box[3])
-    ax.set_zlim(float(np.nanmin(zs)), float(np.nanmin(zs)) + dz)
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_zlabel("z [m]")
-    ax.view_init(elev=28, azim=-60)
-    for i, (wc, _) in zip(WHEELS, WHEEL_STYLES):
-        ax.plot([], [], "o", color=wc, label=f"wheel {i} contact")
-    ax.legend(loc="upper left", fontsize=7)
-    exaggeration = dz_box / dz
-    surface = (f"terrain surface from terrains/{run['scene']}.json "
-               f"({describe_terrain(spec)})" if spec is not None else
-               f"no terrains/{run['scene']}.json, so the contact-point locus is "
-               "drawn without a terrain surface")
+    pairs = [(run, traj)]
+    if ctx.primary_pvc is not None:
+        pairs.append((ctx.primary_pvc, ctx.trajectories.get(ctx.primary_pvc)))
+    fig = new_figure(7.5 * len(pairs), 4.4)
+    panels = []
+    for k, (r, t) in enumerate(pairs):
+        ax = fig.add_subplot(1, len(pairs), k + 1, projection="3d")
+        geom = robot_geometry(ctx.references.get(r.get("ref_hash", "")))
+        panels.append(_snapshot_panel(ax, ctx, r, t, geom))
+    handles = [Patch(facecolor=CHASSIS_COLOUR, label="chassis (joint mounts, COM)"),
+               Patch(facecolor=WHEEL_COLOUR, label="torus wheels (steer, camber)"),
+               Line2D([], [], color="black", label="COM path")]
+    handles += [Line2D([], [], color=wc, label=f"contact path wheel {i}")
+                for i, (wc, _) in zip(WHEELS, WHEEL_STYLES)]
+    fig.legend(handles=handles, loc="lower center", ncol=6, fontsize=8, frameon=False)
+    parts = []
+    for p in panels:
+        r = p["run"]
+        surface = (describe_terrain(p["spec"]) if p["spec"] is not None
+                   else "none (no terrain file: drawn without a terrain surface)")
+        parts.append(f"{r['scene']}: {_run_text(r)} at t = "
+                     + ", ".join(f"{t:.3g}" for t in p["times"])
+                     + f" s, largest camber |δ| {fmt(p['max_camber_deg'], 2)}°, terrain "
+                     + surface)
+    if ctx.primary_pvc is None:
+        parts.append("no successful pvc-mode run at μ = 0.5 with a trajectory, so "
+                     "only paper mode is shown")
     caption = (
-        "Fig. 5 — the paper shows snapshots of the robot crossing the rough "
-        "terrain R1, the platform drawn as the triangle through its three "
-        f"wheel-terrain contact points. This run: {_run_text(run)}, "
-        f"{len(indices)} snapshots at t = "
-        + ", ".join(f"{traj['t'][k]:.3g}" for k in indices)
-        + f" s; {surface}; vertical scale exaggerated about "
-        f"{fmt(exaggeration, 2)}×.")
-    return save_figure(fig, ctx.out_dir, "fig05_snapshots",
-                       "Fig. 5 — snapshots on the terrain", caption)
+        "Fig. 5 — the paper shows the robot crossing the rough terrain R1. "
+        "Here the robot itself is drawn at true scale (no vertical exaggeration) "
+        "from the trajectory's pose and joint angles: chassis triangle through "
+        "the steer and camber joints, the three torus wheels at their steer and "
+        "camber angles (each recorded contact point lies on its drawn torus), "
+        "faded for earlier times, with the COM and contact paths; paper mode "
+        "and passive-variable-camber mode side by side. " + "; ".join(parts) + ".")
+    record = save_figure(fig, ctx.out_dir, "fig05_snapshots",
+                         "Fig. 5 — the robot on the terrain", caption)
+    record.data = {"panels": [{"scene": p["run"]["scene"], "run_id": p["run"]["run_id"],
+                               "times": p["times"]} for p in panels]}
+    return record
 
 
 # ---------------------------------------------------------------- Fig. 6
 
 def figure_locus(ctx):
     run, traj = _primary(ctx)
-    spec = ctx.terrain(run["scene"])
+    spec = ctx.terrain_of(run)
     fig = new_figure(8, 6)
     ax = fig.add_subplot()
     if spec is not None:
@@ -306,6 +352,7 @@ def trajectory_metrics(traj):
 
 
 def _sweep_data(ctx):
+    """(scenes, ok, metrics, failed) of the μ sweep, one entry per scene."""
     rows = sel.mu_sweep_rows(ctx.runs)
     ok = [r for r in rows if is_success(r) and ctx.trajectories.has(r)
           and ctx.trajectories.get(r) is not None]
@@ -314,102 +361,212 @@ def _sweep_data(ctx):
                           "figures 13-14")
     metrics = {r["run_id"]: trajectory_metrics(ctx.trajectories.get(r)) for r in ok}
     failed = [r for r in rows if not is_success(r)]
-    return ok, metrics, failed
+    scenes = sorted({r["scene"] for r in rows},
+                    key=lambda s: (s != sel.PAPER_SCENE, s))
+    return scenes, ok, metrics, failed
 
 
-def _per_method_curve(ax, ctx, ok, metrics, key):
+def _scene_mu_min(ctx, scene):
+    """μ_min the scene needs (ref_mu_min), from its μ-sweep rows, else from
+    any row of the scene; nan when the results do not carry it."""
+    value = sel.scene_mu_min([r for r in sel.mu_sweep_rows(ctx.runs) if r["scene"] == scene])
+    if not is_finite(value):
+        value = sel.scene_mu_min([r for r in ctx.runs if r["scene"] == scene])
+    return value
+
+
+def _per_method_curve(ax, ok, metrics, key):
+    curves = {}
     for method in sel.method_names(ok):
         mine = sorted((r["mu"], metrics[r["run_id"]][key]) for r in ok
                       if r["method"] == method)
         mus = sorted({m for m, _ in mine})
         vals = [float(np.nanmedian([v for m, v in mine if m == mu])) for mu in mus]
-        colour, marker = ctx.styles[method]
-        ax.plot(mus, vals, color=colour, marker=marker, label=method)
+        colour, marker, line = method_style(method)
+        ax.plot(mus, vals, color=colour, marker=marker, linestyle=line, label=method)
+        curves[method] = list(zip(mus, vals))
+    return curves
 
 
-def _mark_failures(ax, ctx, failed):
+def _mark_failures(ax, failed):
     trans = blended_transform_factory(ax.transData, ax.transAxes)
     labelled = set()
     for k, r in enumerate(sorted(failed, key=lambda r: (r["mu"], r["method"]))):
-        colour = ctx.styles[r["method"]][0]
+        colour = method_style(r["method"])[0]
         ax.plot([r["mu"]], [0.04 + 0.03 * (k % 3)], marker="x", color=colour,
                 markersize=9, markeredgewidth=2, transform=trans, linestyle="none")
-        if (r["mu"], r["status"]) not in labelled:
-            labelled.add((r["mu"], r["status"]))
-            ax.text(r["mu"], 0.14, " " + r["status"], rotation=90, fontsize=6.5,
+        cls, detail = sel.failure_cause(r)
+        text = r["status"] if cls == sel.UNKNOWN else f"{cls}: {detail}"
+        if (r["mu"], text) not in labelled:
+            labelled.add((r["mu"], text))
+            ax.text(r["mu"], 0.14, " " + text, rotation=90, fontsize=6.5,
                     ha="center", va="bottom", transform=trans, color="#333333")
-    if failed:
-        ax.plot([], [], "x", color="#444444", markeredgewidth=2,
-                label="failed μ (status)")
 
 
-def _mu_min_line(ax, rows):
-    values = [r.get("mu_min") for r in rows]
-    values = [v for v in values if isinstance(v, float) and math.isfinite(v)]
-    if values:
-        ax.axvline(float(np.median(values)), color="grey", linestyle=":",
-                   label=f"μ_min ≈ {fmt(float(np.median(values)))}")
+def _mu_min_line(ax, mu_min):
+    if is_finite(mu_min):
+        ax.axvline(mu_min, color="grey", linestyle=":", linewidth=1.6)
+        ax.text(mu_min, 0.98, f" μ_min(ref) = {fmt(mu_min)}", rotation=90, fontsize=7,
+                ha="right", va="top", color="#444444",
+                transform=blended_transform_factory(ax.transData, ax.transAxes))
 
 
 def _failed_text(failed):
     if not failed:
         return "no μ failed"
-    return "failed: " + ", ".join(
-        f"μ={fmt(r['mu'])} {r['method']} {r['status']}" for r in failed)
+    parts = {}
+    for r in failed:
+        cls, detail = sel.failure_cause(r)
+        what = r["status"] if cls == sel.UNKNOWN else f"{cls} {detail}"
+        parts.setdefault((r["scene"], r["mu"], what), []).append(r["method"])
+    return "failed: " + "; ".join(f"{scene} μ={fmt(mu)} {what} ({len(m)} methods)"
+                                  for (scene, mu, what), m in sorted(parts.items()))
+
+
+def _scene_title(ctx, scene, rows):
+    mode = scene_mode(rows[0], ctx.references) if rows else ""
+    return f"{scene}" + (f" ({mode} mode)" if mode else "")
+
+
+def _sweep_legend(fig, gs_cell, ok, failed):
+    extra = [Line2D([], [], color="grey", linestyle=":", label="μ_min(ref): friction\nthe scene needs")]
+    if failed:
+        extra.append(Line2D([], [], marker="x", color="#444444", markeredgewidth=2,
+                            linestyle="none", label="failed at this μ"))
+    ax = fig.add_subplot(gs_cell)
+    ax.axis("off")
+    ax.legend(handles=style_legend_handles(ok, extra), loc="upper left", frameon=False)
+
+
+def _common_mu_ratio(ctx, scenes, ok, metrics, key):
+    """(μ, {scene: median value}) at the μ closest to 0.5 where every scene
+    has a successful run; (nan, {}) if none."""
+    per_scene = {s: {} for s in scenes}
+    for r in ok:
+        per_scene[r["scene"]].setdefault(r["mu"], []).append(metrics[r["run_id"]][key])
+    common = set.intersection(*(set(v) for v in per_scene.values())) if per_scene else set()
+    if not common:
+        return math.nan, {}
+    mu = min(common, key=lambda m: (abs(m - sel.PAPER_MU), m))
+    return mu, {s: float(np.nanmedian(per_scene[s][mu])) for s in scenes}
 
 
 def figure_traction_vs_mu(ctx):
-    ok, metrics, failed = _sweep_data(ctx)
-    fig = new_figure(11, 4.4)
-    ax_total, ax_wheel = fig.subplots(1, 2)
-    _per_method_curve(ax_total, ctx, ok, metrics, "mean_total_traction")
-    _mark_failures(ax_total, ctx, failed)
-    _mu_min_line(ax_total, ok + failed)
-    ax_total.set_xlabel("friction coefficient μ [-]")
-    ax_total.set_ylabel("mean Σ_i ‖traction_i‖ [N]")
-    ax_total.set_title("total traction per method")
-    ax_total.legend(loc="upper right", fontsize=7)
-    main = ctx.primary["method"] if ctx.primary is not None and any(
-        r["method"] == ctx.primary["method"] for r in ok) else sel.method_names(ok)[0]
-    mine = sorted((r for r in ok if r["method"] == main), key=lambda r: r["mu"])
-    for i, (colour, style) in zip(WHEELS, WHEEL_STYLES):
-        ax_wheel.plot([r["mu"] for r in mine],
-                      [metrics[r["run_id"]]["mean_abs_lon"][i - 1] for r in mine],
-                      color=colour, linestyle=style, marker="o", label=f"wheel {i}")
-    ax_wheel.set_xlabel("friction coefficient μ [-]")
-    ax_wheel.set_ylabel("mean |longitudinal traction| [N]")
-    ax_wheel.set_title(f"per wheel, {main}")
-    ax_wheel.legend(loc="best")
-    best = [(r["mu"], metrics[r["run_id"]]["mean_total_traction"]) for r in mine]
+    scenes, ok, metrics, failed = _sweep_data(ctx)
+    n = len(scenes)
+    fig = new_figure(4.4 * n + 2.6, 7.6)
+    gs = fig.add_gridspec(2, n + 1, width_ratios=[1] * n + [0.6])
+    panels = []
+    share_total = share_wheel = None
+    for k, scene in enumerate(scenes):
+        mine_ok = [r for r in ok if r["scene"] == scene]
+        mine_failed = [r for r in failed if r["scene"] == scene]
+        ax_total = fig.add_subplot(gs[0, k], sharey=share_total)
+        ax_wheel = fig.add_subplot(gs[1, k], sharey=share_wheel)
+        share_total, share_wheel = share_total or ax_total, share_wheel or ax_wheel
+        curves = _per_method_curve(ax_total, mine_ok, metrics, "mean_total_traction")
+        _mark_failures(ax_total, mine_failed)
+        mu_min = _scene_mu_min(ctx, scene)
+        _mu_min_line(ax_total, mu_min)
+        title = _scene_title(ctx, scene, mine_ok or mine_failed)
+        ax_total.set_title(f"{title}: total traction per method", fontsize=9)
+        ax_total.set_xlabel("friction coefficient μ [-]")
+        ax_total.set_ylabel("mean Σ_i ‖traction_i‖ [N]")
+        if not mine_ok:
+            no_data(ax_total, "no successful run")
+            no_data(ax_wheel, "no successful run")
+            panels.append({"scene": scene, "methods": [], "mu_min": mu_min})
+            continue
+        main = _main_method(ctx, mine_ok)
+        runs = sorted((r for r in mine_ok if r["method"] == main), key=lambda r: r["mu"])
+        for i, (colour, style) in zip(WHEELS, WHEEL_STYLES):
+            ax_wheel.plot([r["mu"] for r in runs],
+                          [metrics[r["run_id"]]["mean_abs_lon"][i - 1] for r in runs],
+                          color=colour, linestyle=style, marker="o", label=f"wheel {i}")
+        _mu_min_line(ax_wheel, mu_min)
+        ax_wheel.set_xlabel("friction coefficient μ [-]")
+        ax_wheel.set_ylabel("mean |longitudinal traction| [N]")
+        ax_wheel.set_title(f"{scene}: per wheel, {main}", fontsize=9)
+        ax_wheel.legend(loc="best", fontsize=7)
+        panels.append({"scene": scene, "methods": sorted(curves), "mu_min": mu_min,
+                       "curves": {m: c for m, c in curves.items()}})
+    _sweep_legend(fig, gs[:, n], ok, failed)
+    mu, values = _common_mu_ratio(ctx, scenes, ok, metrics, "mean_total_traction")
+    compare = (", ".join(f"{s} {fmt(v)} N" for s, v in values.items()) + f" at μ={fmt(mu)}"
+               if values else "no μ where every scene succeeded")
+    needs = "; ".join(f"{p['scene']} needs μ ≥ {fmt(p['mu_min'])}" for p in panels
+                      if is_finite(p["mu_min"]))
     caption = (
         "Fig. 13 — the paper shows how the traction the wheels develop varies "
-        "with the friction coefficient μ. This run: mean total traction "
-        + ", ".join(f"{fmt(v)} N at μ={fmt(m)}" for m, v in best)
-        + f" ({main}); {_failed_text(failed)}.")
-    return save_figure(fig, ctx.out_dir, "fig13_traction_vs_mu",
-                       "Fig. 13 — traction vs μ", caption)
+        "with μ, for the paper's fixed-camber mode and for the passive variable "
+        "camber (pvc). One column per scene/mode (never averaged over them), one "
+        "curve per method (median over runs at a μ); bottom row per wheel for one "
+        f"method. This run: mean total traction {compare}"
+        + (f"; {needs} (μ_min(ref): the solver's μ_min maximised over the "
+           "reference trajectory)" if needs else
+           "; μ_min not drawn (these results carry no ref_mu_min column)")
+        + f"; {_failed_text(failed)}.")
+    record = save_figure(fig, ctx.out_dir, "fig13_traction_vs_mu",
+                         "Fig. 13 — traction vs μ", caption)
+    record.data = {"panels": panels}
+    return record
+
+
+def _main_method(ctx, ok):
+    names = sel.method_names(ok)
+    if ctx.primary is not None and ctx.primary["method"] in names:
+        return ctx.primary["method"]
+    return names[0]
 
 
 def figure_total_slip_vs_mu(ctx):
-    ok, metrics, failed = _sweep_data(ctx)
-    fig = new_figure(8, 4.4)
-    ax = fig.add_subplot()
-    _per_method_curve(ax, ctx, ok, metrics, "total_slip")
-    _mark_failures(ax, ctx, failed)
-    _mu_min_line(ax, ok + failed)
+    scenes, ok, metrics, failed = _sweep_data(ctx)
+    n = len(scenes)
+    fig = new_figure(4.4 * n + 2.6, 4.6)
+    gs = fig.add_gridspec(1, n + 1, width_ratios=[1] * n + [0.6])
     values = [metrics[r["run_id"]]["total_slip"] for r in ok]
-    if spans_decades(values, 1.0):
-        ax.set_yscale("log")
-    ax.set_xlabel("friction coefficient μ [-]")
-    ax.set_ylabel("total slip ∫Σ_i ‖s_i‖ dt [m]")
-    ax.legend(loc="best", fontsize=7)
-    pairs = sorted((r["mu"], metrics[r["run_id"]]["total_slip"]) for r in ok)
+    log = spans_decades(values, 1.0)
+    panels, share = [], None
+    for k, scene in enumerate(scenes):
+        ax = fig.add_subplot(gs[0, k], sharey=share)
+        share = share or ax
+        mine_ok = [r for r in ok if r["scene"] == scene]
+        curves = _per_method_curve(ax, mine_ok, metrics, "total_slip")
+        _mark_failures(ax, [r for r in failed if r["scene"] == scene])
+        mu_min = _scene_mu_min(ctx, scene)
+        _mu_min_line(ax, mu_min)
+        if log:
+            ax.set_yscale("log")
+        ax.set_xlabel("friction coefficient μ [-]")
+        ax.set_ylabel("total slip ∫Σ_i ‖s_i‖ dt [m]")
+        ax.set_title(_scene_title(ctx, scene, mine_ok or failed), fontsize=9)
+        if not mine_ok:
+            no_data(ax, "no successful run")
+        panels.append({"scene": scene, "methods": sorted(curves), "mu_min": mu_min,
+                       "curves": curves})
+    _sweep_legend(fig, gs[0, n], ok, failed)
+    mu, per_scene = _common_mu_ratio(ctx, scenes, ok, metrics, "total_slip")
+    headline = ""
+    if len(per_scene) >= 2:
+        ordered = sorted(per_scene.items(), key=lambda kv: kv[1])
+        (low_s, low_v), (high_s, high_v) = ordered[0], ordered[-1]
+        ratio = high_v / low_v if low_v > 0 else math.inf
+        headline = (f" At μ={fmt(mu)}: {', '.join(f'{s} {fmt(v)} m' for s, v in per_scene.items())}"
+                    f" — {low_s} slips {fmt(ratio, 2)}× less than {high_s}.")
+    needs = "; ".join(f"{p['scene']} needs μ ≥ {fmt(p['mu_min'])}" for p in panels
+                      if is_finite(p["mu_min"]))
     caption = (
-        "Fig. 14 — the paper shows the accumulated slip falling as μ grows. "
-        "This run: " + ", ".join(f"{fmt(v)} m at μ={fmt(m)}" for m, v in pairs[:8])
-        + ("…" if len(pairs) > 8 else "") + f"; {_failed_text(failed)}.")
-    return save_figure(fig, ctx.out_dir, "fig14_total_slip_vs_mu",
-                       "Fig. 14 — total slip vs μ", caption)
+        "Fig. 14 — the paper shows the accumulated slip falling as μ grows and "
+        "the passive variable camber slipping far less than the fixed camber, "
+        "at the price of needing more friction. One panel per scene/mode on a "
+        "shared axis (never averaged over them), one curve per method." + headline
+        + (f" {needs} (μ_min(ref), dotted)." if needs else
+           " μ_min not drawn (these results carry no ref_mu_min column).")
+        + f" {_failed_text(failed)}.")
+    record = save_figure(fig, ctx.out_dir, "fig14_total_slip_vs_mu",
+                         "Fig. 14 — total slip vs μ", caption)
+    record.data = {"panels": panels, "compare_mu": mu, "per_scene": per_scene}
+    return record
 
 
 # ---------------------------------------------------------------- Fig. 15
@@ -425,8 +582,9 @@ def figure_stabilisation(ctx):
     parts = []
     for run in pair:
         traj = ctx.trajectories.get(run)
-        colour, marker = ctx.styles[run["method"]]
+        colour, marker, line = ctx.styles[run["method"]]
         ax.plot(traj["t"], positive(traj["drift"]), color=colour, marker=marker,
+                linestyle=line,
                 markevery=0.1, label=f"{run['dae']} ({run['method']}, "
                 f"Δt={fmt(run['dt'])} s"
                 + (f", σ={fmt(run['sigma'])} 1/s)" if is_finite(run["sigma"]) else ")"))

@@ -1,11 +1,17 @@
-"""The static, self-contained index.html (no JavaScript)."""
+"""The static, self-contained index.html (no JavaScript of its own; the 3D
+replay is a separate page in an iframe)."""
 
 import json
 import math
 from html import escape
 
+from . import selection as sel
 from .data import is_finite
-from .plotting import NOT_RUN_COLOUR, fmt, status_colours
+from .findings import qs_rows, qs_threshold
+from .plotting import NOT_RUN_COLOUR, cause_colour, fmt, text_colour
+from .problems import (dae_marker, nlp_colour, problem_label, problem_sort_key,
+                       reference_field)
+from .repro import command_lines, copy_inputs, environment
 
 MARKER_GLYPHS = {"o": "●", "s": "■", "^": "▲", "D": "◆", "v": "▼", "P": "✚",
                  "X": "✖", "*": "★", "<": "◀", ">": "▶", "h": "⬢", "p": "⬟"}
@@ -23,6 +29,7 @@ figure img { max-width: 100%; height: auto; border: 1px solid #ddd; }
 figcaption { font-size: 0.92em; margin-top: 0.3em; }
 .swatch { font-size: 1.2em; }
 .note { color: #8a4b00; }
+.warn { background: #fff3cd; border: 1px solid #e0b000; padding: 0.5em; }
 table.map td { text-align: center; font-size: 0.8em; min-width: 2.5em; }
 .scroll { overflow-x: auto; }
 pre { background: #f6f6f6; padding: 0.6em; overflow-x: auto; font-size: 0.85em; }
@@ -81,59 +88,175 @@ def metadata_table(meta):
     return "\n".join(out)
 
 
+def _style_swatch(colour, marker, line):
+    dash = "solid" if line == "-" else "dashed"
+    return (f'<span class="swatch" style="color:{colour};border-bottom:2px {dash} {colour}">'
+            f'{MARKER_GLYPHS.get(marker, "●")}</span>')
+
+
+def _swatch(styles, method):
+    return _style_swatch(*styles[method])
+
+
 def summary_table(summary, styles, failed_only):
     out = ["<table>", "<tr><th></th><th>method (nlp/dae/coupling)</th><th>runs</th>"
-           "<th>status counts</th><th>median wall [s]</th>"
-           "<th>median err_pos_rms [m]</th><th>max drift ‖H‖∞</th></tr>"]
+           "<th>status counts</th><th>failures: physical / numerical / unclassified</th>"
+           "<th>max drift ‖H‖∞ (successes)</th><th>max KKT residual (successes)</th></tr>"]
     for row in summary:
         counts = ", ".join(f"{escape(s)} {n}" for s, n in
                            sorted(row["status_counts"].items(),
                                   key=lambda kv: (kv[0] != "success", kv[0])))
         note = ' <span class="note">(all runs failed)</span>' \
             if row["method"] in failed_only else ""
+        causes = row["cause_counts"]
         out.append(
             f"<tr><td>{_swatch(styles, row['method'])}</td>"
             f"<td>{escape(row['method'])}{note}</td>"
             f'<td class="num">{row["runs"]}</td><td>{counts}</td>'
-            + _num(row["median_wall_s"]) + _num(row["median_err_pos_rms"])
-            + _num(row["max_drift"]) + "</tr>")
+            f'<td class="num">{causes.get("physical", 0)} / {causes.get("numerical", 0)}'
+            f' / {causes.get("unknown", 0)}</td>'
+            + _num(row["max_drift"]) + _num(row["max_kkt"]) + "</tr>")
     out.append("</table>")
     return "\n".join(out)
 
 
 def bands_table(bands, styles):
     if not bands:
-        return "<p>No successful run with a finite err_pos_rms.</p>"
-    out = ["<table>", "<tr><th>err_pos_rms band [m]</th><th>fastest method</th>"
-           "<th>Δt [s]</th><th>tol</th><th>wall [s]</th><th>err_pos_rms [m]</th>"
-           "<th>runs in band</th></tr>"]
-    for decade, run, count in bands:
+        return "<p>No successful work-precision run with a finite err_pos_rms.</p>"
+    out = []
+    for problem, rows in bands:
+        out.append(f"<h3>{escape(problem['label'])}</h3>")
+        if not rows:
+            out.append("<p>No successful run with a finite err_pos_rms.</p>")
+            continue
+        out += ["<table>", "<tr><th>err_pos_rms band [m]</th><th>fastest method</th>"
+                "<th>Δt [s]</th><th>tol</th><th>wall [s]</th><th>wall spread [s]</th>"
+                "<th>wall / simulated s</th><th>err_pos_rms [m]</th><th>runs in band</th></tr>"]
+        for decade, run, count in rows:
+            wall, low, high = sel.timing(run)
+            per = wall / run["t_reached"] if is_finite(run["t_reached"]) and run["t_reached"] > 0 \
+                else math.nan
+            spread = f"{fmt(low)} – {fmt(high)}" if high > low else "–"
+            out.append(
+                f"<tr><td>[1e{decade}, 1e{decade + 1})</td>"
+                f"<td>{_swatch(styles, run['method'])} {escape(sel.line_key(run))}</td>"
+                + _num(run["dt"]) + _num(run["tol"]) + _num(wall)
+                + f'<td class="num">{escape(spread)}</td>' + _num(per)
+                + _num(run["err_pos_rms"]) + f'<td class="num">{count}</td></tr>')
+        out.append("</table>")
+    return "\n".join(out)
+
+
+def _reference_method(spec):
+    """Human text of a reference's method from its canonical key."""
+    kind = spec.get("kind", "")
+    if kind.startswith("analytic"):
+        return "closed form (" + kind.split(":", 1)[-1] + ")"
+    fields = {name: reference_field(spec, name) for name in
+              ("dt_divisor", "substeps", "nlp", "residual_tolerance", "coupling",
+               "dae", "rk", "dt")}
+    try:
+        scene_dt = float(fields["dt"])
+        out_dt = scene_dt / float(fields["dt_divisor"])
+        step = out_dt / float(fields["substeps"])
+    except (TypeError, ValueError, ZeroDivisionError):
+        out_dt = step = math.nan
+    if kind.endswith("dp54"):
+        scheme = "DP5(4), rtol 1e-10 / atol 1e-12"
+    else:
+        scheme = f"{(fields['rk'] or 'rk4').upper()}, step {fmt(step)} s"
+    parts = [f"{fields['coupling'] or 'coupled'} {fields['dae'] or 'rk-projection'}",
+             scheme, f"output every {fmt(out_dt)} s",
+             f"{fields['nlp'] or 'newton'} at residual {fields['residual_tolerance'] or '?'}"]
+    for key in ("method", "dt", "tolerance", "check_method", "check_kind"):
+        if key in spec and not isinstance(spec[key], (dict, list)):
+            parts.append(f"{key} {spec[key]}")
+    return "; ".join(parts)
+
+
+def references_table(ctx):
+    used = {}
+    for run in ctx.runs:
+        if run.get("ref_hash"):
+            used.setdefault(run["ref_hash"], run)
+    if not used:
+        return ('<p class="note">These results name no reference per run (no '
+                "<code>ref_hash</code> column): references not listed.</p>")
+    has_est = any(is_finite(r.get("ref_err_est", math.nan)) for r in ctx.runs)
+    out = []
+    if not has_est:
+        out.append('<p class="note">No <code>ref_err_est</code> column: the references\' '
+                   "own errors were not estimated by this harness version.</p>")
+    out += ["<table>", "<tr><th>problem</th><th>reference (ref_hash)</th><th>kind</th>"
+            "<th>method</th><th>status</th><th>t_reached [s]</th>"
+            "<th>estimated error [m]</th><th>μ_min along it</th><th>runs</th></tr>"]
+    for ref_hash, run in sorted(used.items(), key=lambda kv: problem_sort_key(kv[1])):
+        spec = ctx.references.get(ref_hash, {})
+        rows = [r for r in ctx.runs if r.get("ref_hash") == ref_hash]
+        est = max([r["ref_err_est"] for r in rows if is_finite(r.get("ref_err_est", math.nan))],
+                  default=math.nan)
+        mu_min = max([r["ref_mu_min"] for r in rows if is_finite(r.get("ref_mu_min", math.nan))],
+                     default=math.nan)
         out.append(
-            f"<tr><td>[1e{decade}, 1e{decade + 1})</td>"
-            f"<td>{_swatch(styles, run['method'])} {escape(run['method'])}</td>"
-            + _num(run["dt"]) + _num(run["tol"]) + _num(run["wall_s"])
-            + _num(run["err_pos_rms"]) + f'<td class="num">{count}</td></tr>')
+            f"<tr><td>{escape(problem_label(run, ctx.references))}</td>"
+            f"<td><code>{escape(ref_hash)}</code></td>"
+            f"<td>{escape(spec.get('kind', run.get('ref_kind', '')) or 'unknown')}</td>"
+            f"<td>{escape(_reference_method(spec) if spec else 'references/' + ref_hash + '.json missing')}</td>"
+            f"<td>{escape(str(spec.get('status', run.get('ref_status', ''))))}</td>"
+            + _num(spec.get("t_reached", math.nan) if isinstance(spec.get("t_reached"), float)
+                   else math.nan) + _num(est) + _num(mu_min)
+            + f'<td class="num">{len(rows)}</td></tr>')
     out.append("</table>")
     return "\n".join(out)
 
 
-def failure_map_table(smap):
-    colours = status_colours(smap["statuses"])
-    head = "".join(f"<th>{escape(c['group'])}<br>{escape(c['label'])}</th>"
-                   for c in smap["columns"])
-    out = ['<div class="scroll"><table class="map">', f"<tr><th>method</th>{head}</tr>"]
-    for method in smap["methods"]:
-        cells = []
-        for cell in smap["cells"][method]:
-            if cell is None:
-                cells.append(f'<td style="background:{NOT_RUN_COLOUR}">–</td>')
-                continue
-            status, label = cell
-            text = "ok" if status == "success" else status + (f" ({label})" if label else "")
-            cells.append(f'<td style="background:{colours[status]};color:white">'
-                         f"{escape(text)}</td>")
-        out.append(f"<tr><th>{escape(method)}</th>{''.join(cells)}</tr>")
-    out.append("</table></div>")
+def qs_table(ctx):
+    rows = qs_rows(ctx.runs, ctx.references)
+    threshold, source = qs_threshold(ctx.meta)
+    why = (f"<p>Quasi-static validity: <code>qs_inertia_ratio</code> is, over a run, the "
+           "largest ratio of the inertial load the quasi-static model neglects "
+           "(m|a_com| plus the rotational term) to the contact load it balances "
+           f"(docs/model.md). Threshold {fmt(threshold)} ({escape(source)}): the "
+           "neglected inertia perturbs the contact forces by about that fraction, "
+           "below the uncertainty of a Coulomb friction coefficient; above it the "
+           "scene needs dynamics.</p>")
+    if not rows:
+        return why + ('<p class="note">No <code>qs_inertia_ratio</code> column in these '
+                      "results: validity not shown.</p>")
+    out = [why, "<table>", "<tr><th>problem</th><th>runs</th><th>max ratio</th>"
+           "<th>median ratio</th><th>verdict</th></tr>"]
+    for label, _, count, worst, median in rows:
+        verdict = "quasi-static valid" if worst <= threshold else \
+            '<span class="note">exceeds the threshold: needs dynamics</span>'
+        out.append(f"<tr><td>{escape(label)}</td><td class=\"num\">{count}</td>"
+                   + _num(worst) + _num(median) + f"<td>{verdict}</td></tr>")
+    out.append("</table>")
+    return "\n".join(out)
+
+
+def stability_table(chart):
+    out = []
+    for panel in chart["panels"]:
+        head = "".join(f"<th>{escape(sel.format_value(v))}</th>" for v in panel["values"])
+        out += [f"<p><b>{escape(chart['group'])}</b> — {escape(panel['label'])}</p>",
+                '<div class="scroll"><table class="map">',
+                f"<tr><th>method \\ {escape(chart['axis_label'])}</th>{head}</tr>"]
+        for row in panel["rows"]:
+            cells = []
+            for j in range(len(panel["values"])):
+                cell = panel["cells"].get((row, j))
+                if cell is None:
+                    cells.append(f'<td style="background:{NOT_RUN_COLOUR}">–</td>')
+                    continue
+                colour = cause_colour(cell["cls"], cell["detail"])
+                what = ("ok" if cell["cls"] == "success" else
+                        f"{cell['status']}" if cell["cls"] == "unknown" else
+                        f"{cell['cls']}: {cell['detail']}")
+                cells.append(f'<td style="background:{colour};color:{text_colour(colour)}" '
+                             f'title="{escape(cell["run_id"])}">{escape(what)} '
+                             f"{escape(cell['label'])}</td>")
+            out.append(f"<tr><th>{escape(row)}</th>{''.join(cells)}</tr>")
+        out.append("</table></div>")
     return "\n".join(out)
 
 
@@ -145,23 +268,98 @@ def figure_block(record):
             f'[<a href="{escape(record.svg)}">SVG</a>]</figcaption></figure>')
 
 
-def render_page(ctx, summary, bands, figures, smap, warnings):
+def style_key(ctx):
+    nlps = sorted({r["nlp"] for r in ctx.runs})
+    daes = sorted({r["dae"] for r in ctx.runs})
+    parts = [f'<span class="swatch" style="color:{nlp_colour(n)}">■</span> {escape(n)}'
+             for n in nlps]
+    parts += [f"{MARKER_GLYPHS.get(dae_marker(d), '●')} {escape(d)}" for d in daes]
+    return ("<p>Styles in every figure: colour = NLP backend, marker = integrator, "
+            "solid line = zoh, dashed = coupled. " + " &nbsp; ".join(parts) + "</p>")
+
+
+def hosts_note(ctx):
+    hosts = sorted({r.get("host", "") for r in ctx.runs if r.get("host")})
+    if len(hosts) <= 1:
+        return ""
+    cpus = sorted({r.get("cpu_model", "") for r in ctx.runs if r.get("cpu_model")})
+    return (f'<p class="warn">Mixed hosts: these rows ran on {len(hosts)} machines '
+            f"({escape(', '.join(hosts))}; CPUs: {escape(', '.join(cpus) or 'unknown')}). "
+            "Wall times of different hosts are not comparable: timing comparisons "
+            "below mix machines.</p>")
+
+
+def repro_section(ctx):
+    meta = ctx.meta
+    copies = copy_inputs(meta, ctx.results_dir, ctx.out_dir)
+    out = ["<p>Commands (from the repository root, after <code>scripts/install-deps.sh"
+           "</code> and a Release build):</p>",
+           "<pre>" + escape("\n".join(command_lines(meta, ctx.results_dir))) + "</pre>",
+           metadata_table(meta), "<table>"]
+    out += [f"<tr><th>{escape(k)}</th><td>{escape(v)}</td></tr>" for k, v in environment()]
+    out.append("</table>")
+    if copies["files"]:
+        out.append("<p>Copies of the inputs: " + ", ".join(
+            f'<a href="{escape(path)}">{escape(label)}</a>' for label, path in copies["files"])
+            + ".</p>")
+    for note in copies["notes"]:
+        out.append(f'<p class="note">{escape(note)}</p>')
+    return "\n".join(out)
+
+
+def missing_features(ctx):
+    """Notes for features the results cannot support (older harness output)."""
+    header = set(ctx.header)
+    notes = []
+    checks = [("wall_s_median", "timing spread (median, min–max error bars): wall times "
+               "are the minimum over repeats"),
+              ("cause", "failure causes (physical vs numerical): failures are shown "
+               "unclassified, in grey, with their status"),
+              ("ref_err_est", "the references' estimated errors (no error floor drawn)"),
+              ("ref_mu_min", "μ_min of the references (no μ_min line in Figs. 13-14 and "
+               "the μ stability chart)"),
+              ("qs_inertia_ratio", "quasi-static validity per scene"),
+              ("kkt_residual", "verified optimality (KKT residual) of successful runs")]
+    for column, what in checks:
+        if column not in header:
+            notes.append(f"These results have no <code>{column}</code> column "
+                         f"(older harness): omitted — {what}.")
+    return notes
+
+
+def render_page(ctx, summary, bands, figures, warnings, findings=(), replay=""):
     parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
              "<title>quasiroll comparison report</title>",
              f"<style>{CSS}</style></head><body>",
              "<h1>quasiroll comparison report</h1>",
              f"<p>{len(ctx.runs)} runs of {len(summary)} methods from "
-             f"<code>{escape(ctx.results_dir)}</code>.</p>"]
+             f"<code>{escape(ctx.results_dir)}</code>.</p>", hosts_note(ctx)]
     if warnings:
         parts.append("<ul>" + "".join(f'<li class="note">{escape(w)}</li>'
                                       for w in warnings) + "</ul>")
-    parts += ["<h2>Summary per method</h2>",
+    parts += ['<h2 id="findings">Key findings</h2>',
+              "<ul>" + "".join(f"<li>{escape(f)}</li>" for f in findings) + "</ul>"
+              if findings else "<p>No finding could be computed from these results.</p>"]
+    missing = missing_features(ctx)
+    if missing:
+        parts.append("<ul>" + "".join(f'<li class="note">{m}</li>' for m in missing) + "</ul>")
+    parts += [style_key(ctx),
+              "<h2>Summary per method</h2>",
+              "<p>Counts over every run of the method (all problems); speed and "
+              "accuracy are compared per problem below, never pooled.</p>",
               summary_table(summary, ctx.styles, ctx.failed_only),
               "<h2>Fastest method per accuracy band</h2>",
-              "<p>Work-precision runs grouped by the decade of their "
-              "err_pos_rms; the fastest run in each band.</p>",
+              "<p>Work-precision runs of one problem grouped by the decade of their "
+              "err_pos_rms; the fastest run in each band (median wall time over "
+              "repeats where recorded, else the minimum).</p>",
               bands_table(bands, ctx.styles),
-              "<h2>Run metadata</h2>", metadata_table(ctx.meta),
+              '<h2 id="references">References</h2>',
+              "<p>Every run is compared with the reference of its problem "
+              "(docs/harness.md, References); its estimated error is the largest "
+              "position difference to a second reference of a different method "
+              "family, the floor below which no run's error is meaningful.</p>",
+              references_table(ctx),
+              '<h2 id="validity">Quasi-static validity</h2>', qs_table(ctx),
               "<h2>Figures</h2>",
               "<ul>" + "".join(f'<li><a href="#{escape(f.name)}">{escape(f.title)}</a>'
                                f' (<a href="{escape(f.svg)}">SVG</a>)</li>'
@@ -170,7 +368,11 @@ def render_page(ctx, summary, bands, figures, smap, warnings):
         if record.name.startswith("fig05"):
             parts.append("<h2>The paper's figures (paper scene, μ = 0.5)</h2>")
         parts.append(figure_block(record))
-        if record.name == "fig_failure_map" and smap is not None:
-            parts += ["<h3>Failure map as a table</h3>", failure_map_table(smap)]
+        if record.name.startswith("fig_stability_") and record.notes:
+            parts += [f"<details><summary>{escape(record.title)} as a table</summary>",
+                      stability_table(record.notes[0]), "</details>"]
+    if replay:
+        parts += ['<h2 id="replay">3D replay</h2>', replay]
+    parts += ['<h2 id="reproduction">Reproduction</h2>', repro_section(ctx)]
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"

@@ -53,6 +53,35 @@ _EXTRA_STATUS_COLOURS = ["#843c39", "#637939", "#7b4173", "#3182bd",
                          "#e6550d", "#31a354", "#756bb1", "#636363"]
 NOT_RUN_COLOUR = "#f0f0f0"
 
+# Failure causes (docs/harness.md `cause`, `cause_detail`): physical causes in
+# cool colours, numerical ones in warm colours, unclassified in grey.
+SUCCESS_COLOUR = "#4daf4a"
+PHYSICAL_COLOURS = {"friction_limit": "#377eb8", "lift_off": "#80b1d3",
+                    "degenerate_contact": "#984ea3"}
+PHYSICAL_OTHER = "#bebada"
+NUMERICAL_COLOURS = {"step_too_large": "#e41a1c", "baumgarte_instability": "#ff7f00",
+                     "solver_failure": "#f781bf", "integrator_failure": "#a65628",
+                     "drift_blowup": "#fdb462", "gap_blowup": "#b15928",
+                     "error": "#333333"}
+NUMERICAL_OTHER = "#fb8072"
+UNKNOWN_COLOUR = "#9e9e9e"
+
+
+def cause_colour(cls, detail):
+    if cls == "success":
+        return SUCCESS_COLOUR
+    if cls == "physical":
+        return PHYSICAL_COLOURS.get(detail, PHYSICAL_OTHER)
+    if cls == "numerical":
+        return NUMERICAL_COLOURS.get(detail, NUMERICAL_OTHER)
+    return UNKNOWN_COLOUR
+
+
+def text_colour(background):
+    """Black or white, whichever reads better on the hex colour."""
+    r, g, b = (int(background[i:i + 2], 16) / 255 for i in (1, 3, 5))
+    return "black" if 0.299 * r + 0.587 * g + 0.114 * b > 0.55 else "white"
+
 
 class MissingData(ReportError):
     """A figure has nothing to draw."""
@@ -86,6 +115,8 @@ class Figure:
     png: str = ""
     svg: str = ""
     notes: list = field(default_factory=list)
+    # What the figure drew, for figures.json and the tests (JSON-able).
+    data: dict = field(default_factory=dict)
 
     @property
     def width_px(self):

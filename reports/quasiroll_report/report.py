@@ -7,7 +7,9 @@ import sys
 from . import figures_methods as fm
 from . import figures_paper as fp
 from . import selection as sel
-from .data import ReportError, TrajectoryStore, read_meta, read_runs, read_terrain
+from .data import (ReportError, TrajectoryStore, read_meta, read_references,
+                   read_runs, read_terrain)
+from .findings import key_findings
 from .html_page import render_page
 from .plotting import MissingData, apply_style, placeholder_figure
 
@@ -15,8 +17,8 @@ from .plotting import MissingData, apply_style, placeholder_figure
 FIGURES = [
     (fm.figure_work_precision, "fig_work_precision", "1. Work-precision"),
     (fm.figure_drift, "fig_drift", "2. Constraint drift"),
-    (fm.figure_failure_map, "fig_failure_map", "3. Stability / failure map"),
-    (fp.figure_snapshots, "fig05_snapshots", "Fig. 5 — snapshots on the terrain"),
+    (fm.figure_stability, "fig_stability", "3. Stability charts"),
+    (fp.figure_snapshots, "fig05_snapshots", "Fig. 5 — the robot on the terrain"),
     (fp.figure_locus, "fig06_locus", "Fig. 6 — contact-point and platform loci"),
     (fp.figure_linear_velocity, "fig07_linear_velocity", "Fig. 7 — platform linear velocity"),
     (fp.figure_angular_velocity, "fig08_angular_velocity", "Fig. 8 — platform angular velocity"),
@@ -40,14 +42,24 @@ class Context:
         self.out_dir = out_dir
         self.runs, self.header = read_runs(self.results_dir)
         self.meta = read_meta(self.results_dir)
+        self.references = read_references(self.results_dir)
         self.styles = sel.method_styles(self.runs)
         self.failed_only = sel.failed_only_methods(self.runs)
         self.trajectories = TrajectoryStore(self.results_dir)
         self.primary = sel.paper_run(self.runs, self._has_usable_trajectory)
+        pvc = sel.pvc_scene(self.runs, self.references)
+        self.primary_pvc = (sel.paper_run(self.runs, self._has_usable_trajectory, pvc)
+                            if pvc else None)
         self._terrains = {}
 
     def _has_usable_trajectory(self, run):
         return self.trajectories.has(run) and self.trajectories.get(run) is not None
+
+    def terrain_of(self, run):
+        """The terrain spec of a run: terrains/<terrain column>.json, else
+        terrains/<scene>.json (older results)."""
+        spec = self.terrain(run["terrain"]) if run.get("terrain") else None
+        return spec if spec is not None else self.terrain(run["scene"])
 
     def terrain(self, scene):
         if scene not in self._terrains:
@@ -60,7 +72,8 @@ def _draw_figures(ctx, allow_missing, warnings):
     records = []
     for function, name, title in FIGURES:
         try:
-            records.append(function(ctx))
+            made = function(ctx)
+            records += made if isinstance(made, list) else [made]
         except MissingData as exc:
             plt.close("all")
             if not allow_missing:
@@ -73,10 +86,20 @@ def _draw_figures(ctx, allow_missing, warnings):
 def _write_manifest(out_dir, records):
     manifest = [{"name": r.name, "title": r.title, "png": r.png, "svg": r.svg,
                  "figsize_in": [r.width_in, r.height_in], "dpi": r.dpi,
-                 "width_px": r.width_px, "height_px": r.height_px}
+                 "width_px": r.width_px, "height_px": r.height_px,
+                 "caption": r.caption, "data": r.data}
                 for r in records]
     with open(os.path.join(out_dir, "figures.json"), "w", encoding="utf-8") as handle:
-        json.dump(manifest, handle, indent=1)
+        json.dump(manifest, handle, indent=1, default=_jsonable)
+
+
+def _jsonable(value):
+    if isinstance(value, (set, tuple)):
+        return list(value)
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return str(value)
 
 
 def build_report(results_dir, out_dir=None, allow_missing=False):
@@ -96,10 +119,9 @@ def build_report(results_dir, out_dir=None, allow_missing=False):
     if not ctx.meta and not os.path.isfile(os.path.join(ctx.results_dir, "meta.json")):
         warnings.append("meta.json is missing: metadata shown as unknown")
     records = _draw_figures(ctx, allow_missing, warnings)
-    smap = next((r.notes[0] for r in records if r.name == "fig_failure_map" and r.notes),
-                None)
-    page = render_page(ctx, sel.method_summary(ctx.runs), sel.accuracy_bands(ctx.runs),
-                       records, smap, warnings)
+    page = render_page(ctx, sel.method_summary(ctx.runs),
+                       sel.accuracy_bands(ctx.runs, ctx.references), records, warnings,
+                       key_findings(ctx, records))
     index = os.path.join(out_dir, "index.html")
     with open(index, "w", encoding="utf-8") as handle:
         handle.write(page)

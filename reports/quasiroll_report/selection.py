@@ -7,15 +7,13 @@ from collections import Counter, OrderedDict
 import numpy as np
 
 from .data import is_finite, is_success
+from .problems import group_by_problem, method_style, problem_label, scene_mode
 
 PAPER_SCENE = "paper"
 PAPER_MU = 0.5
 WORK_PRECISION_GROUP = "work_precision"
 MU_SWEEP_GROUP = "mu_sweep"
-
-_COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
-            "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"]
-_MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*", "<", ">", "h", "p"]
+TOLERANCE_GROUP = "tolerance"
 
 
 # ---------------------------------------------------------------- methods
@@ -25,13 +23,9 @@ def method_names(runs):
 
 
 def method_styles(runs):
-    """{method: (colour, marker)}, stable: assigned in sorted method order."""
-    styles = OrderedDict()
-    for index, method in enumerate(method_names(runs)):
-        colour = _COLOURS[index % len(_COLOURS)]
-        marker = _MARKERS[(index // len(_COLOURS) + index) % len(_MARKERS)]
-        styles[method] = (colour, marker)
-    return styles
+    """{method: (colour, marker, linestyle)}: colour per NLP, marker per
+    integrator, line style per coupling, the same in every report."""
+    return OrderedDict((m, method_style(m)) for m in method_names(runs))
 
 
 def failed_only_methods(runs):
@@ -61,6 +55,28 @@ def mu_equals(run, mu):
                                                  abs_tol=1e-12)
 
 
+# ------------------------------------------------------------------ timing
+
+def has_timing_spread(runs):
+    return any(is_finite(r.get("wall_s_median", math.nan)) for r in runs)
+
+
+def timing(run):
+    """(point, low, high) wall time of a run: the median over its repeats with
+    the min/max as the spread when the harness wrote them; otherwise wall_s
+    (the minimum) with no spread (low = high = point)."""
+    median = run.get("wall_s_median", math.nan)
+    if is_finite(median):
+        samples = run.get("timings") or []
+        low = run.get("wall_s_min", math.nan)
+        high = run.get("wall_s_max", math.nan)
+        low = low if is_finite(low) else (min(samples) if samples else median)
+        high = high if is_finite(high) else (max(samples) if samples else median)
+        return median, low, high
+    wall = run["wall_s"]
+    return wall, wall, wall
+
+
 # ------------------------------------------------------ work-precision data
 
 def scene_with_most_runs(runs):
@@ -68,12 +84,17 @@ def scene_with_most_runs(runs):
     return sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))[0][0]
 
 
+def is_work_precision_group(group):
+    return group.startswith(WORK_PRECISION_GROUP) or group == TOLERANCE_GROUP
+
+
 def work_precision_rows(runs):
-    """Rows of the Δt/tolerance ladders (successful ones only): every group
-    whose name starts with "work_precision" (e.g. a separate, shorter ladder
-    for the coupled methods)."""
+    """Successful rows of the Δt / tolerance ladders: groups named
+    work_precision* (e.g. a separate coupled ladder) and `tolerance` (the
+    adaptive schemes' rtol ladder). Without groups: the scene with most runs.
+    Rows of different problems are kept apart by the callers."""
     rows = ([run for run in runs
-             if run.get("suite_group", "").startswith(WORK_PRECISION_GROUP)]
+             if is_work_precision_group(run.get("suite_group", ""))]
             if has_group_column(runs) else [])
     if not rows:
         ok = successful(runs)
@@ -88,29 +109,51 @@ def _ladder_key(run):
             run["tol"] if is_finite(run["tol"]) else -1.0)
 
 
-def work_precision_series(runs, metric):
-    """{method: [(dt, tol, error, wall_s), ...]} for the work-precision chart.
+def line_key(run):
+    """A work-precision line: the method, plus the RK scheme when it is not
+    the default RK4 (a DP5(4) tolerance ladder is a different method)."""
+    scheme = run.get("rk_method", "")
+    if run["dae"].startswith("rk") and scheme and scheme != "rk4":
+        return f"{run['method']} ({scheme})"
+    return run["method"]
 
-    Points are the medians over repeats (seeds) of one (dt, tol) rung,
-    ordered from the coarsest rung to the finest. Only successful runs with a
-    positive finite error and wall time count, so a method whose runs all
-    failed never appears.
+
+def work_precision_series(runs, metric, rows=None):
+    """{line: [point, ...]} for one problem's work-precision chart.
+
+    A point is a dict (dt, tol, err, wall, wall_lo, wall_hi, t_end, n): the
+    median error and median wall time over the rows of one (Δt, tol) rung,
+    the timing spread over those rows' repeats; ordered coarsest rung first.
+    Only successful rows with a positive finite error count, so a method
+    whose runs all failed never appears. `rows` defaults to every
+    work-precision row (callers pass one problem's rows).
     """
     rungs = OrderedDict()
-    for run in work_precision_rows(runs):
-        err, wall = run[metric], run["wall_s"]
+    for run in (work_precision_rows(runs) if rows is None else successful(rows)):
+        err = run[metric]
+        wall, low, high = timing(run)
         if not (is_finite(err) and is_finite(wall) and err > 0 and wall > 0):
             continue
-        rungs.setdefault(run["method"], {}).setdefault(
-            _ladder_key(run), []).append((err, wall))
+        rungs.setdefault(line_key(run), {}).setdefault(
+            _ladder_key(run), []).append((err, wall, low, high, run))
     series = OrderedDict()
-    for method in sorted(rungs):
+    for line in sorted(rungs):
         points = []
-        for key in sorted(rungs[method], reverse=True):
-            errs, walls = zip(*rungs[method][key])
-            points.append((key[0], key[1], float(np.median(errs)),
-                           float(np.median(walls))))
-        series[method] = points
+        for key in sorted(rungs[line], reverse=True):
+            members = rungs[line][key]
+            first = members[0][4]
+            points.append({
+                "dt": key[0], "tol": key[1],
+                "err": float(np.median([m[0] for m in members])),
+                "wall": float(np.median([m[1] for m in members])),
+                "wall_lo": float(min(m[2] for m in members)),
+                "wall_hi": float(max(m[3] for m in members)),
+                "t_end": first.get("t_end", math.nan),
+                "t_reached": float(np.median([m[4]["t_reached"] for m in members])),
+                "n": len(members), "run": first,
+                "nlp": first["nlp"], "dae": first["dae"],
+                "coupling": first["coupling"]})
+        series[line] = points
     return series
 
 
@@ -125,6 +168,21 @@ def pareto_front(points):
     return front
 
 
+def work_precision_problems(runs, references=None):
+    """[dict] one per problem of the work-precision rows: key, label, rows,
+    t_end, ref_err_est (max over the rows, nan if absent), groups."""
+    problems = []
+    for key, rows in group_by_problem(work_precision_rows(runs)):
+        estimates = [r["ref_err_est"] for r in rows if is_finite(r.get("ref_err_est"))]
+        problems.append({
+            "key": key, "label": problem_label(rows[0], references),
+            "rows": rows, "t_end": rows[0].get("t_end", math.nan),
+            "ref_hash": rows[0].get("ref_hash", ""),
+            "ref_err_est": max(estimates) if estimates else math.nan,
+            "groups": sorted({r.get("suite_group", "") for r in rows})})
+    return problems
+
+
 # -------------------------------------------------------------- summaries
 
 def _median(values):
@@ -137,42 +195,76 @@ def _max(values):
     return max(values) if values else math.nan
 
 
+PHYSICAL, NUMERICAL, UNKNOWN = "physical", "numerical", "unknown"
+
+
+def has_causes(runs):
+    """True when the harness classified failures (`cause` column filled)."""
+    return any(r.get("cause") for r in runs if not is_success(r))
+
+
+def failure_cause(run):
+    """(class, detail) of a run: ("success", "") for a success; ("physical" |
+    "numerical", cause_detail) when the harness classified it; else
+    ("unknown", status): an unclassified status is never presented as
+    physical (INFEASIBLE_FRICTION from a blow-up looks like a friction limit)."""
+    if is_success(run):
+        return "success", ""
+    cause = run.get("cause", "")
+    if cause in (PHYSICAL, NUMERICAL):
+        return cause, run.get("cause_detail", "") or "unspecified"
+    return UNKNOWN, run["status"]
+
+
 def method_summary(runs):
-    """One dict per method: runs, status counts, medians and max drift."""
+    """One dict per method: runs, status counts, failure classes, max drift
+    and max KKT residual over its successful runs. No medians of time or
+    error here: those pool different problems (see the per-problem tables)."""
     summary = []
     for method in method_names(runs):
         mine = runs_of(runs, method=method)
         ok = successful(mine)
+        classes = Counter(failure_cause(r)[0] for r in mine if not is_success(r))
         summary.append({
             "method": method,
             "runs": len(mine),
             "successes": len(ok),
             "status_counts": Counter(run["status"] for run in mine),
-            "median_wall_s": _median([r["wall_s"] for r in ok]),
-            "median_err_pos_rms": _median([r["err_pos_rms"] for r in ok]),
+            "cause_counts": classes,
             "max_drift": _max([r["drift_max"] for r in ok]),
+            "max_kkt": _max([r.get("kkt_residual", math.nan) for r in ok]),
         })
     return summary
 
 
-def accuracy_bands(runs):
-    """Fastest successful run per decade of err_pos_rms (work-precision rows).
+def accuracy_bands(runs, references=None):
+    """Fastest successful run per decade of err_pos_rms, per problem.
 
-    Returns [(decade_exponent, fastest_run, count_in_band)], from the most
-    accurate band to the least.
-    """
-    bands = {}
-    for run in work_precision_rows(runs):
-        err, wall = run["err_pos_rms"], run["wall_s"]
-        if not (is_finite(err) and err > 0 and is_finite(wall)):
-            continue
-        bands.setdefault(math.floor(math.log10(err)), []).append(run)
+    Returns [(problem, [(decade_exponent, fastest_run, count_in_band)])],
+    bands from the most accurate to the least; speed = median wall time over
+    repeats where recorded (else wall_s, the minimum)."""
     result = []
-    for decade in sorted(bands):
-        members = bands[decade]
-        fastest = min(members, key=lambda r: (r["wall_s"], r["method"]))
-        result.append((decade, fastest, len(members)))
+    for problem in work_precision_problems(runs, references):
+        bands = {}
+        for run in problem["rows"]:
+            err, wall = run["err_pos_rms"], timing(run)[0]
+            if not (is_finite(err) and err > 0 and is_finite(wall)):
+                continue
+            bands.setdefault(math.floor(math.log10(err)), []).append(run)
+        rows = []
+        for decade in sorted(bands):
+            members = bands[decade]
+            fastest = min(members, key=lambda r: (timing(r)[0], r["method"]))
+            rows.append((decade, fastest, len(members)))
+        result.append((problem, rows))
     return result
+
+
+def fastest_within(rows, target):
+    """The fastest successful row with err_pos_rms <= target, or None."""
+    ok = [r for r in rows if is_finite(r["err_pos_rms"]) and r["err_pos_rms"] <= target
+          and is_finite(timing(r)[0])]
+    return min(ok, key=lambda r: (timing(r)[0], r["method"])) if ok else None
 
 
 # ---------------------------------------------------- representative runs
@@ -189,10 +281,18 @@ def is_reference(run):
         or run["run_id"].lower().startswith("ref")
 
 
-def paper_run(runs, has_trajectory):
-    """The reference, else the most accurate successful paper run at μ=0.5."""
+def pvc_scene(runs, references):
+    """The pvc-mode twin of the paper scene (e.g. `paper_pvc`), or None."""
+    names = sorted({r["scene"] for r in runs if r["scene"] != PAPER_SCENE
+                    and scene_mode(r, references) == "pvc"})
+    twins = [n for n in names if n.startswith(PAPER_SCENE)]
+    return (twins or names or [None])[0]
+
+
+def paper_run(runs, has_trajectory, scene=PAPER_SCENE):
+    """The reference, else the most accurate successful run of `scene` at μ=0.5."""
     candidates = [r for r in successful(runs)
-                  if r["scene"] == PAPER_SCENE and mu_equals(r, PAPER_MU)
+                  if r["scene"] == scene and mu_equals(r, PAPER_MU)
                   and has_trajectory(r)]
     if not candidates:
         return None
@@ -249,36 +349,47 @@ def stabilisation_pair(runs, has_trajectory, primary=None):
 
 
 def mu_sweep_rows(runs):
-    """Rows of the μ sweep: suite_group == mu_sweep, else paper-scene rows
-    when μ varies there. Failed rows included."""
-    rows = in_group(runs, MU_SWEEP_GROUP) if has_group_column(runs) else []
-    if rows:
-        return rows
-    paper = runs_of(runs, scene=PAPER_SCENE)
+    """Rows of the μ sweep: suite_group == mu_sweep; without a group column,
+    paper-scene rows when μ varies there. Failed rows included."""
+    if has_group_column(runs):
+        return in_group(runs, MU_SWEEP_GROUP)
+    paper = [r for r in runs if r["scene"].startswith(PAPER_SCENE)]
     mus = {r["mu"] for r in paper if is_finite(r["mu"])}
     return paper if len(mus) > 1 else []
 
 
 # --------------------------------------------------------- stability map
 
-# (name, label, value shown, value whose variation within one method makes
-# it a condition). tol is left out: it is a method's own ladder knob, not a
-# condition shared by all methods.
-CONDITION_PARAMETERS = [
-    ("dt", "Δt", lambda r: r["dt"], lambda r: r["dt"]),
-    ("sigma_dt", "σΔt", lambda r: r["sigma"] * r["dt"], lambda r: r["sigma"]),
-    ("mu", "μ", lambda r: r["mu"], lambda r: r["mu"]),
-    ("roughness", "roughness", lambda r: r.get("roughness", math.nan),
+STABILITY_PREFIX = "stability_"
+
+# Axis name (suffix of a stability_<axis> group, matched by prefix) -> label
+# and the value of a run on that axis.
+AXES = [
+    ("sigma_dt", "σ·Δt [-]", lambda r: r["sigma"] * r["dt"]),
+    ("sigma", "σ·Δt [-]", lambda r: r["sigma"] * r["dt"]),
+    ("dt", "Δt [s]", lambda r: r["dt"]),
+    ("tol", "rtol [-]", lambda r: r["tol"]),
+    ("mu", "μ [-]", lambda r: r["mu"]),
+    ("rough", "roughness (bump amplitude factor) [-]",
      lambda r: r.get("roughness", math.nan)),
-    ("eps", "ε", lambda r: r["eps"], lambda r: r["eps"]),
-    ("scene", "scene", lambda r: r["scene"], lambda r: r["scene"]),
+    ("seed", "terrain seed", lambda r: r.get("seed", "")),
 ]
+# Method parameters that, when they vary within a stability group besides its
+# axis, split a method into several rows.
+_ROW_PARAMETERS = [("dt", "Δt", lambda r: r["dt"]), ("tol", "rtol", lambda r: r["tol"]),
+                   ("sigma", "σ", lambda r: r["sigma"]), ("eps", "ε", lambda r: r["eps"]),
+                   ("rk_method", "", lambda r: r.get("rk_method", ""))]
+_AXIS_OWNS = {"sigma_dt": {"sigma", "dt"}, "sigma": {"sigma", "dt"}, "dt": {"dt"},
+              "tol": {"tol"}}
 
 
 def _value_key(value):
     if isinstance(value, float):
         return (0, value if math.isfinite(value) else math.inf, "")
-    return (1, 0.0, str(value))
+    try:
+        return (0, float(value), "")
+    except (TypeError, ValueError):
+        return (1, 0.0, str(value))
 
 
 def _same(a, b):
@@ -293,97 +404,135 @@ def _varies(values):
     return any(not _same(values[0], v) for v in values[1:])
 
 
-def _varying_parameters(rows):
-    """Condition parameters that vary within at least one method's rows."""
-    varying = []
-    for name, label, getter, test in CONDITION_PARAMETERS:
-        if any(_varies([test(r) for r in rows if r["method"] == method])
-               for method in method_names(rows)):
-            varying.append((name, label, getter))
-    return varying
-
-
-def stability_groups(runs):
-    """[(group_name, rows)] shown in the failure map."""
-    if has_group_column(runs):
-        groups = sorted({r["suite_group"] for r in runs
-                         if "stab" in r["suite_group"].lower()})
-        if MU_SWEEP_GROUP in {r["suite_group"] for r in runs}:
-            groups.append(MU_SWEEP_GROUP)
-        if groups:
-            return [(g, in_group(runs, g)) for g in groups]
-    return [(scene, runs_of(runs, scene=scene))
-            for scene in sorted({r["scene"] for r in runs})]
-
-
 def format_value(value):
     if isinstance(value, float):
         return "nan" if math.isnan(value) else f"{value:.3g}"
     return str(value)
 
 
-def cell_status(rows):
-    """(status, label) of one map cell: the most common failure if any run
-    failed (label 'k/n' failed when mixed), else success."""
-    failures = Counter(r["status"] for r in rows if not is_success(r))
-    if not failures:
-        return "success", ""
-    status = sorted(failures.items(), key=lambda kv: (-kv[1], kv[0]))[0][0]
-    failed = sum(failures.values())
-    label = "" if failed == len(rows) else f"{failed}/{len(rows)}"
-    return status, label
+def axis_of(group):
+    """(axis, label, getter) of a stability_<axis> group, or None."""
+    if not group.startswith(STABILITY_PREFIX):
+        return None
+    suffix = group[len(STABILITY_PREFIX):].lower()
+    for name, label, getter in AXES:
+        if suffix.startswith(name):
+            return name, label, getter
+    return None
 
 
-def stability_map(runs):
-    """The failure map as data.
+def t_fraction(run):
+    frac = run.get("t_reached_frac", math.nan)
+    if is_finite(frac):
+        return frac
+    t_end = run.get("t_end", math.nan)
+    if is_finite(t_end) and t_end > 0 and is_finite(run["t_reached"]):
+        return run["t_reached"] / t_end
+    return math.nan
 
-    Returns dict(methods, columns, cells, statuses) where columns is a list
-    of dicts (group, label, values, mu, mu_min) and cells[method][i] is
-    (status, label) or None when that method has no run in column i.
+
+def stability_cell(rows):
+    """One chart cell: dict(cls, detail, frac, label, n, failed). The worst
+    row decides (a failure over a success; among failures numerical, then
+    unknown, then physical; then the smallest t_reached fraction)."""
+    rank = {NUMERICAL: 0, UNKNOWN: 1, PHYSICAL: 2, "success": 3}
+    scored = sorted(rows, key=lambda r: (rank[failure_cause(r)[0]],
+                                         t_fraction(r) if is_finite(t_fraction(r)) else 2.0,
+                                         r["run_id"]))
+    worst = scored[0]
+    cls, detail = failure_cause(worst)
+    failed = sum(1 for r in rows if not is_success(r))
+    frac = t_fraction(worst)
+    if cls == "success" and (not is_finite(frac) or frac >= 1.0 - 1e-12):
+        label = "1"
+    elif is_finite(frac):
+        # rounded down: a run that stopped at 99.8 % never reads "1.00"
+        label = f"{math.floor(frac * 100) / 100:.2f}".lstrip("0")
+    else:
+        label = "?"
+    if 0 < failed < len(rows):
+        label += f" ({failed}/{len(rows)})"
+    return {"cls": cls, "detail": detail, "frac": frac, "label": label,
+            "n": len(rows), "failed": failed, "status": worst["status"],
+            "run_id": worst["run_id"]}
+
+
+def _row_label(run, extra):
+    parts = [run["method"]] + [f"{lab}={format_value(get(run))}" if lab else
+                               format_value(get(run)) for _, lab, get in extra]
+    return " ".join(parts)
+
+
+def stability_charts(runs, references=None):
+    """[chart] one per stability_<axis> group (docs: reports/README.md).
+
+    chart = dict(group, axis, axis_label, panels); one panel per scene of the
+    group: dict(scene, label, values, rows, cells, mu_min) where rows are the
+    methods that ran there (split by other varying method parameters),
+    values the axis values that ran, cells[(row, i)] a stability_cell or
+    absent; mu_min the largest ref_mu_min of a successful reference of that
+    scene (μ axis only, nan when not recorded).
     """
-    methods = method_names(runs)
-    columns, cells = [], {m: [] for m in methods}
-    for group, rows in stability_groups(runs):
-        varying = _varying_parameters(rows) or [CONDITION_PARAMETERS[0][:3]]
-        keys = OrderedDict()
-        for r in rows:
-            key = tuple(getter(r) for _, _, getter in varying)
-            keys.setdefault(tuple(_value_key(v) for v in key), (key, []))[1].append(r)
-        for sort_key in sorted(keys):
-            values, members = keys[sort_key]
-            label = ", ".join(f"{lab}={format_value(v)}"
-                              for (_, lab, _), v in zip(varying, values))
-            only_mu = [n for n, _, _ in varying] == ["mu"]
-            mu_min = _median([r.get("mu_min", math.nan) for r in members])
-            columns.append({"group": group, "label": label, "values": values,
-                            "mu": values[0] if only_mu else None,
-                            "mu_min": mu_min})
-            for m in methods:
-                mine = [r for r in members if r["method"] == m]
-                cells[m].append(cell_status(mine) if mine else None)
-    statuses = sorted({c[0] for m in methods for c in cells[m] if c},
-                      key=lambda s: (s != "success", s))
-    return {"methods": methods, "columns": columns, "cells": cells,
-            "statuses": statuses}
+    charts = []
+    groups = sorted({r.get("suite_group", "") for r in runs})
+    for group in groups:
+        axis = axis_of(group)
+        if axis is None:
+            continue
+        name, label, getter = axis
+        rows = in_group(runs, group)
+        owned = _AXIS_OWNS.get(name, set())
+        panels = []
+        for scene in sorted({r["scene"] for r in rows}):
+            mine = [r for r in rows if r["scene"] == scene]
+            extra = [p for p in _ROW_PARAMETERS if p[0] not in owned and any(
+                _varies([p[2](r) for r in mine if r["method"] == m])
+                for m in method_names(mine))]
+            values = sorted({_value_key(getter(r)): getter(r) for r in mine}.items())
+            values = [v for _, v in values]
+            row_names = sorted({_row_label(r, extra) for r in mine})
+            cells = {}
+            for row_name in row_names:
+                for i, value in enumerate(values):
+                    members = [r for r in mine if _row_label(r, extra) == row_name
+                               and _same(getter(r), value)]
+                    if members:
+                        cells[(row_name, i)] = stability_cell(members)
+            mu_min = math.nan
+            if name == "mu":
+                mu_min = scene_mu_min(mine)
+            panels.append({"scene": scene,
+                           "label": problem_label(mine[0], references).split(" · μ=")[0]
+                           if name == "mu" else problem_label(mine[0], references),
+                           "values": values, "rows": row_names, "cells": cells,
+                           "mu_min": mu_min})
+        charts.append({"group": group, "axis": name, "axis_label": label,
+                       "panels": panels})
+    return charts
 
 
-def mu_min_position(columns, group):
-    """x position (column index, fractional) of μ_min inside a μ-only group,
-    or None. Interpolates linearly in μ between neighbouring columns."""
-    idx = [i for i, c in enumerate(columns)
-           if c["group"] == group and c["mu"] is not None]
-    if len(idx) < 1:
-        return None, math.nan
-    mu_min = _median([columns[i]["mu_min"] for i in idx])
-    if not is_finite(mu_min):
-        return None, math.nan
-    mus = [columns[i]["mu"] for i in idx]
-    if mu_min <= mus[0]:
-        return idx[0] - 0.5, mu_min
-    if mu_min >= mus[-1]:
-        return idx[-1] + 0.5, mu_min
-    for k in range(len(mus) - 1):
-        if mus[k] <= mu_min <= mus[k + 1]:
-            frac = (mu_min - mus[k]) / (mus[k + 1] - mus[k])
-            return idx[k] + frac, mu_min
-    return None, mu_min
+def scene_mu_min(rows):
+    """The friction a scene needs: the largest `ref_mu_min` (the solver's
+    μ_min maximised over a reference trajectory) among rows whose reference
+    reached its end; nan when the column is absent."""
+    values = [r["ref_mu_min"] for r in rows if is_finite(r.get("ref_mu_min", math.nan))
+              and r.get("ref_status", "success") in ("success", "")]
+    if not values:
+        values = [r["ref_mu_min"] for r in rows if is_finite(r.get("ref_mu_min", math.nan))]
+    return max(values) if values else math.nan
+
+
+def value_position(values, x):
+    """Fractional column index of x among sorted numeric values (linear
+    interpolation), or None."""
+    nums = [float(v) for v in values]
+    if not nums or not is_finite(x):
+        return None
+    if x <= nums[0]:
+        return -0.5 if x < nums[0] else 0.0
+    if x >= nums[-1]:
+        return len(nums) - 0.5 if x > nums[-1] else len(nums) - 1.0
+    for k in range(len(nums) - 1):
+        if nums[k] <= x <= nums[k + 1]:
+            return k + (x - nums[k]) / (nums[k + 1] - nums[k])
+    return None

@@ -1,0 +1,166 @@
+"""Key findings at the top of the page, generated from the data (plain text
+sentences with numbers), and the per-problem tables that back them."""
+
+import math
+
+from . import selection as sel
+from .data import is_finite, is_success
+from .plotting import fmt
+from .problems import problem_label
+
+ERROR_TARGETS = [1e-4, 1e-6, 1e-8, 1e-10]
+
+# Quasi-static validity: inertial load / contact load (qs_inertia_ratio). The
+# neglected inertial wrench perturbs the contact forces by about this
+# fraction; 5 % is below the spread of Coulomb friction coefficients
+# themselves. A results directory may override it (meta.json
+# "qs_inertia_threshold").
+QS_THRESHOLD_DEFAULT = 0.05
+
+
+def qs_threshold(meta):
+    value = meta.get("qs_inertia_threshold") if isinstance(meta, dict) else None
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return QS_THRESHOLD_DEFAULT, "report default"
+    return (value, "meta.json") if math.isfinite(value) and value > 0 else (
+        QS_THRESHOLD_DEFAULT, "report default")
+
+
+def _speed_text(run):
+    wall = sel.timing(run)[0]
+    per = wall / run["t_reached"] if is_finite(run["t_reached"]) and run["t_reached"] > 0 \
+        else math.nan
+    kind = "median" if is_finite(run.get("wall_s_median", math.nan)) else "min"
+    ladder = f"Δt={fmt(run['dt'])} s"
+    if run.get("rk_method") and run["rk_method"] != "rk4" and run["dae"].startswith("rk"):
+        ladder += f", {run['rk_method']} rtol={fmt(run['tol'])}"
+    return f"{run['method']} ({ladder}): {fmt(wall)} s {kind} wall, {fmt(per)} s per simulated s"
+
+
+def work_precision_findings(runs, references):
+    out = []
+    for problem in sel.work_precision_problems(runs, references):
+        floor = problem["ref_err_est"]
+        reached = []
+        for target in ERROR_TARGETS:
+            if is_finite(floor) and target < floor:
+                out.append(f"On {problem['label']} a position error of {fmt(target)} m is "
+                           f"below the reference's estimated error ({fmt(floor)} m): "
+                           "not resolvable with this reference.")
+                break
+            best = sel.fastest_within(problem["rows"], target)
+            if best is None:
+                break
+            reached.append((target, best))
+        for target, best in reached:
+            out.append(f"For RMS position error ≤ {fmt(target)} m on {problem['label']}, "
+                       f"the fastest method is {_speed_text(best)} "
+                       f"(err {fmt(best['err_pos_rms'])} m).")
+        if not reached:
+            errs = [r["err_pos_rms"] for r in problem["rows"] if is_finite(r["err_pos_rms"])]
+            if errs:
+                out.append(f"On {problem['label']} no run reaches {fmt(ERROR_TARGETS[0])} m; "
+                           f"the most accurate has {fmt(min(errs))} m.")
+    return out
+
+
+def mu_findings(records):
+    slip = next((r for r in records if r.name == "fig14_total_slip_vs_mu" and r.data), None)
+    if slip is None:
+        return []
+    out = []
+    per_scene = slip.data.get("per_scene", {})
+    if len(per_scene) >= 2:
+        ordered = sorted(per_scene.items(), key=lambda kv: kv[1])
+        (low_s, low_v), (high_s, high_v) = ordered[0], ordered[-1]
+        if low_v > 0:
+            out.append(f"At μ={fmt(slip.data['compare_mu'])}, {low_s} slips "
+                       f"{fmt(high_v / low_v, 2)}× less than {high_s} "
+                       f"(total slip {fmt(low_v)} m vs {fmt(high_v)} m).")
+    needs = [f"{p['scene']} needs μ ≥ {fmt(p['mu_min'])}" for p in slip.data["panels"]
+             if is_finite(p.get("mu_min", math.nan))]
+    if needs:
+        out.append("Friction needed along the reference trajectory (ref_mu_min): "
+                   + "; ".join(needs) + ".")
+    return out
+
+
+def stability_findings(runs, references):
+    out = []
+    for chart in sel.stability_charts(runs, references):
+        cells = [(p["scene"], row, p["values"][j], c) for p in chart["panels"]
+                 for (row, j), c in p["cells"].items()]
+        numerical = [c for c in cells if c[3]["cls"] == sel.NUMERICAL]
+        physical = [c for c in cells if c[3]["cls"] == sel.PHYSICAL]
+        unknown = [c for c in cells if c[3]["cls"] == sel.UNKNOWN]
+        axis = chart["axis_label"].split(" [")[0]
+        text = (f"Stability along {axis} ({chart['group']}): {len(cells)} cells, "
+                f"{len(numerical)} numerical failures, {len(physical)} physical")
+        if unknown:
+            text += f", {len(unknown)} unclassified"
+        if numerical:
+            first = {}
+            for scene, row, value, _ in numerical:
+                key = row.split(" ")[0]
+                first.setdefault(key, []).append(value)
+            worst = sorted(first.items(), key=lambda kv: (-len(kv[1]), kv[0]))[:3]
+            text += "; most numerical failures: " + ", ".join(
+                f"{m} ({len(v)})" for m, v in worst)
+        out.append(text + ".")
+    return out
+
+
+def qs_rows(runs, references):
+    """[(problem label, scene, n, max ratio, median ratio)] per problem with a
+    finite qs_inertia_ratio on a successful run."""
+    table = []
+    ok = [r for r in sel.successful(runs) if is_finite(r.get("qs_inertia_ratio", math.nan))]
+    from .problems import group_by_problem
+    for _, rows in group_by_problem(ok):
+        values = sorted(r["qs_inertia_ratio"] for r in rows)
+        table.append((problem_label(rows[0], references), rows[0]["scene"], len(values),
+                      values[-1], values[len(values) // 2]))
+    return table
+
+
+def qs_findings(runs, references, meta):
+    rows = qs_rows(runs, references)
+    if not rows:
+        return []
+    threshold, _ = qs_threshold(meta)
+    over = [r for r in rows if r[3] > threshold]
+    worst = max(rows, key=lambda r: r[3])
+    text = (f"Quasi-static validity: the largest inertial/contact load ratio is "
+            f"{fmt(worst[3])} ({worst[0]}); threshold {fmt(threshold)}")
+    if over:
+        text += f"; {len(over)} of {len(rows)} problems exceed it (dynamics matter there)"
+    else:
+        text += f"; all {len(rows)} problems are below it"
+    return [text + "."]
+
+
+def kkt_findings(runs):
+    ok = [r for r in sel.successful(runs) if is_finite(r.get("kkt_residual", math.nan))]
+    if not ok:
+        return []
+    worst = max(ok, key=lambda r: r["kkt_residual"])
+    return [f"Verified success: every successful run's NLP solves were checked for "
+            f"first-order optimality; the largest KKT residual among them is "
+            f"{fmt(worst['kkt_residual'])} ({worst['method']}, {worst['run_id']})."]
+
+
+def key_findings(ctx, records):
+    return (work_precision_findings(ctx.runs, ctx.references) + mu_findings(records)
+            + stability_findings(ctx.runs, ctx.references)
+            + qs_findings(ctx.runs, ctx.references, ctx.meta) + kkt_findings(ctx.runs))
+
+
+def failure_counts(runs):
+    counts = {}
+    for r in runs:
+        if not is_success(r):
+            cls = sel.failure_cause(r)[0]
+            counts[cls] = counts.get(cls, 0) + 1
+    return counts

@@ -1,0 +1,137 @@
+"""What may be compared with what, and the fixed styles of the report.
+
+A *problem* is everything that fixes the exact solution a run approximates:
+scene (with its mode and robot), μ, terrain (seed, roughness) and t_end. Runs
+of one problem share a reference (`ref_hash`, docs/harness.md); only they may
+share a chart, a Pareto front or a table row. Results without `ref_hash`
+fall back to the tuple of those columns.
+
+Styles are fixed per name, not per report: colour = NLP backend, marker =
+integrator, line style = coupling, so a method looks the same in every
+figure of every report.
+"""
+
+import math
+import re
+import zlib
+
+from .data import is_finite
+
+NLP_COLOURS = {"newton": "#1f77b4", "ipopt": "#ff7f0e", "ipopt-mumps": "#8c564b",
+               "slsqp": "#2ca02c", "ceres": "#d62728", "reference": "#000000"}
+_EXTRA_COLOURS = ["#9467bd", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f", "#393b79"]
+DAE_MARKERS = {"rk-baumgarte": "s", "rk-projection": "o", "ida": "^",
+               "cvode-projection": "D", "cvode": "D"}
+_EXTRA_MARKERS = ["v", "P", "X", "*", "h", "p", "<", ">"]
+COUPLING_LINES = {"zoh": "-", "coupled": "--"}
+
+
+def _stable_pick(name, choices):
+    return choices[zlib.crc32(name.encode("utf-8")) % len(choices)]
+
+
+def nlp_colour(nlp):
+    return NLP_COLOURS.get(nlp) or _stable_pick(nlp, _EXTRA_COLOURS)
+
+
+def dae_marker(dae):
+    return DAE_MARKERS.get(dae) or _stable_pick(dae, _EXTRA_MARKERS)
+
+
+def coupling_line(coupling):
+    return COUPLING_LINES.get(coupling, ":")
+
+
+def run_style(run):
+    """(colour, marker, linestyle) of a run's method."""
+    return nlp_colour(run["nlp"]), dae_marker(run["dae"]), coupling_line(run["coupling"])
+
+
+def method_style(method):
+    nlp, dae, coupling = (method.split("/") + ["", "", ""])[:3]
+    return nlp_colour(nlp), dae_marker(dae), coupling_line(coupling)
+
+
+# ------------------------------------------------------------------ problems
+
+def _num_key(value):
+    return round(value, 12) if is_finite(value) else None
+
+
+def problem_key(run):
+    """Hashable identity of the run's problem."""
+    if run.get("ref_hash"):
+        return ("ref", run["ref_hash"])
+    return ("cols", run["scene"], run.get("terrain", ""), _num_key(run["mu"]),
+            run.get("seed", ""), _num_key(run.get("roughness", math.nan)),
+            _num_key(run.get("t_end", math.nan)))
+
+
+def reference_field(reference, name):
+    """A `name=value` field of a reference's canonical key text, or ''."""
+    key = (reference or {}).get("key", "")
+    match = re.search(r"(?:^|[;{|])" + re.escape(name) + r"=([^;}|]*)", key)
+    return match.group(1) if match else ""
+
+
+def scene_mode(run, references):
+    """'paper' or 'pvc' from the run's reference key; '' when unknown."""
+    mode = reference_field(references.get(run.get("ref_hash", "")), "mode")
+    if mode:
+        return mode
+    return "pvc" if "pvc" in run["scene"].lower() else ""
+
+
+def _short(value):
+    return f"{value:g}" if is_finite(value) else ""
+
+
+def problem_label(run, references=None):
+    """Short human label: 'paper · pvc · μ=0.5 · 20 s' (+ seed, roughness)."""
+    parts = [run["scene"]]
+    mode = scene_mode(run, references or {})
+    if mode:
+        parts.append(f"{mode} mode")
+    if is_finite(run["mu"]):
+        parts.append(f"μ={_short(run['mu'])}")
+    if run.get("seed"):
+        parts.append(f"seed {run['seed']}")
+    rough = run.get("roughness", math.nan)
+    if is_finite(rough) and not math.isclose(rough, 1.0):
+        parts.append(f"roughness {_short(rough)}")
+    t_end = run.get("t_end", math.nan)
+    if is_finite(t_end):
+        parts.append(f"{_short(t_end)} s")
+    return " · ".join(parts)
+
+
+def problem_sort_key(run):
+    t_end = run.get("t_end", math.nan)
+    return (-(t_end if is_finite(t_end) else 0.0), run["scene"],
+            run["mu"] if is_finite(run["mu"]) else 0.0, run.get("seed", ""))
+
+
+def group_by_problem(rows):
+    """[(key, rows)] in a stable order (longest t_end first, then scene, μ)."""
+    groups = {}
+    for run in rows:
+        groups.setdefault(problem_key(run), []).append(run)
+    return sorted(groups.items(), key=lambda kv: problem_sort_key(kv[1][0]))
+
+
+def robot_geometry(reference):
+    """Robot dimensions from a reference's key text (docs/harness.md), with the
+    defaults of docs/model.md for fields it lacks."""
+    geometry = {"a": 0.25, "b": 0.25, "track": 0.4, "z_h": 0.05, "R": 0.08,
+                "r": 0.02, "e": 0.0}
+    key = (reference or {}).get("key", "")
+    match = re.search(r"robot\{([^}]*)\}", key)
+    if match:
+        for field in match.group(1).split(";"):
+            name, _, value = field.partition("=")
+            try:
+                if name in geometry:
+                    geometry[name] = float(value)
+            except ValueError:
+                pass
+    return geometry
