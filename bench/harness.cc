@@ -22,6 +22,7 @@
 #include "bench/json_writer.h"
 #include "bench/metrics.h"
 #include "bench/run_output.h"
+#include "bench/shard.h"
 #include "core/nlp.h"
 
 namespace quasiroll::bench {
@@ -78,7 +79,9 @@ const std::vector<std::string>& RunsCsvColumns() {
                                                    "err_slip",
                                                    "drift_max",
                                                    "drift_final",
-                                                   "gap_max"};
+                                                   "gap_max",
+                                                   "host",
+                                                   "cpu_model"};
   return columns;
 }
 
@@ -110,6 +113,13 @@ std::string JoinRow(const std::vector<std::string>& values) {
 }
 
 std::string Header() { return JoinRow(RunsCsvColumns()); }
+
+std::size_t ColumnIndex(const std::string& column) {
+  const auto& cols = RunsCsvColumns();
+  const auto it = std::find(cols.begin(), cols.end(), column);
+  if (it == cols.end()) throw std::logic_error("unknown column " + column);
+  return static_cast<std::size_t>(it - cols.begin());
+}
 
 class RowBuilder {
  public:
@@ -154,6 +164,8 @@ void SetParameters(const RunSpec& run, const std::string& terrain_id,
   b->Set("roughness", run.roughness);
   b->Set("t_end", run.t_end);
   b->SetInt("repeats", run.repeats);
+  b->Set("host", ThisMachine().hostname);
+  b->Set("cpu_model", ThisMachine().cpu);
 }
 
 void SetReference(const Reference* ref, const std::string& error,
@@ -417,58 +429,6 @@ class Scheduler {
   std::condition_variable cv_;
 };
 
-class Progress {
- public:
-  Progress(std::FILE* log, int mode, int total)
-      : log_(log), mode_(mode), total_(total), start_(Clock::now()) {
-    if (mode_ < 0) mode_ = (log_ && ::isatty(::fileno(log_))) ? 2 : 1;
-    if (!log_) mode_ = 0;
-  }
-  void Done(const std::string& run_id, const std::string& status,
-            double t_reached, double wall) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++done_;
-    if (status != "success") ++failed_;
-    const double elapsed =
-        std::chrono::duration<double>(Clock::now() - start_).count();
-    const double eta = done_ > 0 ? elapsed / done_ * (total_ - done_) : NAN;
-    if (mode_ == 1) {
-      std::fprintf(log_, "[%d/%d] %s: %s (t=%s s, %.3f s wall)\n", done_,
-                   total_, run_id.c_str(), status.c_str(),
-                   Num(t_reached).c_str(), wall);
-    } else if (mode_ == 2) {
-      std::fprintf(log_, "\r\033[K%d/%d runs, %d failed, elapsed %s, ETA %s",
-                   done_, total_, failed_, FormatDuration(elapsed).c_str(),
-                   FormatDuration(eta).c_str());
-      if (done_ == total_) std::fprintf(log_, "\n");
-    }
-    if (mode_) std::fflush(log_);
-  }
-  void Message(const std::string& text) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!log_ || mode_ == 0) return;
-    std::fprintf(log_, "%s\n", text.c_str());
-    std::fflush(log_);
-  }
-
- private:
-  std::mutex mutex_;
-  std::FILE* log_;
-  int mode_;
-  int total_;
-  int done_ = 0, failed_ = 0;
-  Clock::time_point start_;
-};
-
-struct RefJob {
-  Scene scene;
-  TerrainSpec terrain;
-  std::string digest, label, key;
-  std::optional<Reference> reference;
-  std::string error;
-  std::string nlp;
-};
-
 void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
                const std::string& start, const std::string& end,
                const HarnessSummary* summary) {
@@ -493,6 +453,8 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
   WriteLibraryVersions(&w);
   w.Key("numerical_libraries");
   WriteNumericalLibraries(&w);
+  w.Key("build");
+  WriteBuildOptions(&w);
   w.Key("machine");
   WriteMachine(&w);
   w.Key("jobs").Value(jobs);
@@ -504,6 +466,12 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
   w.Key("filter").Value(options.filter);
   w.Key("resume").Value(options.resume);
   w.EndObject();
+  if (options.shard_count > 0) {
+    w.Key("shard").BeginObject();
+    w.Key("index").Value(options.shard_index);
+    w.Key("count").Value(options.shard_count);
+    w.EndObject();
+  }
   w.Key("start_time").Value(start);
   if (summary) {
     w.Key("end_time").Value(end);
@@ -517,27 +485,91 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
     w.Key("complete").Value(false);
   }
   w.EndObject();
-  AtomicWriteFile(options.out_dir + "/meta.json", w.str() + "\n");
+  AtomicWriteFile(SuiteOutputDir(options) + "/meta.json", w.str() + "\n");
+}
+
+double SteadySeconds() {
+  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
 }
 
 }  // namespace
 
-HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
-  const auto t_start = Clock::now();
-  const std::string start_time = IsoTimeNow();
-  const std::string& dir = options.out_dir;
-  int jobs = options.jobs > 0
-                 ? options.jobs
-                 : static_cast<int>(std::thread::hardware_concurrency());
-  if (jobs <= 0) jobs = 1;
+Progress::Progress(std::FILE* log, int mode, int total)
+    : log_(log), mode_(mode), total_(total), start_(SteadySeconds()) {
+  if (mode_ < 0) mode_ = (log_ && ::isatty(::fileno(log_))) ? 2 : 1;
+  if (!log_) mode_ = 0;
+}
+
+void Progress::Done(const std::string& run_id, const std::string& status,
+                    double t_reached, double wall) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++done_;
+  if (status != "success") ++failed_;
+  const double elapsed = SteadySeconds() - start_;
+  const double eta = done_ > 0 ? elapsed / done_ * (total_ - done_) : NAN;
+  if (mode_ == 1) {
+    std::fprintf(log_, "[%d/%d] %s: %s (t=%s s, %.3f s wall)\n", done_, total_,
+                 run_id.c_str(), status.c_str(), Num(t_reached).c_str(), wall);
+  } else if (mode_ == 2) {
+    std::fprintf(log_, "\r\033[K%d/%d runs, %d failed, elapsed %s, ETA %s",
+                 done_, total_, failed_, FormatDuration(elapsed).c_str(),
+                 FormatDuration(eta).c_str());
+    if (done_ == total_) std::fprintf(log_, "\n");
+  }
+  if (mode_) std::fflush(log_);
+}
+
+void Progress::Message(const std::string& text) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!log_ || mode_ == 0) return;
+  std::fprintf(log_, "%s\n", text.c_str());
+  std::fflush(log_);
+}
+
+void ReferenceJob::Compute(const std::string& dir,
+                           const ReferenceSettings& settings) {
+  try {
+    reference =
+        LoadOrComputeReference(dir, scene, terrain, digest, settings, label);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+}
+
+std::string ShardName(const HarnessOptions& options) {
+  if (options.shard_count <= 0) return "";
+  return std::to_string(options.shard_index) + "-of-" +
+         std::to_string(options.shard_count);
+}
+
+std::string SuiteOutputDir(const HarnessOptions& options) {
+  if (options.shard_count <= 0) return options.out_dir;
+  return options.out_dir + "/shards/" + ShardName(options);
+}
+
+ReferenceJob ReferenceJobFor(const Suite& suite, const RunSpec& run) {
+  const SuiteScene& sc = suite.scenes[run.scene_index];
+  ReferenceJob job;
+  job.scene = ReferenceScene(suite, run);
+  job.terrain = SweptTerrain(sc, run.seed, run.roughness);
+  job.digest = sc.heightmap_digest;
+  job.label = sc.name;
+  job.nlp = suite.reference.nlp;
+  job.key = ReferenceKey(job.scene, job.terrain, job.digest, suite.reference);
+  return job;
+}
+
+std::string RunReferenceKey(const Suite& suite, const RunSpec& run) {
+  return ReferenceJobFor(suite, run).key;
+}
+
+SuitePlan PlanSuite(const Suite& suite, const HarnessOptions& options) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
+  SuitePlan plan;
+  const std::string& dir = options.out_dir;
 
-  HarnessSummary summary;
-  summary.total = static_cast<int>(suite.runs.size());
-
-  // Selection.
-  std::vector<const RunSpec*> selected;
+  // Selection: --filter, then --shard.
   {
     std::optional<std::regex> re;
     if (!options.filter.empty()) {
@@ -550,19 +582,33 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
       }
     }
     for (const RunSpec& r : suite.runs)
-      if (!re || std::regex_search(r.run_id, *re)) selected.push_back(&r);
+      if (!re || std::regex_search(r.run_id, *re)) plan.selected.push_back(&r);
   }
-  summary.selected = static_cast<int>(selected.size());
-  fs::create_directories(dir);
-  WriteMeta(suite, options, jobs, start_time, "", nullptr);
+  if (options.shard_count > 0) {
+    if (options.shard_index < 0 || options.shard_index >= options.shard_count)
+      throw SceneError("--shard: expected I/N with 0 <= I < N, got " +
+                       ShardName(options));
+    std::vector<double> costs;
+    std::vector<std::string> keys;
+    for (const RunSpec* r : plan.selected) {
+      costs.push_back(EstimatedRunCost(*r));
+      keys.push_back(RunReferenceKey(suite, *r));
+    }
+    const std::vector<int> shard =
+        AssignShards(costs, keys, options.shard_count);
+    std::vector<const RunSpec*> mine;
+    for (std::size_t k = 0; k < plan.selected.size(); ++k)
+      if (shard[k] == options.shard_index) mine.push_back(plan.selected[k]);
+    plan.selected = std::move(mine);
+  }
 
   const std::string header = Header();
-  std::vector<std::string> rows(selected.size());
-  std::vector<std::string> terrain_ids(selected.size());
-  std::vector<int> pending;
-  for (std::size_t i = 0; i < selected.size(); ++i) {
-    const RunSpec& r = *selected[i];
-    terrain_ids[i] = TerrainId(r, suite.scenes[r.scene_index]);
+  plan.rows.assign(plan.selected.size(), "");
+  plan.terrain_ids.resize(plan.selected.size());
+  plan.run_reference.assign(plan.selected.size(), -1);
+  for (std::size_t i = 0; i < plan.selected.size(); ++i) {
+    const RunSpec& r = *plan.selected[i];
+    plan.terrain_ids[i] = TerrainId(r, suite.scenes[r.scene_index]);
     if (options.resume) {
       bool ok_row = false, ok_traj = false;
       const std::string text =
@@ -574,115 +620,90 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
         std::string row = text.substr(header.size() + 1);
         row.pop_back();
         if (row.find('\n') == std::string::npos) {
-          rows[i] = row;
-          ++summary.resumed;
+          plan.rows[i] = row;
+          ++plan.resumed;
           continue;
         }
       }
     }
-    pending.push_back(static_cast<int>(i));
+    plan.pending.push_back(static_cast<int>(i));
   }
 
-  // Terrains for the report (one file per terrain id).
-  {
-    std::set<std::string> written;
-    for (std::size_t i = 0; i < selected.size(); ++i) {
-      if (!written.insert(terrain_ids[i]).second) continue;
-      const RunSpec& r = *selected[i];
-      const std::string json = TerrainJson(
-          SweptTerrain(suite.scenes[r.scene_index], r.seed, r.roughness));
-      if (!json.empty())
-        AtomicWriteFile(dir + "/terrains/" + terrain_ids[i] + ".json", json);
-    }
-  }
-
-  Progress progress(options.log, options.progress,
-                    static_cast<int>(pending.size()));
-  if (summary.resumed > 0)
-    progress.Message("resume: " + std::to_string(summary.resumed) + " of " +
-                     std::to_string(selected.size()) + " runs already done");
-
-  ExclusiveClasses exclusive;
-  // References needed by the pending runs, computed once each.
-  std::vector<RefJob> refs;
-  std::map<std::string, int> ref_index;  // key -> refs index
-  std::vector<int> run_ref(selected.size(), -1);
-  for (int i : pending) {
-    const RunSpec& r = *selected[i];
-    const SuiteScene& sc = suite.scenes[r.scene_index];
-    RefJob job;
-    job.scene = ReferenceScene(suite, r);
-    job.terrain = SweptTerrain(sc, r.seed, r.roughness);
-    job.digest = sc.heightmap_digest;
-    job.label = sc.name;
-    job.nlp = suite.reference.nlp;
-    job.key = ReferenceKey(job.scene, job.terrain, job.digest, suite.reference);
+  // References needed by the pending runs, one job per distinct key.
+  std::map<std::string, int> ref_index;  // key -> references index
+  for (int i : plan.pending) {
+    ReferenceJob job = ReferenceJobFor(suite, *plan.selected[i]);
     auto [it, inserted] =
-        ref_index.emplace(job.key, static_cast<int>(refs.size()));
-    if (inserted) refs.push_back(std::move(job));
-    run_ref[i] = it->second;
+        ref_index.emplace(job.key, static_cast<int>(plan.references.size()));
+    if (inserted) plan.references.push_back(std::move(job));
+    plan.run_reference[i] = it->second;
   }
-  {
-    std::vector<int> classes;
-    for (const RefJob& j : refs) classes.push_back(exclusive.Of(j.nlp));
-    Scheduler(classes, jobs).Run([&](int k) {
-      RefJob& j = refs[k];
-      try {
-        j.reference = LoadOrComputeReference(dir, j.scene, j.terrain, j.digest,
-                                             suite.reference, j.label);
-      } catch (const std::exception& e) {
-        j.error = e.what();
-        progress.Message("reference for scene " + j.label +
-                         " failed: " + j.error);
-      }
-    });
-  }
+  return plan;
+}
 
-  // Runs.
-  {
-    std::vector<int> classes;
-    for (int i : pending) classes.push_back(exclusive.Of(selected[i]->nlp));
-    Scheduler(classes, jobs).Run([&](int k) {
-      const int i = pending[k];
-      const RunSpec& r = *selected[i];
-      const RefJob& rj = refs[run_ref[i]];
-      const Reference* ref = rj.reference ? &*rj.reference : nullptr;
-      std::vector<std::string> row;
-      SimulationResult result;
-      try {
-        const Scene scene = RunScene(suite, r);
-        Simulator sim(scene, r.Options());
-        result = sim.Run();
-        double wall = result.wall_seconds;
-        for (int rep = 1; rep < r.repeats; ++rep)
-          wall = std::min(wall, sim.Run().wall_seconds);
-        row = MakeRow(r, terrain_ids[i], result, wall, ref, rj.error);
-      } catch (const std::exception& e) {
-        result = SimulationResult{};
-        result.status = "error";
-        row = ErrorRow(r, terrain_ids[i], e.what(), ref, rj.error);
-      }
-      const std::string line = JoinRow(row);
-      AtomicWriteFile(dir + "/trajectories/" + r.run_id + ".csv",
-                      TrajectoryCsv(result));
-      AtomicWriteFile(dir + "/runs/" + r.run_id + ".csv",
-                      header + "\n" + line + "\n");
-      rows[i] = line;
-      progress.Done(r.run_id,
-                    row[std::find(RunsCsvColumns().begin(),
-                                  RunsCsvColumns().end(), "status") -
-                        RunsCsvColumns().begin()],
-                    result.t_reached, result.wall_seconds);
-    });
+void BeginSuiteOutput(const Suite& suite, const HarnessOptions& options,
+                      const SuitePlan& plan, int jobs,
+                      const std::string& start_time) {
+  const std::string& dir = options.out_dir;
+  fs::create_directories(dir);
+  WriteMeta(suite, options, jobs, start_time, "", nullptr);
+  // Terrains for the report (one file per terrain id).
+  std::set<std::string> written;
+  for (std::size_t i = 0; i < plan.selected.size(); ++i) {
+    if (!written.insert(plan.terrain_ids[i]).second) continue;
+    const RunSpec& r = *plan.selected[i];
+    const std::string json = TerrainJson(
+        SweptTerrain(suite.scenes[r.scene_index], r.seed, r.roughness));
+    if (!json.empty())
+      AtomicWriteFile(dir + "/terrains/" + plan.terrain_ids[i] + ".json", json);
   }
-  summary.executed = static_cast<int>(pending.size());
+}
 
+RunOutcome ExecuteRun(const Suite& suite, const RunSpec& run,
+                      const std::string& terrain_id,
+                      const ReferenceJob& reference, const std::string& dir) {
+  const Reference* ref = reference.reference ? &*reference.reference : nullptr;
+  std::vector<std::string> row;
+  SimulationResult result;
+  try {
+    const Scene scene = RunScene(suite, run);
+    Simulator sim(scene, run.Options());
+    result = sim.Run();
+    double wall = result.wall_seconds;
+    for (int rep = 1; rep < run.repeats; ++rep)
+      wall = std::min(wall, sim.Run().wall_seconds);
+    row = MakeRow(run, terrain_id, result, wall, ref, reference.error);
+  } catch (const std::exception& e) {
+    result = SimulationResult{};
+    result.status = "error";
+    row = ErrorRow(run, terrain_id, e.what(), ref, reference.error);
+  }
+  RunOutcome outcome;
+  outcome.row = JoinRow(row);
+  outcome.status = row[ColumnIndex("status")];
+  outcome.t_reached = result.t_reached;
+  outcome.wall_seconds = result.wall_seconds;
+  AtomicWriteFile(dir + "/trajectories/" + run.run_id + ".csv",
+                  TrajectoryCsv(result));
+  AtomicWriteFile(dir + "/runs/" + run.run_id + ".csv",
+                  Header() + "\n" + outcome.row + "\n");
+  return outcome;
+}
+
+HarnessSummary FinishSuiteOutput(const Suite& suite,
+                                 const HarnessOptions& options,
+                                 const SuitePlan& plan, int jobs,
+                                 const std::string& start_time,
+                                 double wall_seconds) {
+  HarnessSummary summary;
+  summary.total = static_cast<int>(suite.runs.size());
+  summary.selected = static_cast<int>(plan.selected.size());
+  summary.executed = static_cast<int>(plan.pending.size());
+  summary.resumed = plan.resumed;
   // runs.csv in grid order.
-  std::string csv = header + "\n";
-  const std::size_t status_col =
-      std::find(RunsCsvColumns().begin(), RunsCsvColumns().end(), "status") -
-      RunsCsvColumns().begin();
-  for (const std::string& row : rows) {
+  std::string csv = Header() + "\n";
+  const std::size_t status_col = ColumnIndex("status");
+  for (const std::string& row : plan.rows) {
     csv += row + "\n";
     // The status field never needs quoting; find it by counting fields up to
     // it (earlier fields never contain commas either: names and numbers).
@@ -692,11 +713,64 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
     const std::string status = row.substr(pos, row.find(',', pos) - pos);
     if (status != "success") ++summary.failures;
   }
-  AtomicWriteFile(dir + "/runs.csv", csv);
-  summary.wall_seconds =
-      std::chrono::duration<double>(Clock::now() - t_start).count();
+  AtomicWriteFile(SuiteOutputDir(options) + "/runs.csv", csv);
+  summary.wall_seconds = wall_seconds;
   WriteMeta(suite, options, jobs, start_time, IsoTimeNow(), &summary);
   return summary;
+}
+
+HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
+  const auto t_start = Clock::now();
+  const std::string start_time = IsoTimeNow();
+  const std::string& dir = options.out_dir;
+  int jobs = options.jobs > 0
+                 ? options.jobs
+                 : static_cast<int>(std::thread::hardware_concurrency());
+  if (jobs <= 0) jobs = 1;
+
+  SuitePlan plan = PlanSuite(suite, options);
+  BeginSuiteOutput(suite, options, plan, jobs, start_time);
+
+  Progress progress(options.log, options.progress,
+                    static_cast<int>(plan.pending.size()));
+  if (plan.resumed > 0)
+    progress.Message("resume: " + std::to_string(plan.resumed) + " of " +
+                     std::to_string(plan.selected.size()) +
+                     " runs already done");
+
+  ExclusiveClasses exclusive;
+  {
+    std::vector<int> classes;
+    for (const ReferenceJob& j : plan.references)
+      classes.push_back(exclusive.Of(j.nlp));
+    Scheduler(classes, jobs).Run([&](int k) {
+      ReferenceJob& j = plan.references[k];
+      j.Compute(dir, suite.reference);
+      if (!j.error.empty())
+        progress.Message("reference for scene " + j.label +
+                         " failed: " + j.error);
+    });
+  }
+
+  // Runs.
+  {
+    std::vector<int> classes;
+    for (int i : plan.pending)
+      classes.push_back(exclusive.Of(plan.selected[i]->nlp));
+    Scheduler(classes, jobs).Run([&](int k) {
+      const int i = plan.pending[k];
+      const RunOutcome out =
+          ExecuteRun(suite, *plan.selected[i], plan.terrain_ids[i],
+                     plan.references[plan.run_reference[i]], dir);
+      plan.rows[i] = out.row;
+      progress.Done(plan.selected[i]->run_id, out.status, out.t_reached,
+                    out.wall_seconds);
+    });
+  }
+
+  return FinishSuiteOutput(
+      suite, options, plan, jobs, start_time,
+      std::chrono::duration<double>(Clock::now() - t_start).count());
 }
 
 }  // namespace quasiroll::bench

@@ -10,6 +10,8 @@
 #pragma once
 
 #include <cstdio>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,6 +29,11 @@ struct HarnessOptions {
   // one line per finished run), 0 never, 1 lines, 2 updating line.
   int progress = -1;
   std::FILE* log = stderr;
+  // --shard I/N (bench/shard.h): run only slice shard_index of shard_count;
+  // shard_count 0 = no sharding. runs.csv and meta.json then go to
+  // DIR/shards/<I>-of-<N>/ so that the N shards may share DIR.
+  int shard_index = 0;
+  int shard_count = 0;
 };
 
 struct HarnessSummary {
@@ -62,6 +69,91 @@ std::vector<std::string> ErrorRow(const RunSpec& run,
 // Runs the suite. Throws SceneError for a bad filter; I/O errors propagate
 // as std::runtime_error. Failing runs never stop the suite.
 HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options);
+
+// ------------------------------------- pieces shared by the suite drivers ----
+// RunSuite (threads), `bench --shard` (one slice per process) and
+// quasiroll-mpi (runs handed out to MPI ranks) are the same steps:
+// PlanSuite, BeginSuiteOutput, ReferenceJob::Compute for the references,
+// ExecuteRun for every pending run, FinishSuiteOutput.
+
+// The reference trajectory of one effective scene (docs/harness.md,
+// References), needed by one or more runs.
+struct ReferenceJob {
+  Scene scene;
+  TerrainSpec terrain;
+  std::string digest, label, key, nlp;
+  std::optional<Reference> reference;
+  std::string error;  // why `reference` is empty ("" = not computed yet)
+  // Loads DIR/references/<hash> or computes and caches it; a failure is
+  // kept in `error`, never thrown.
+  void Compute(const std::string& dir, const ReferenceSettings& settings);
+};
+
+// The reference job of a run's effective scene (not computed yet).
+ReferenceJob ReferenceJobFor(const Suite& suite, const RunSpec& run);
+// Its cache key (ReferenceKey): runs with equal keys share a reference.
+std::string RunReferenceKey(const Suite& suite, const RunSpec& run);
+
+struct SuitePlan {
+  std::vector<const RunSpec*> selected;  // --filter and --shard, grid order
+  std::vector<std::string> terrain_ids;  // per selected run
+  std::vector<std::string> rows;         // runs.csv lines ("" = not run yet)
+  std::vector<int> pending;              // selected runs to execute
+  int resumed = 0;                       // rows taken from DIR/runs/
+  std::vector<ReferenceJob> references;  // needed by the pending runs
+  std::vector<int> run_reference;        // per selected run; -1 if resumed
+};
+
+// Selection (filter, shard), --resume (rows of finished runs) and the
+// references the pending runs need. Throws SceneError for a bad filter.
+SuitePlan PlanSuite(const Suite& suite, const HarnessOptions& options);
+// Creates DIR, writes meta.json (complete: false) and DIR/terrains/.
+void BeginSuiteOutput(const Suite& suite, const HarnessOptions& options,
+                      const SuitePlan& plan, int jobs,
+                      const std::string& start_time);
+
+struct RunOutcome {
+  std::string row;     // runs.csv line (no newline)
+  std::string status;  // its status column
+  double t_reached = 0;
+  double wall_seconds = 0;  // first repeat
+};
+// Runs one grid point (all repeats), compares it with its reference and
+// writes DIR/trajectories/<run_id>.csv, then DIR/runs/<run_id>.csv. A run
+// that fails or throws is a row (status "error" for an exception); only I/O
+// errors propagate.
+RunOutcome ExecuteRun(const Suite& suite, const RunSpec& run,
+                      const std::string& terrain_id,
+                      const ReferenceJob& reference, const std::string& dir);
+
+// Writes runs.csv (plan.rows in grid order) and meta.json (complete).
+HarnessSummary FinishSuiteOutput(const Suite& suite,
+                                 const HarnessOptions& options,
+                                 const SuitePlan& plan, int jobs,
+                                 const std::string& start_time,
+                                 double wall_seconds);
+
+// "<I>-of-<N>" for a shard, "" otherwise.
+std::string ShardName(const HarnessOptions& options);
+// Where runs.csv and meta.json go: DIR, or DIR/shards/<I>-of-<N>.
+std::string SuiteOutputDir(const HarnessOptions& options);
+
+// Progress on a log stream (HarnessOptions::progress modes); thread-safe.
+class Progress {
+ public:
+  Progress(std::FILE* log, int mode, int total);
+  void Done(const std::string& run_id, const std::string& status,
+            double t_reached, double wall);
+  void Message(const std::string& text);
+
+ private:
+  std::mutex mutex_;
+  std::FILE* log_;
+  int mode_;
+  int total_;
+  int done_ = 0, failed_ = 0;
+  double start_ = 0;  // steady clock, seconds
+};
 
 // JSON description of a terrain for the report ("" for types it does not
 // cover: sinusoid, heightmap).

@@ -156,6 +156,16 @@ void WriteLibraryVersions(JsonWriter* json) {
   json->EndObject();
 }
 
+void WriteBuildOptions(JsonWriter* json) {
+  json->BeginObject();
+#ifdef QUASIROLL_BUILD_TYPE
+  json->Key("type").Value(QUASIROLL_BUILD_TYPE);
+  json->Key("cxx_flags").Value(QUASIROLL_CXX_FLAGS);
+  json->Key("options").Value(QUASIROLL_BUILD_OPTIONS);
+#endif
+  json->EndObject();
+}
+
 namespace {
 std::string LoadedLibraryProviding(const char* symbol) {
   void* address = ::dlsym(RTLD_DEFAULT, symbol);
@@ -174,24 +184,34 @@ void WriteNumericalLibraries(JsonWriter* json) {
   json->EndObject();
 }
 
-void WriteMachine(JsonWriter* json) {
-  char host[256] = {0};
-  if (::gethostname(host, sizeof(host) - 1) != 0) host[0] = 0;
-  std::string cpu = "unknown";
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(cpuinfo, line)) {
-    if (line.rfind("model name", 0) == 0) {
-      const auto colon = line.find(':');
-      if (colon != std::string::npos) cpu = line.substr(colon + 2);
-      break;
+const MachineInfo& ThisMachine() {
+  static const MachineInfo info = [] {
+    MachineInfo m;
+    char host[256] = {0};
+    if (::gethostname(host, sizeof(host) - 1) != 0) host[0] = 0;
+    m.hostname = host;
+    m.cpu = "unknown";
+    std::ifstream cpuinfo("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(cpuinfo, line)) {
+      if (line.rfind("model name", 0) == 0) {
+        const auto colon = line.find(':');
+        if (colon != std::string::npos) m.cpu = line.substr(colon + 2);
+        break;
+      }
     }
-  }
+    m.hardware_threads = static_cast<int>(std::thread::hardware_concurrency());
+    return m;
+  }();
+  return info;
+}
+
+void WriteMachine(JsonWriter* json) {
+  const MachineInfo& m = ThisMachine();
   json->BeginObject();
-  json->Key("hostname").Value(std::string(host));
-  json->Key("cpu").Value(cpu);
-  json->Key("hardware_threads")
-      .Value(static_cast<int>(std::thread::hardware_concurrency()));
+  json->Key("hostname").Value(m.hostname);
+  json->Key("cpu").Value(m.cpu);
+  json->Key("hardware_threads").Value(m.hardware_threads);
   json->EndObject();
 }
 

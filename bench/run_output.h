@@ -29,6 +29,17 @@ void WriteLibraryVersions(JsonWriter* json);
 // implementation is loaded can change Ipopt's last digits
 // (docs/performance.md).
 void WriteNumericalLibraries(JsonWriter* json);
+// The machine this process runs on (read once, then cached).
+struct MachineInfo {
+  std::string hostname;  // gethostname(2)
+  std::string cpu;       // first "model name" of /proc/cpuinfo, or "unknown"
+  int hardware_threads = 0;
+};
+const MachineInfo& ThisMachine();
+// How this binary was built: {"type": CMAKE_BUILD_TYPE, "cxx_flags": ...,
+// "options": "QUASIROLL_WITH_IPOPT=ON,..."} (anything that can change the
+// numbers; `quasiroll merge` requires it to agree).
+void WriteBuildOptions(JsonWriter* json);
 // Host name, CPU model, core count.
 void WriteMachine(JsonWriter* json);
 std::string IsoTimeNow();

@@ -8,6 +8,8 @@
 #include <iostream>
 
 #include "bench/harness.h"
+#include "bench/merge.h"
+#include "bench/shard.h"
 #include "bench/suite.h"
 
 namespace quasiroll::cli {
@@ -29,6 +31,10 @@ void BenchCommands::Register(CLI::App& app, std::function<int()>* selected) {
   bench->add_flag(
       "--resume", bench_.resume,
       "Skip runs already finished in DIR/runs/ (interrupted suite)");
+  bench->add_option("--shard", bench_.shard,
+                    "I/N: run only slice I (0-based) of N cost-balanced "
+                    "slices; runs.csv and meta.json go to DIR/shards/I-of-N/ "
+                    "(then 'quasiroll merge')");
   bench
       ->add_option("--progress", bench_.progress,
                    "auto (bar on a TTY, else lines) | bar | lines | none")
@@ -36,6 +42,18 @@ void BenchCommands::Register(CLI::App& app, std::function<int()>* selected) {
       ->capture_default_str();
   bench->callback(
       [this, selected] { *selected = [this] { return RunBench(bench_); }; });
+
+  CLI::App* merge = app.add_subcommand(
+      "merge",
+      "Join shard / partial outputs of one suite into DIR/runs.csv and "
+      "DIR/meta.json as one run writes them (docs/cluster.md)");
+  merge->add_option("inputs", merge_.inputs, "Output directories of bench")
+      ->required();
+  merge->add_option("--out", merge_.out, "Merged output directory")->required();
+  merge->add_option("--suite", merge_.suite,
+                    "Suite file (default: the one the inputs' meta.json name)");
+  merge->callback(
+      [this, selected] { *selected = [this] { return RunMerge(merge_); }; });
 
   CLI::App* report = app.add_subcommand(
       "report", "Render a bench output directory (reports/make_report.py DIR)");
@@ -53,6 +71,11 @@ int RunBench(const BenchArgs& args) {
   options.jobs = args.jobs;
   options.filter = args.filter;
   options.resume = args.resume;
+  if (!args.shard.empty()) {
+    const auto [index, count] = bench::ParseShard(args.shard);
+    options.shard_index = index;
+    options.shard_count = count;
+  }
   options.progress = args.progress == "auto"    ? -1
                      : args.progress == "none"  ? 0
                      : args.progress == "lines" ? 1
@@ -64,6 +87,23 @@ int RunBench(const BenchArgs& args) {
       "successful, %.1f s\n",
       suite.name.c_str(), s.total, s.selected, s.executed, s.resumed,
       s.failures, s.wall_seconds);
+  std::printf("%s/runs.csv\n", bench::SuiteOutputDir(options).c_str());
+  return 0;
+}
+
+int RunMerge(const MergeArgs& args) {
+  bench::MergeOptions options;
+  options.inputs = args.inputs;
+  options.out = args.out;
+  options.suite = args.suite;
+  const bench::MergeSummary s = bench::MergeOutputs(options);
+  std::string hosts;
+  for (const std::string& h : s.hosts) hosts += (hosts.empty() ? "" : ", ") + h;
+  std::fprintf(stderr,
+               "merge: %d runs from %d meta.json (%d duplicates, %d of them "
+               "differing), %d not successful; hosts: %s\n",
+               s.runs, s.metas, s.duplicates, s.differing, s.failures,
+               hosts.c_str());
   std::printf("%s/runs.csv\n", args.out.c_str());
   return 0;
 }

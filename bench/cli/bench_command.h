@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace quasiroll::cli {
 
@@ -14,7 +15,14 @@ struct BenchArgs {
   int jobs = 0;  // 0 = hardware concurrency
   std::string filter;
   bool resume = false;
+  std::string shard;  // "I/N", "" = the whole suite
   std::string progress = "auto";
+};
+
+struct MergeArgs {
+  std::vector<std::string> inputs;
+  std::string out;
+  std::string suite;
 };
 
 struct ReportArgs {
@@ -23,16 +31,18 @@ struct ReportArgs {
 
 class BenchCommands {
  public:
-  // Adds the `bench` and `report` subcommands; a parsed one stores its
+  // Adds the `bench`, `merge` and `report` subcommands; a parsed one stores its
   // action in *selected.
   void Register(CLI::App& app, std::function<int()>* selected);
 
  private:
   BenchArgs bench_;
+  MergeArgs merge_;
   ReportArgs report_;
 };
 
 int RunBench(const BenchArgs& args);
+int RunMerge(const MergeArgs& args);
 int RunReport(const ReportArgs& args);
 
 }  // namespace quasiroll::cli

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -26,6 +27,12 @@ std::string ReadAll(const fs::path& p) {
   std::ostringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+std::string HostName() {
+  char host[256] = {0};
+  ::gethostname(host, sizeof(host) - 1);
+  return host;
 }
 
 // RFC 4180-style parser (quoted fields, doubled quotes); rows of fields.
@@ -198,7 +205,9 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
                         "roughness",
                         "mu_min",
                         "jac_evals",
-                        "t_end"})
+                        "t_end",
+                        "host",
+                        "cpu_model"})
     EXPECT_NE(std::find(t.header.begin(), t.header.end(), c), t.header.end())
         << c;
   ASSERT_EQ(t.rows.size(), suite_.runs.size());
@@ -208,6 +217,9 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
     EXPECT_TRUE(
         fs::exists(root_ / "j1" / "trajectories" / (r.at("run_id") + ".csv")));
     EXPECT_TRUE(fs::exists(root_ / "j1" / "runs" / (r.at("run_id") + ".csv")));
+    // The machine that executed the row.
+    EXPECT_EQ(r.at("host"), HostName()) << r.at("run_id");
+    EXPECT_FALSE(r.at("cpu_model").empty()) << r.at("run_id");
     if (r.at("suite_group") == "wp" || r.at("suite_group") == "ip") {
       EXPECT_EQ(r.at("status"), "success")
           << r.at("run_id") << ": " << r.at("stop_reason");

@@ -1,0 +1,583 @@
+#include "bench/merge.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "bench/harness.h"
+#include "bench/json_writer.h"
+#include "bench/run_output.h"
+#include "bench/suite.h"
+#include "core/scene.h"
+
+namespace quasiroll::bench {
+
+namespace fs = std::filesystem;
+
+const std::vector<std::string>& InvocationMetaKeys() {
+  static const std::vector<std::string> keys = {
+      "machine",       "jobs",         "resume",   "options",
+      "shard",         "start_time",   "end_time", "wall_s",
+      "runs_executed", "runs_resumed", "merge"};
+  return keys;
+}
+
+const std::vector<std::string>& TimingAndHostColumns() {
+  // wall_s* and wall_per_sim_s: timing (docs/harness.md); host, cpu_model:
+  // the machine that executed the row.
+  static const std::vector<std::string> columns = {
+      "wall_s",     "wall_s_median",  "wall_s_min", "wall_s_max",
+      "wall_s_all", "wall_per_sim_s", "host",       "cpu_model"};
+  return columns;
+}
+
+// ------------------------------------------------------------ JSON text ----
+
+namespace {
+
+[[noreturn]] void BadJson(const std::string& why) {
+  throw std::runtime_error("malformed JSON: " + why);
+}
+
+std::size_t SkipSpace(const std::string& s, std::size_t i) {
+  while (i < s.size() &&
+         (s[i] == ' ' || s[i] == '\n' || s[i] == '\r' || s[i] == '\t'))
+    ++i;
+  return i;
+}
+
+// End (one past) of the string literal starting at s[i] == '"'.
+std::size_t StringEnd(const std::string& s, std::size_t i) {
+  for (++i; i < s.size(); ++i) {
+    if (s[i] == '\\')
+      ++i;
+    else if (s[i] == '"')
+      return i + 1;
+  }
+  BadJson("unterminated string");
+}
+
+// End (one past) of the value starting at s[i].
+std::size_t ValueEnd(const std::string& s, std::size_t i) {
+  if (i >= s.size()) BadJson("value expected at the end");
+  if (s[i] == '"') return StringEnd(s, i);
+  if (s[i] == '{' || s[i] == '[') {
+    int depth = 0;
+    for (; i < s.size(); ++i) {
+      const char c = s[i];
+      if (c == '"') {
+        i = StringEnd(s, i) - 1;
+      } else if (c == '{' || c == '[') {
+        ++depth;
+      } else if (c == '}' || c == ']') {
+        if (--depth == 0) return i + 1;
+      }
+    }
+    BadJson("unbalanced brackets");
+  }
+  while (i < s.size() && s[i] != ',' && s[i] != '}' && s[i] != ']' &&
+         s[i] != ' ' && s[i] != '\n' && s[i] != '\r' && s[i] != '\t')
+    ++i;
+  return i;
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> JsonMembers(
+    const std::string& text) {
+  std::vector<std::pair<std::string, std::string>> members;
+  std::size_t i = SkipSpace(text, 0);
+  if (i >= text.size() || text[i] != '{') BadJson("object expected");
+  i = SkipSpace(text, i + 1);
+  if (i < text.size() && text[i] == '}') return members;
+  for (;;) {
+    if (i >= text.size() || text[i] != '"') BadJson("key expected");
+    const std::size_t key_end = StringEnd(text, i);
+    const std::string key = JsonStringValue(text.substr(i, key_end - i));
+    i = SkipSpace(text, key_end);
+    if (i >= text.size() || text[i] != ':') BadJson("':' expected");
+    i = SkipSpace(text, i + 1);
+    const std::size_t value_end = ValueEnd(text, i);
+    members.emplace_back(key, text.substr(i, value_end - i));
+    i = SkipSpace(text, value_end);
+    if (i < text.size() && text[i] == ',') {
+      i = SkipSpace(text, i + 1);
+      continue;
+    }
+    if (i < text.size() && text[i] == '}') return members;
+    BadJson("',' or '}' expected");
+  }
+}
+
+std::string JsonStringValue(const std::string& raw) {
+  if (raw.size() < 2 || raw.front() != '"' || raw.back() != '"')
+    return raw;  // not a string: the raw text (number, null, ...)
+  std::string out;
+  for (std::size_t i = 1; i + 1 < raw.size(); ++i) {
+    char c = raw[i];
+    if (c != '\\') {
+      out += c;
+      continue;
+    }
+    c = raw[++i];
+    switch (c) {
+      case 'n':
+        out += '\n';
+        break;
+      case 't':
+        out += '\t';
+        break;
+      case 'r':
+        out += '\r';
+        break;
+      case 'b':
+        out += '\b';
+        break;
+      case 'f':
+        out += '\f';
+        break;
+      case 'u': {
+        const long code =
+            std::strtol(raw.substr(i + 1, 4).c_str(), nullptr, 16);
+        i += 4;
+        if (code < 0x80) {
+          out += static_cast<char>(code);
+        } else if (code < 0x800) {
+          out += static_cast<char>(0xC0 | (code >> 6));
+          out += static_cast<char>(0x80 | (code & 0x3F));
+        } else {
+          out += static_cast<char>(0xE0 | (code >> 12));
+          out += static_cast<char>(0x80 | ((code >> 6) & 0x3F));
+          out += static_cast<char>(0x80 | (code & 0x3F));
+        }
+        break;
+      }
+      default:
+        out += c;  // \" \\ \/
+    }
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- merge ----
+
+namespace {
+
+std::string ReadText(const fs::path& p, bool* ok) {
+  std::ifstream in(p, std::ios::binary);
+  *ok = static_cast<bool>(in);
+  std::ostringstream ss;
+  if (in) ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string JsonQuote(const std::string& s) {
+  JsonWriter w;
+  w.Value(s);
+  return w.str();
+}
+
+struct Meta {
+  std::string path;
+  std::vector<std::pair<std::string, std::string>> members;
+  const std::string* Get(const std::string& key) const {
+    for (const auto& [k, v] : members)
+      if (k == key) return &v;
+    return nullptr;
+  }
+  std::string Str(const std::string& key) const {
+    const std::string* v = Get(key);
+    return v ? JsonStringValue(*v) : "";
+  }
+  bool complete() const {
+    const std::string* v = Get("complete");
+    return v && *v == "true";
+  }
+};
+
+Meta ReadMeta(const fs::path& p) {
+  bool ok = false;
+  const std::string text = ReadText(p, &ok);
+  if (!ok) throw SceneError(p.string() + ": cannot read");
+  Meta m;
+  m.path = p.string();
+  try {
+    m.members = JsonMembers(text);
+  } catch (const std::exception& e) {
+    throw SceneError(m.path + ": " + e.what());
+  }
+  return m;
+}
+
+// "I-of-N" -> (N, I) for ordering shard directories; others last.
+std::pair<long, long> ShardOrder(const std::string& name) {
+  const auto of = name.find("-of-");
+  if (of == std::string::npos) return {1L << 40, 0};
+  return {std::atol(name.substr(of + 4).c_str()),
+          std::atol(name.substr(0, of).c_str())};
+}
+
+std::vector<Meta> CollectMetas(const std::vector<std::string>& inputs) {
+  std::vector<Meta> metas;
+  std::set<std::string> seen;  // canonical paths
+  auto add = [&](const fs::path& p) {
+    std::error_code ec;
+    const std::string canon = fs::weakly_canonical(p, ec).string();
+    if (seen.insert(ec ? p.string() : canon).second)
+      metas.push_back(ReadMeta(p));
+  };
+  for (const std::string& in : inputs) {
+    const fs::path dir(in);
+    if (!fs::is_directory(dir))
+      throw SceneError("merge: input " + in + ": not a directory");
+    const std::size_t before = metas.size();
+    if (fs::exists(dir / "meta.json")) add(dir / "meta.json");
+    if (fs::is_directory(dir / "shards")) {
+      std::vector<std::string> names;
+      for (const auto& e : fs::directory_iterator(dir / "shards"))
+        if (fs::exists(e.path() / "meta.json"))
+          names.push_back(e.path().filename().string());
+      std::sort(names.begin(), names.end(),
+                [](const std::string& a, const std::string& b) {
+                  return ShardOrder(a) < ShardOrder(b);
+                });
+      for (const std::string& n : names) add(dir / "shards" / n / "meta.json");
+    }
+    if (metas.size() == before && !fs::exists(dir / "meta.json"))
+      throw SceneError("merge: input " + in +
+                       ": no meta.json nor shards/*/meta.json (not an "
+                       "output directory of quasiroll bench)");
+  }
+  return metas;
+}
+
+// Keys that must be byte-identical in every input: what was run, with what.
+void CheckAgreement(const std::vector<Meta>& metas) {
+  for (const char* key : {"suite_hash", "commit", "build", "library_versions",
+                          "numerical_libraries", "reference", "filter"}) {
+    const std::string* first = metas[0].Get(key);
+    for (std::size_t k = 1; k < metas.size(); ++k) {
+      const std::string* v = metas[k].Get(key);
+      if ((first == nullptr) != (v == nullptr) || (first && *first != *v))
+        throw SceneError(std::string("merge: inputs disagree on ") + key +
+                         ": " + metas[0].path + " has " +
+                         (first ? *first : "(no such key)") + ", " +
+                         metas[k].path + " has " + (v ? *v : "(no such key)") +
+                         " (merge only runs of one suite, commit and build)");
+    }
+  }
+}
+
+std::vector<std::string> ParseCsvLine(const std::string& line) {
+  std::vector<std::string> fields;
+  std::string field;
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        field += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        field += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      fields.push_back(field);
+      field.clear();
+    } else {
+      field += c;
+    }
+  }
+  fields.push_back(field);
+  return fields;
+}
+
+struct FoundRow {
+  std::string header, row;
+  fs::path dir;
+};
+
+// The finished row of `run_id` in `dir` (runs/<id>.csv with one row for that
+// run and trajectories/<id>.csv present), as --resume accepts it.
+bool FindRow(const fs::path& dir, const std::string& run_id, FoundRow* out) {
+  bool ok = false;
+  const std::string text = ReadText(dir / "runs" / (run_id + ".csv"), &ok);
+  if (!ok || text.empty() || text.back() != '\n') return false;
+  if (!fs::exists(dir / "trajectories" / (run_id + ".csv"))) return false;
+  const auto nl = text.find('\n');
+  std::string row = text.substr(nl + 1);
+  row.pop_back();
+  if (row.find('\n') != std::string::npos || row.rfind(run_id + ",", 0) != 0)
+    return false;
+  out->header = text.substr(0, nl);
+  out->row = row;
+  out->dir = dir;
+  return true;
+}
+
+bool SameFile(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  return fs::exists(b, ec) && fs::equivalent(a, b, ec);
+}
+
+// dst := src (a hard link if possible, else a copy), atomically.
+void LinkOrCopy(const fs::path& src, const fs::path& dst) {
+  if (SameFile(src, dst)) return;
+  fs::create_directories(dst.parent_path());
+  const fs::path tmp = dst.string() + ".tmp.merge";
+  std::error_code ec;
+  fs::remove(tmp, ec);
+  fs::create_hard_link(src, tmp, ec);
+  if (ec) fs::copy_file(src, tmp, fs::copy_options::overwrite_existing);
+  fs::rename(tmp, dst);
+}
+
+// Every file of DIR/<sub>/ of every input into OUT/<sub>/ unless OUT has it.
+void UnionDirectory(const std::vector<std::string>& inputs, const fs::path& out,
+                    const std::string& sub) {
+  for (const std::string& in : inputs) {
+    const fs::path dir = fs::path(in) / sub;
+    if (!fs::is_directory(dir)) continue;
+    for (const auto& e : fs::directory_iterator(dir)) {
+      if (!e.is_regular_file()) continue;
+      const std::string name = e.path().filename().string();
+      if (name.find(".tmp.") != std::string::npos) continue;
+      const fs::path dst = out / sub / name;
+      if (!fs::exists(dst)) LinkOrCopy(e.path(), dst);
+    }
+  }
+}
+
+double NumberOr(const std::string* raw, double fallback) {
+  if (!raw) return fallback;
+  char* end = nullptr;
+  const double v = std::strtod(raw->c_str(), &end);
+  return end == raw->c_str() ? fallback : v;
+}
+
+}  // namespace
+
+MergeSummary MergeOutputs(const MergeOptions& options) {
+  if (options.inputs.empty()) throw SceneError("merge: no input directory");
+  const std::vector<Meta> metas = CollectMetas(options.inputs);
+  CheckAgreement(metas);
+  MergeSummary summary;
+  summary.metas = static_cast<int>(metas.size());
+
+  // The suite, checked against the inputs' hash.
+  const std::string suite_hash = metas[0].Str("suite_hash");
+  std::string suite_path = options.suite;
+  if (suite_path.empty()) {
+    const std::string* suite_obj = metas[0].Get("suite");
+    if (suite_obj)
+      for (const auto& [k, v] : JsonMembers(*suite_obj))
+        if (k == "absolute_path") suite_path = JsonStringValue(v);
+    if (suite_path.empty())
+      throw SceneError("merge: " + metas[0].path +
+                       " names no suite file; pass --suite FILE");
+  }
+  {
+    bool ok = false;
+    const std::string text = ReadText(suite_path, &ok);
+    if (!ok)
+      throw SceneError("merge: cannot read the suite file " + suite_path +
+                       " (pass --suite FILE)");
+    const std::string hash = Hex64(Fnv1a64(text));
+    if (hash != suite_hash)
+      throw SceneError("merge: the suite file " + suite_path + " has hash " +
+                       hash + ", the inputs were run with suite_hash " +
+                       suite_hash + " (pass --suite FILE with that suite)");
+  }
+  const Suite suite = LoadSuite(suite_path);
+  HarnessOptions selection;
+  selection.filter = metas[0].Str("filter");
+  const SuitePlan plan = PlanSuite(suite, selection);
+
+  for (const Meta& m : metas)
+    if (!m.complete() && options.log)
+      std::fprintf(options.log,
+                   "merge: warning: %s is not complete (interrupted?); its "
+                   "finished runs are used\n",
+                   m.path.c_str());
+
+  // Rows, in grid order: the first input holding a finished row wins.
+  std::string header;
+  std::vector<FoundRow> rows(plan.selected.size());
+  std::vector<std::string> missing;
+  std::vector<std::string> columns;
+  for (std::size_t i = 0; i < plan.selected.size(); ++i) {
+    const std::string& id = plan.selected[i]->run_id;
+    bool found = false;
+    for (const std::string& in : options.inputs) {
+      FoundRow f;
+      if (!FindRow(in, id, &f)) continue;
+      if (header.empty()) {
+        header = f.header;
+        columns = ParseCsvLine(header);
+      } else if (f.header != header) {
+        throw SceneError("merge: " + (f.dir / "runs" / (id + ".csv")).string() +
+                         " has other columns than " +
+                         (rows[0].dir / "runs").string() +
+                         "/*.csv (made by another quasiroll version?)");
+      }
+      if (!found) {
+        rows[i] = f;
+        found = true;
+        continue;
+      }
+      if (SameFile(rows[i].dir / "runs" / (id + ".csv"),
+                   f.dir / "runs" / (id + ".csv")))
+        continue;
+      ++summary.duplicates;
+      const auto a = ParseCsvLine(rows[i].row), b = ParseCsvLine(f.row);
+      const auto& skip = TimingAndHostColumns();
+      for (std::size_t c = 0; c < columns.size() && c < a.size(); ++c) {
+        if (std::find(skip.begin(), skip.end(), columns[c]) != skip.end())
+          continue;
+        if (c >= b.size() || a[c] != b[c]) {
+          ++summary.differing;
+          if (options.log)
+            std::fprintf(options.log,
+                         "merge: warning: run %s differs between %s and %s in "
+                         "column %s (%s vs %s); keeping the first\n",
+                         id.c_str(), rows[i].dir.c_str(), f.dir.c_str(),
+                         columns[c].c_str(), a[c].c_str(),
+                         c < b.size() ? b[c].c_str() : "");
+          break;
+        }
+      }
+    }
+    if (!found) missing.push_back(id);
+  }
+  if (!missing.empty())
+    throw SceneError(
+        "merge: " + std::to_string(missing.size()) + " of " +
+        std::to_string(plan.selected.size()) +
+        " selected runs have no finished row in the inputs (first: " +
+        missing[0] +
+        "); run the shards that hold them again with --resume, then merge");
+
+  // Files.
+  const fs::path out(options.out);
+  fs::create_directories(out);
+  const auto& status_it = std::find(columns.begin(), columns.end(), "status");
+  const auto& host_it = std::find(columns.begin(), columns.end(), "host");
+  std::set<std::string> hosts;
+  std::string csv = header + "\n";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const std::string& id = plan.selected[i]->run_id;
+    const FoundRow& f = rows[i];
+    LinkOrCopy(f.dir / "trajectories" / (id + ".csv"),
+               out / "trajectories" / (id + ".csv"));
+    LinkOrCopy(f.dir / "runs" / (id + ".csv"), out / "runs" / (id + ".csv"));
+    csv += f.row + "\n";
+    const auto fields = ParseCsvLine(f.row);
+    const auto col = [&](auto it) -> std::string {
+      const std::size_t c = static_cast<std::size_t>(it - columns.begin());
+      return it != columns.end() && c < fields.size() ? fields[c] : "";
+    };
+    if (col(status_it) != "success") ++summary.failures;
+    if (host_it != columns.end()) hosts.insert(col(host_it));
+  }
+  UnionDirectory(options.inputs, out, "references");
+  UnionDirectory(options.inputs, out, "terrains");
+  AtomicWriteFile((out / "runs.csv").string(), csv);
+  summary.runs = static_cast<int>(rows.size());
+  summary.hosts.assign(hosts.begin(), hosts.end());
+
+  // meta.json: the members of a complete input (else the first), with the
+  // invocation keys recomputed for the merged whole, and "merge".
+  const Meta* tmpl = &metas[0];
+  for (const Meta& m : metas)
+    if (m.complete()) {
+      tmpl = &m;
+      break;
+    }
+  std::string start_time, end_time;
+  double wall = 0;
+  long long executed = 0, resumed = 0;
+  for (const Meta& m : metas) {
+    const std::string* s = m.Get("start_time");
+    const std::string* e = m.Get("end_time");
+    if (s && (start_time.empty() || *s < start_time)) start_time = *s;
+    if (e && (end_time.empty() || *e > end_time)) end_time = *e;
+    wall += NumberOr(m.Get("wall_s"), 0);
+    executed += static_cast<long long>(NumberOr(m.Get("runs_executed"), 0));
+    resumed += static_cast<long long>(NumberOr(m.Get("runs_resumed"), 0));
+  }
+  if (end_time.empty()) end_time = JsonQuote(IsoTimeNow());
+  std::string options_raw;
+  if (const std::string* o = tmpl->Get("options")) {
+    // The template's options with "out" = the merged directory.
+    options_raw = "{";
+    bool first = true;
+    for (const auto& [k, v] : JsonMembers(*o)) {
+      if (!first) options_raw += ",";
+      first = false;
+      options_raw +=
+          JsonQuote(k) + ":" + (k == "out" ? JsonQuote(options.out) : v);
+    }
+    options_raw += "}";
+  }
+  std::map<std::string, std::string> replaced = {
+      {"options", options_raw},
+      {"start_time", start_time.empty() ? "null" : start_time},
+      {"end_time", end_time},
+      {"wall_s", JsonWriter().Value(wall).str()},
+      {"runs_selected", std::to_string(rows.size())},
+      {"runs_executed", std::to_string(executed)},
+      {"runs_resumed", std::to_string(resumed)},
+      {"failures", std::to_string(summary.failures)},
+      {"complete", "true"}};
+  if (options_raw.empty()) replaced.erase("options");
+  std::string meta = "{";
+  std::set<std::string> emitted;
+  auto emit = [&](const std::string& k, const std::string& v) {
+    if (meta.size() > 1) meta += ",";
+    meta += JsonQuote(k) + ":" + v;
+    emitted.insert(k);
+  };
+  for (const auto& [k, v] : tmpl->members) {
+    if (k == "shard" || k == "merge") continue;
+    const auto it = replaced.find(k);
+    emit(k, it == replaced.end() ? v : it->second);
+  }
+  for (const char* k :
+       {"start_time", "end_time", "wall_s", "runs_selected", "runs_executed",
+        "runs_resumed", "failures", "complete"})
+    if (!emitted.count(k) && replaced.count(k)) emit(k, replaced[k]);
+  std::string merge = "{\"inputs\":[";
+  for (std::size_t k = 0; k < metas.size(); ++k) {
+    const Meta& m = metas[k];
+    if (k) merge += ",";
+    merge += "{\"meta\":" + JsonQuote(m.path);
+    for (const char* key :
+         {"shard", "machine", "jobs", "start_time", "end_time", "wall_s",
+          "runs_selected", "runs_executed", "runs_resumed", "complete"}) {
+      const std::string* v = m.Get(key);
+      merge += std::string(",") + JsonQuote(key) + ":" + (v ? *v : "null");
+    }
+    merge += "}";
+  }
+  merge += "],\"duplicates\":" + std::to_string(summary.duplicates) +
+           ",\"differing_duplicates\":" + std::to_string(summary.differing) +
+           ",\"hosts\":[";
+  for (std::size_t k = 0; k < summary.hosts.size(); ++k)
+    merge += (k ? "," : "") + JsonQuote(summary.hosts[k]);
+  merge += "]}";
+  emit("merge", merge);
+  meta += "}\n";
+  AtomicWriteFile((out / "meta.json").string(), meta);
+  return summary;
+}
+
+}  // namespace quasiroll::bench

@@ -1,0 +1,55 @@
+// `quasiroll merge DIR [DIR...] --out DIR` (docs/cluster.md): joins the
+// output of shards (bench --shard), partial runs (--filter) and MPI runs of
+// one suite into the runs.csv and meta.json a one-machine run writes.
+#pragma once
+
+#include <cstdio>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace quasiroll::bench {
+
+struct MergeOptions {
+  std::vector<std::string> inputs;  // output directories of quasiroll bench
+  std::string out;                  // may be one of the inputs
+  // The suite file; "" = the one the inputs' meta.json name
+  // (suite.absolute_path). Its text must hash to the inputs' suite_hash.
+  std::string suite;
+  std::FILE* log = stderr;  // warnings (differing duplicates, incomplete)
+};
+
+struct MergeSummary {
+  int runs = 0;        // rows of the merged runs.csv
+  int metas = 0;       // meta.json files read
+  int duplicates = 0;  // rows found in more than one input (one kept)
+  int differing = 0;   // of those, rows differing outside the timing/host
+                       // columns (a warning each)
+  int failures = 0;    // rows whose status is not "success"
+  std::vector<std::string> hosts;  // distinct `host` values of the rows
+};
+
+// meta.json keys that describe how, where and when a run was made, not what
+// it computed: they differ between a merged and a one-machine run of the same
+// suite (docs/cluster.md). Every other key is byte-identical.
+const std::vector<std::string>& InvocationMetaKeys();
+// runs.csv columns of timing and of the executing machine; every other
+// column is byte-identical between a merged and a one-machine run.
+const std::vector<std::string>& TimingAndHostColumns();
+
+// Merges. Throws SceneError (one line naming the file, the key and both
+// values) when the inputs disagree on the suite hash, commit, library
+// versions, numerical libraries, reference settings or filter, when the
+// suite file does not match, or when selected runs are missing (naming how
+// many and the first); I/O errors propagate as std::runtime_error.
+MergeSummary MergeOutputs(const MergeOptions& options);
+
+// The members of a JSON object text, in order, as raw value texts
+// ({"a":{"b":1}} -> {"a", "{\"b\":1}"}). Throws std::runtime_error on
+// malformed text.
+std::vector<std::pair<std::string, std::string>> JsonMembers(
+    const std::string& object_text);
+// The string a JSON string literal denotes (raw text -> value).
+std::string JsonStringValue(const std::string& raw);
+
+}  // namespace quasiroll::bench

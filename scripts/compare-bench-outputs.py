@@ -1,0 +1,88 @@
+#!/usr/bin/python3
+"""Checks that two `quasiroll bench` output directories hold the same results.
+
+    /usr/bin/python3 scripts/compare-bench-outputs.py A B [--no-trajectories]
+
+Compares (docs/cluster.md, "What is identical"):
+  runs.csv   byte for byte after dropping the timing and host columns
+             (wall_s, wall_s_median, wall_s_min, wall_s_max, wall_s_all,
+             wall_per_sim_s, host, cpu_model) from both;
+  meta.json  key by key, in order, after dropping the invocation keys
+             (machine, jobs, resume, options, shard, start_time, end_time,
+             wall_s, runs_executed, runs_resumed, merge);
+  trajectories/<run_id>.csv byte for byte for every row (unless
+             --no-trajectories).
+Exit 0 if identical, 1 with the first differences on stderr otherwise.
+"""
+import csv
+import io
+import json
+import os
+import sys
+
+TIMING_AND_HOST_COLUMNS = {"wall_s", "wall_s_median", "wall_s_min", "wall_s_max",
+                           "wall_s_all", "wall_per_sim_s", "host", "cpu_model"}
+INVOCATION_META_KEYS = {"machine", "jobs", "resume", "options", "shard", "start_time",
+                        "end_time", "wall_s", "runs_executed", "runs_resumed", "merge"}
+
+
+def runs_without_timing(path):
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    keep = [k for k, name in enumerate(rows[0]) if name not in TIMING_AND_HOST_COLUMNS]
+    out = io.StringIO()
+    w = csv.writer(out, lineterminator="\n")
+    for r in rows:
+        w.writerow([r[k] for k in keep])
+    return rows, out.getvalue().splitlines()
+
+
+def meta_without_invocation(path):
+    with open(path) as f:
+        meta = json.load(f)
+    return [(k, v) for k, v in meta.items() if k not in INVOCATION_META_KEYS]
+
+
+def main():
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    trajectories = "--no-trajectories" not in sys.argv
+    if len(args) != 2:
+        print(__doc__, file=sys.stderr)
+        return 2
+    a, b = args
+    problems = []
+    rows_a, ta = runs_without_timing(os.path.join(a, "runs.csv"))
+    _, tb = runs_without_timing(os.path.join(b, "runs.csv"))
+    if ta != tb:
+        if len(ta) != len(tb):
+            problems.append(f"runs.csv: {len(ta) - 1} rows in {a}, {len(tb) - 1} in {b}")
+        for k, (x, y) in enumerate(zip(ta, tb)):
+            if x != y:
+                problems.append(f"runs.csv line {k + 1} differs:\n  {x}\n  {y}")
+                break
+    ma, mb = meta_without_invocation(os.path.join(a, "meta.json")), \
+        meta_without_invocation(os.path.join(b, "meta.json"))
+    if ma != mb:
+        da, db = dict(ma), dict(mb)
+        keys = [k for k in list(da) + list(db) if da.get(k) != db.get(k)]
+        problems.append(f"meta.json differs in {sorted(set(keys)) or 'key order'}")
+    if trajectories:
+        for r in rows_a[1:]:
+            name = os.path.join("trajectories", r[0] + ".csv")
+            with open(os.path.join(a, name), "rb") as f:
+                x = f.read()
+            with open(os.path.join(b, name), "rb") as f:
+                y = f.read()
+            if x != y:
+                problems.append(f"{name} differs")
+                break
+    for p in problems:
+        print(f"compare-bench-outputs: {p}", file=sys.stderr)
+    if not problems:
+        print(f"compare-bench-outputs: {a} and {b} hold the same {len(ta) - 1} rows "
+              f"(timing/host columns and invocation keys aside)")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
