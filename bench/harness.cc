@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -259,12 +260,24 @@ std::vector<std::string> ErrorRow(const RunSpec& run,
   return b.values();
 }
 
-std::string ReportScriptPath() {
-#ifdef QUASIROLL_SOURCE_DIR_FOR_GIT
-  return std::string(QUASIROLL_SOURCE_DIR_FOR_GIT) + "/reports/make_report.py";
+std::string DataDirectory() {
+  if (const char* env = std::getenv("QUASIROLL_DATA_DIR"); env && *env)
+    return env;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const fs::path beside = exe.parent_path().parent_path() / "share/quasiroll";
+    if (fs::is_directory(beside, ec)) return beside.string();
+  }
+#ifdef QUASIROLL_INSTALL_DATA_DIR
+  return QUASIROLL_INSTALL_DATA_DIR;
 #else
-  return "reports/make_report.py";
+  return "share/quasiroll";
 #endif
+}
+
+std::string ReportScriptPath() {
+  return DataDirectory() + "/reports/make_report.py";
 }
 
 std::string TerrainJson(const TerrainSpec& spec) {

@@ -159,7 +159,13 @@ class Progress {
 // cover: sinusoid, heightmap).
 std::string TerrainJson(const TerrainSpec& spec);
 
-// <source dir>/reports/make_report.py (source dir fixed at build time).
+// quasiroll's run-time data directory (scenes, suites, the report
+// generator): $QUASIROLL_DATA_DIR if set, else <exe dir>/../share/quasiroll
+// when that exists (an installed prefix, or the build tree, where CMake
+// links build/share/quasiroll to the sources), else the configured install
+// prefix's share/quasiroll.
+std::string DataDirectory();
+// DataDirectory() + "/reports/make_report.py".
 std::string ReportScriptPath();
 
 }  // namespace quasiroll::bench

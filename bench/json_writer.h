@@ -35,6 +35,12 @@ class JsonWriter {
     }
     return *this;
   }
+  // An unknown value (docs/cli.md: null, never a zero that looks like data).
+  JsonWriter& Null() {
+    Separator();
+    out_ += "null";
+    return *this;
+  }
   JsonWriter& Value(int v) {
     Separator();
     out_ += std::to_string(v);

@@ -14,6 +14,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "quasiroll_git_commit.h"
+
 namespace quasiroll {
 
 namespace fs = std::filesystem;
@@ -104,32 +106,7 @@ std::string TrajectoryCsv(const SimulationResult& result) {
   return out;
 }
 
-std::string GitCommit() {
-#ifdef QUASIROLL_SOURCE_DIR_FOR_GIT
-  const std::string dir = QUASIROLL_SOURCE_DIR_FOR_GIT;
-#else
-  const std::string dir = ".";
-#endif
-  auto run = [](const std::string& cmd) {
-    std::string out;
-    FILE* pipe = ::popen(cmd.c_str(), "r");
-    if (!pipe) return out;
-    char buf[256];
-    while (std::fgets(buf, sizeof(buf), pipe)) out += buf;
-    ::pclose(pipe);
-    while (!out.empty() && (out.back() == '\n' || out.back() == '\r'))
-      out.pop_back();
-    return out;
-  };
-  std::string commit =
-      run("git -C '" + dir + "' rev-parse --short=12 HEAD 2>/dev/null");
-  if (commit.empty()) return "unknown";
-  const std::string dirty =
-      run("git -C '" + dir +
-          "' status --porcelain --untracked-files=no 2>/dev/null");
-  if (!dirty.empty()) commit += "-dirty";
-  return commit;
-}
+std::string GitCommit() { return QUASIROLL_GIT_COMMIT; }
 
 void WriteLibraryVersions(JsonWriter* json) {
   json->BeginObject();
@@ -233,7 +210,8 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.Key("stop_reason").Value(r.stop_reason);
   j.Key("t_reached").Value(r.t_reached);
   j.Key("mu_min_at_stop").Value(r.mu_min_at_stop);
-  j.Key("critical_wheel").Value(r.critical_contact);
+  j.Key("critical_wheel");  // 1-based, null if none (docs/formats.md)
+  r.critical_contact > 0 ? (void)j.Value(r.critical_contact) : (void)j.Null();
   if (!r.success()) j.Key("stop_configuration").Array(r.stop_configuration);
   j.Key("samples").Value(static_cast<int>(r.samples.size()));
   j.Key("counters").BeginObject();

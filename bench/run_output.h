@@ -19,8 +19,9 @@ void AtomicWriteFile(const std::string& path, const std::string& content);
 std::string TrajectoryCsvHeader();
 std::string TrajectoryCsv(const SimulationResult& result);
 
-// Short commit hash of the source tree ("unknown" outside a git checkout),
-// with "-dirty" when the tree has uncommitted changes.
+// Short commit hash the binary was built from ("unknown" when built outside
+// a git checkout), with "-dirty" when the tree had uncommitted changes to
+// tracked files at build time (cmake/QuasirollGitCommit.cmake).
 std::string GitCommit();
 // {"eigen": "3.4.0", "ipopt": ..., ...}: versions seen at configure time.
 void WriteLibraryVersions(JsonWriter* json);

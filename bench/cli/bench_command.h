@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,8 +13,8 @@ namespace quasiroll::cli {
 struct BenchArgs {
   std::string suite;
   std::string out;
-  int jobs = 0;  // 0 = hardware concurrency
-  std::string filter;
+  std::optional<int> jobs;  // default: hardware concurrency
+  std::optional<std::string> filter;
   bool resume = false;
   std::string shard;  // "I/N", "" = the whole suite
   std::string progress = "auto";
@@ -27,6 +28,8 @@ struct MergeArgs {
 
 struct ReportArgs {
   std::string dir;
+  std::optional<std::string> out;  // passed to make_report.py --out
+  bool strict = false;             // passed to make_report.py --strict
 };
 
 class BenchCommands {
@@ -44,5 +47,9 @@ class BenchCommands {
 int RunBench(const BenchArgs& args);
 int RunMerge(const MergeArgs& args);
 int RunReport(const ReportArgs& args);
+// The Python that runs the report generator: $QUASIROLL_PYTHON if set (and
+// only it), else the first of /usr/bin/python3 and python3 on PATH that can
+// import matplotlib and numpy. nullopt if none; *tried lists the candidates.
+std::optional<std::string> FindReportPython(std::string* tried);
 
 }  // namespace quasiroll::cli

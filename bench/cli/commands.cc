@@ -1,10 +1,15 @@
 #include "bench/cli/commands.h"
 
+#include <unistd.h>
+
+#include <chrono>
 #include <cstdio>
 #include <iostream>
 
+#include "bench/harness.h"
 #include "bench/json_writer.h"
 #include "bench/run_output.h"
+#include "bench/suite.h"
 #include "core/dae.h"
 #include "core/initial_configuration.h"
 #include "core/kinematics.h"
@@ -15,7 +20,43 @@
 
 namespace quasiroll::cli {
 
+namespace {
+
+const std::vector<std::string> kRkMethods = {"rk4", "dp54", "bs32"};
+
+void AddSceneOverrides(CLI::App* command, SceneOverrides* o) {
+  command
+      ->add_option("--mu", o->mu,
+                   "Friction coefficient (default: the scene's `mu`)")
+      ->check(PositiveNumber());
+  command
+      ->add_option("--eps", o->eps,
+                   "Friction regularisation velocity [m/s] (default: the "
+                   "scene's `epsilon`)")
+      ->check(PositiveNumber());
+  command
+      ->add_option("--mode", o->mode,
+                   "Actuation mode paper | pvc (default: the scene's)")
+      ->check(OneOf({"paper", "pvc"}));
+}
+
+void AddNlpTol(CLI::App* command, std::optional<double>* nlp_tol) {
+  command
+      ->add_option("--nlp-tol", *nlp_tol,
+                   "Quasi-static residual tolerance, scaled (default: " +
+                       bench::Num(QuasiStaticOptions().residual_tolerance) +
+                       ")")
+      ->check(PositiveNumber());
+}
+
+}  // namespace
+
 void Commands::Register(CLI::App& app) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  const std::vector<std::string> nlps = NlpSolverRegistry::Names();
+  const std::vector<std::string> daes = IntegratorRegistry::Names();
+
   CLI::App* pose = app.add_subcommand(
       "pose", "Print the initial consistent configuration of a scene");
   pose->add_option("--scene", pose_.scene, "Scene YAML file")->required();
@@ -27,41 +68,85 @@ void Commands::Register(CLI::App& app) {
       "Solve the quasi-static problem at a scene's initial configuration");
   solve->add_option("--scene", solve_.scene, "Scene YAML file")->required();
   solve->add_option("--nlp", solve_.nlp, "NLP backend (see 'quasiroll list')")
+      ->check(OneOf(nlps))
       ->capture_default_str();
-  solve->add_option("--mu", solve_.mu,
-                    "Override the friction coefficient (> 0)");
-  solve->add_option("--mode", solve_.mode, "Override the actuation mode")
-      ->check(CLI::IsMember({"paper", "pvc"}));
+  AddSceneOverrides(solve, &solve_.overrides);
+  AddNlpTol(solve, &solve_.nlp_tol);
   solve->add_flag("--json", solve_.json, "Print JSON instead of text");
   solve->callback([this] { selected_ = [this] { return RunSolve(solve_); }; });
 
+  const IntegratorOptions integrator_defaults;
   CLI::App* run = app.add_subcommand(
       "run", "Simulate a scene; writes DIR/trajectory.csv and DIR/run.json");
   run->add_option("--scene", run_.scene, "Scene YAML file")->required();
-  run->add_option("--nlp", run_.nlp, "NLP backend")->capture_default_str();
-  run->add_option("--dae", run_.dae, "Integrator backend")
+  run->add_option("--nlp", run_.nlp, "NLP backend (see 'quasiroll list')")
+      ->check(OneOf(nlps))
+      ->capture_default_str();
+  run->add_option("--dae", run_.dae,
+                  "Integrator backend (see 'quasiroll list')")
+      ->check(OneOf(daes))
       ->capture_default_str();
   run->add_option("--coupling", run_.coupling, "zoh | coupled")
-      ->check(CLI::IsMember({"zoh", "coupled"}))
+      ->check(OneOf({"zoh", "coupled"}))
       ->capture_default_str();
   run->add_option("--dt", run_.dt,
-                  "Hold/output interval [s] (default: scene's)");
-  run->add_option("--t-end", run_.t_end, "End time [s] (default: scene's)");
-  run->add_option("--mu", run_.mu, "Override the friction coefficient (> 0)");
-  run->add_option("--mode", run_.mode, "Override the actuation mode")
-      ->check(CLI::IsMember({"paper", "pvc"}));
-  run->add_option("--rk", run_.rk_method, "RK scheme: rk4 | dp54 | bs32")
-      ->capture_default_str();
-  run->add_option("--sigma", run_.sigma, "Baumgarte gain [1/s]")
-      ->capture_default_str();
-  run->add_option("--rtol", run_.rtol, "Relative tolerance (adaptive RK, IDA)")
-      ->capture_default_str();
-  run->add_option("--atol", run_.atol, "Absolute tolerance (adaptive RK, IDA)")
-      ->capture_default_str();
+                  "Hold/output interval [s] (default: the scene's time.dt)")
+      ->check(PositiveNumber());
+  run->add_option("--t-end", run_.t_end,
+                  "End time [s] (default: the scene's time.t_end)")
+      ->check(PositiveNumber());
+  AddSceneOverrides(run, &run_.overrides);
+  const std::string rk_help =
+      "RK scheme of rk-baumgarte / rk-projection: rk4 | dp54 | bs32 "
+      "(default: rk4)";
+  CLI::Option* rk_method =
+      run->add_option("--rk-method", run_.rk_method, rk_help);
+  rk_method->check(OneOf(kRkMethods));
+  deprecated_.push_back(
+      {run->add_option("--rk", run_.rk_method, "Deprecated: --rk-method")
+           ->check(OneOf(kRkMethods))
+           ->excludes(rk_method)
+           ->group("Deprecated"),
+       "--rk", "--rk-method"});
+  run->add_option("--sigma", run_.sigma,
+                  "Baumgarte gain [1/s] (rk-baumgarte; ida with --dae-index 1; "
+                  "default: " +
+                      bench::Num(integrator_defaults.baumgarte_sigma) + ")")
+      ->check(NonNegativeNumber());
+  CLI::Option* tol =
+      run->add_option("--tol", run_.tol,
+                      "Relative tolerance of adaptive RK and IDA (default: " +
+                          bench::Num(integrator_defaults.rtol) + ")");
+  tol->check(PositiveNumber());
+  deprecated_.push_back(
+      {run->add_option("--rtol", run_.tol, "Deprecated: --tol")
+           ->check(PositiveNumber())
+           ->excludes(tol)
+           ->group("Deprecated"),
+       "--rtol", "--tol"});
+  run->add_option("--atol", run_.atol,
+                  "Absolute tolerance of adaptive RK and IDA (default: " +
+                      bench::Num(integrator_defaults.atol) + ")")
+      ->check(PositiveNumber());
+  AddNlpTol(run, &run_.nlp_tol);
   run->add_option("--dae-index", run_.dae_index,
-                  "IDA formulation: 2 (GGL) or 1 (Baumgarte)")
-      ->capture_default_str();
+                  "IDA formulation: 2 (GGL) or 1 (Baumgarte) (default: " +
+                      std::to_string(integrator_defaults.dae_index) + ")")
+      ->check(IntegerIn(1, 2));
+  run->add_option("--substeps", run_.substeps,
+                  "Integrator steps per dt (RK4 step = dt / substeps; initial "
+                  "step of adaptive schemes; default: 1)")
+      ->check(IntegerIn(1, 100000));
+  run->add_option("--contact-check", run_.contact_check,
+                  "Sampled second-contact check every N samples (default: "
+                  "never)")
+      ->check(IntegerIn(1, 1000000000));
   run->add_option("--out", run_.out, "Output directory")->capture_default_str();
+  run->add_option("--progress", run_.progress,
+                  "auto (a line updated in place when stderr is a TTY) | bar "
+                  "| none")
+      ->check(OneOf({"auto", "bar", "none"}))
+      ->capture_default_str();
   run->callback([this] { selected_ = [this] { return RunRun(run_); }; });
 
   CLI::App* list = app.add_subcommand(
@@ -69,9 +154,32 @@ void Commands::Register(CLI::App& app) {
   list->callback([this] { selected_ = [] { return RunList(); }; });
 
   bench_.Register(app, &selected_);
+  for (CLI::App* command : app.get_subcommands({})) command->allow_extras();
 }
 
-int Commands::Run() { return selected_ ? selected_() : 2; }
+void Commands::CheckParsed(const CLI::App& app) const {
+  for (const CLI::App* command : app.get_subcommands())
+    RejectUnknownArguments(*command, "quasiroll " + command->get_name());
+  WarnDeprecatedSpellings(deprecated_);
+}
+
+int Commands::Run() { return selected_ ? selected_() : kExitBadInput; }
+
+std::string VersionText() {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  std::string text = "quasiroll " QUASIROLL_VERSION "\ncommit      " +
+                     GitCommit() +
+                     "\nbuild type  " QUASIROLL_BUILD_TYPE "\nnlp         ";
+  for (const std::string& name : NlpSolverRegistry::Names()) text += name + " ";
+  text.back() = '\n';
+  text += "dae         ";
+  for (const std::string& name : IntegratorRegistry::Names())
+    text += name + " ";
+  text.back() = '\n';
+  text += "reports     " + bench::ReportScriptPath();
+  return text;
+}
 
 int RunPose(const PoseArgs& args) {
   const Scene scene = LoadScene(args.scene);
@@ -151,15 +259,18 @@ int RunList() {
 
 namespace {
 
-void ApplyOverrides(Scene* scene, double mu, const std::string& mode) {
-  if (mu != 0) {
-    if (!(std::isfinite(mu) && mu > 0))
-      throw SceneError("--mu: must be finite and > 0, got " +
-                       std::to_string(mu));
-    scene->mu = mu;
-  }
-  if (mode == "paper") scene->mode = ActuationMode::kPaper;
-  if (mode == "pvc") scene->mode = ActuationMode::kPvc;
+void ApplyOverrides(Scene* scene, const SceneOverrides& o) {
+  if (o.mu) scene->mu = *o.mu;
+  if (o.eps) scene->epsilon = *o.eps;
+  if (o.mode == "paper") scene->mode = ActuationMode::kPaper;
+  if (o.mode == "pvc") scene->mode = ActuationMode::kPvc;
+}
+
+// Arrays of `n` nulls: the JSON of a value the solve did not produce.
+void NullArray(JsonWriter* w, int n) {
+  w->BeginArray();
+  for (int i = 0; i < n; ++i) w->Null();
+  w->EndArray();
 }
 
 }  // namespace
@@ -167,17 +278,23 @@ void ApplyOverrides(Scene* scene, double mu, const std::string& mode) {
 int RunSolve(const SolveArgs& args) {
   RegisterBuiltinNlpSolvers();
   Scene scene = LoadScene(args.scene);
-  ApplyOverrides(&scene, args.mu, args.mode);
+  ApplyOverrides(&scene, args.overrides);
   const KinematicModel model(scene.geometry, scene.terrain);
   const Configuration theta = SolveInitialConfiguration(model, scene);
   QuasiStaticOptions options;
   options.diagnostics = true;
+  if (args.nlp_tol) options.residual_tolerance = *args.nlp_tol;
   QuasiStaticSolver solver(model, QuasiStaticParameters::FromScene(scene),
                            NlpSolverRegistry::Create(args.nlp), options);
   QuasiStaticSolution sol;
   const QuasiStaticStatus status = solver.Solve(theta, &sol);
   const bool ok = status == QuasiStaticStatus::kOk;
+  // 1-based wheel, or none (docs/cli.md, "No wheel").
+  const int critical_wheel =
+      sol.critical_contact >= 0 ? sol.critical_contact + 1 : 0;
   if (args.json) {
+    // A failed solve has no twist, rates, torques, gap or contact outputs:
+    // those keys are null (arrays of nulls keep their length), never zeros.
     JsonWriter w;
     w.BeginObject();
     w.Key("status").Value(ToString(status));
@@ -186,32 +303,51 @@ int RunSolve(const SolveArgs& args) {
     w.Key("mode").Value(ToString(scene.mode));
     w.Key("mu").Value(scene.mu);
     w.Key("mu_min").Value(sol.mu_min);
-    w.Key("twist").Array(sol.twist);
-    w.Key("joint_rates").Array(sol.joint_rates);
-    w.Key("actuator_torques").Array(sol.actuator_torques);
-    w.Key("gap").Value(sol.gap);
+    w.Key("twist");
+    ok ? (void)w.Array(sol.twist) : NullArray(&w, 6);
+    w.Key("joint_rates");
+    ok ? (void)w.Array(sol.joint_rates) : NullArray(&w, 6);
+    w.Key("actuator_torques");
+    ok ? (void)w.Array(sol.actuator_torques) : NullArray(&w, 6);
+    w.Key("gap");
+    ok ? (void)w.Value(sol.gap) : (void)w.Null();
     w.Key("iterations").Value(sol.nlp_iterations);
     w.Key("nlp_solves").Value(sol.nlp_solves);
     w.Key("residual").Value(sol.residual);
     w.Key("condition_number").Value(sol.condition_number);
     w.Key("wall_s").Value(sol.wall_seconds);
-    w.Key("critical_wheel").Value(sol.critical_contact + 1);
+    w.Key("critical_wheel");
+    critical_wheel > 0 ? (void)w.Value(critical_wheel) : (void)w.Null();
     w.Key("contacts").BeginArray();
     for (const ContactOutput& c : sol.contacts) {
       w.BeginObject();
-      w.Key("normal_force").Value(c.normal_force);
-      w.Key("traction").Array(c.traction);
-      w.Key("force_world").Array(c.force_world);
-      w.Key("slip").Array(c.slip);
-      w.Key("normal_velocity").Value(c.normal_velocity);
-      w.Key("friction_use").Value(c.friction_use);
-      w.Key("point").Array(c.point);
+      if (ok) {
+        w.Key("normal_force").Value(c.normal_force);
+        w.Key("traction").Array(c.traction);
+        w.Key("force_world").Array(c.force_world);
+        w.Key("slip").Array(c.slip);
+        w.Key("normal_velocity").Value(c.normal_velocity);
+        w.Key("friction_use").Value(c.friction_use);
+        w.Key("point").Array(c.point);
+      } else {
+        w.Key("normal_force").Null();
+        w.Key("traction");
+        NullArray(&w, 2);
+        w.Key("force_world");
+        NullArray(&w, 3);
+        w.Key("slip");
+        NullArray(&w, 2);
+        w.Key("normal_velocity").Null();
+        w.Key("friction_use").Null();
+        w.Key("point");
+        NullArray(&w, 3);
+      }
       w.EndObject();
     }
     w.EndArray();
     w.EndObject();
     std::cout << w.str() << "\n";
-    return ok ? 0 : 1;
+    return ok ? kExitOk : kExitNotOk;
   }
   std::printf("status       %s%s%s\n", ToString(status),
               sol.message.empty() ? "" : ": ", sol.message.c_str());
@@ -223,7 +359,10 @@ int RunSolve(const SolveArgs& args) {
       sol.wall_seconds * 1e6, sol.residual, sol.condition_number);
   std::printf("mode %s, mu = %g, mu_min = %.9g\n", ToString(scene.mode),
               scene.mu, sol.mu_min);
-  if (!ok) return 1;
+  if (!ok) {
+    if (critical_wheel > 0) std::printf("critical wheel %d\n", critical_wheel);
+    return kExitNotOk;
+  }
   std::printf(
       "twist V^B    v = (%.9f, %.9f, %.9f) m/s  w = (%.9f, %.9f, %.9f) rad/s\n",
       sol.twist(0), sol.twist(1), sol.twist(2), sol.twist(3), sol.twist(4),
@@ -242,27 +381,109 @@ int RunSolve(const SolveArgs& args) {
   std::printf("actuator torques ");
   for (double t : sol.actuator_torques) std::printf("%.6f ", t);
   std::printf("N m (nan = passive)\ngap G = %.3e W\n", sol.gap);
-  return 0;
+  return kExitOk;
 }
 
+namespace {
+
+// `quasiroll run --progress`: one line on stderr rewritten in place
+// (carriage return), at most every 0.1 s of wall time.
+class RunProgress {
+ public:
+  RunProgress(bool enabled, double t_end) : enabled_(enabled), t_end_(t_end) {}
+  void Update(const SimulationResult& r, bool force = false) {
+    if (!enabled_ || r.samples.empty()) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (!force && printed_ && now - last_ < std::chrono::milliseconds(100))
+      return;
+    last_ = now;
+    printed_ = true;
+    const double t = r.samples.back().t;
+    std::fprintf(stderr,
+                 "\rrun: t = %.4g / %.4g s  %3.0f%%  %zu samples  %.1f s", t,
+                 t_end_, 100.0 * t / t_end_, r.samples.size(),
+                 std::chrono::duration<double>(now - start_).count());
+    std::fflush(stderr);
+  }
+  void Finish(const SimulationResult& r) {
+    if (!enabled_) return;
+    Update(r, true);
+    if (printed_) std::fputc('\n', stderr);
+  }
+
+ private:
+  bool enabled_;
+  double t_end_;
+  bool printed_ = false;
+  std::chrono::steady_clock::time_point start_ =
+      std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point last_;
+};
+
+}  // namespace
+
 int RunRun(const RunArgs& args) {
+  // Everything that can be checked is checked before the simulation.
+  CheckOutputDirectory("--out", args.out);
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
   Scene scene = LoadScene(args.scene);
-  ApplyOverrides(&scene, args.mu, args.mode);
+  ApplyOverrides(&scene, args.overrides);
+  const double dt = args.dt.value_or(scene.dt);
+  const double t_end = args.t_end.value_or(scene.t_end);
+  if (dt > t_end) {
+    if (args.dt)
+      throw UsageError("--dt",
+                       "must be <= the end time " + bench::Num(t_end) + " s (" +
+                           (args.t_end ? "--t-end" : "scene time.t_end") +
+                           "), got " + bench::Num(dt));
+    throw UsageError("--t-end",
+                     "must be >= the hold interval " + bench::Num(dt) +
+                         " s (scene time.dt), got " + bench::Num(t_end));
+  }
   SimulationOptions options;
   options.nlp = args.nlp;
   options.dae = args.dae;
   options.coupling = CouplingFromString(args.coupling);
-  options.dt = args.dt;
-  options.t_end = args.t_end;
-  options.integrator.rk_method = RkMethodFromString(args.rk_method);
-  options.integrator.baumgarte_sigma = args.sigma;
-  options.integrator.rtol = args.rtol;
-  options.integrator.atol = args.atol;
-  options.integrator.dae_index = args.dae_index;
+  options.dt = dt;
+  options.t_end = t_end;
+  if (args.rk_method)
+    options.integrator.rk_method = RkMethodFromString(*args.rk_method);
+  if (args.sigma) options.integrator.baumgarte_sigma = *args.sigma;
+  if (args.tol) options.integrator.rtol = *args.tol;
+  if (args.atol) options.integrator.atol = *args.atol;
+  if (args.dae_index) options.integrator.dae_index = *args.dae_index;
+  if (args.substeps) options.integrator.step = dt / *args.substeps;
+  if (args.nlp_tol) options.quasi_static.residual_tolerance = *args.nlp_tol;
+  if (args.contact_check)
+    options.second_contact_check_every = *args.contact_check;
   Simulator sim(scene, options);
-  const SimulationResult result = sim.Run();
+
+  const bool tty = ::isatty(STDERR_FILENO) == 1;
+  RunProgress progress(
+      args.progress == "bar" || (args.progress == "auto" && tty), sim.t_end());
+  InstallInterruptFlag();
+  SimulationResult result;
+  sim.Begin(sim.initial_configuration(), &result);
+  bool interrupted = false;
+  while (true) {
+    if (Interrupted()) {
+      interrupted = true;
+      break;
+    }
+    if (!sim.Advance(&result)) break;
+    progress.Update(result);
+  }
+  progress.Finish(result);
+  if (interrupted) {
+    // The trajectory so far; run.json says so (docs/cli.md, "Interrupts").
+    const double t = result.samples.empty() ? 0.0 : result.samples.back().t;
+    result.status = "INTERRUPTED";
+    result.t_reached = t;
+    result.stop_reason = "interrupted (SIGINT) at t=" + bench::Num(t) + " s";
+    if (!result.samples.empty())
+      result.stop_configuration = result.samples.back().theta;
+  }
   AtomicWriteFile(args.out + "/trajectory.csv", TrajectoryCsv(result));
   AtomicWriteFile(args.out + "/run.json",
                   RunJson(scene, options, sim.dt(), sim.t_end(), result));
@@ -272,7 +493,8 @@ int RunRun(const RunArgs& args) {
                result.stop_reason.empty() ? "" : "\n  stop: ",
                result.stop_reason.c_str());
   std::printf("%s/trajectory.csv\n", args.out.c_str());
-  return result.success() ? 0 : 1;
+  if (interrupted) return kExitInterrupted;
+  return result.success() ? kExitOk : kExitNotOk;
 }
 
 }  // namespace quasiroll::cli

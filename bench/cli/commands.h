@@ -1,11 +1,17 @@
 // Subcommands of the quasiroll CLI (docs/cli.md documents each).
+// Flag names are the suite keys with '_' -> '-' (docs/cli.md, "Names");
+// an optional flag left out means "the scene's value" or the documented
+// library default, never a 0 sentinel.
 #pragma once
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "bench/cli/bench_command.h"
+#include "bench/cli/cli_support.h"
 
 namespace quasiroll::cli {
 
@@ -14,11 +20,18 @@ struct PoseArgs {
   bool json = false;
 };
 
+// Scene-parameter overrides shared by solve and run.
+struct SceneOverrides {
+  std::optional<double> mu;         // friction coefficient
+  std::optional<double> eps;        // friction regularisation velocity [m/s]
+  std::optional<std::string> mode;  // actuation mode
+};
+
 struct SolveArgs {
   std::string scene;
   std::string nlp = "newton";
-  double mu = 0;     // 0 = scene's
-  std::string mode;  // "" = scene's
+  SceneOverrides overrides;
+  std::optional<double> nlp_tol;
   bool json = false;
 };
 
@@ -27,18 +40,21 @@ struct RunArgs {
   std::string nlp = "newton";
   std::string dae = "rk-projection";
   std::string coupling = "zoh";
-  double dt = 0, t_end = 0, mu = 0;
-  std::string mode;
-  std::string rk_method = "rk4";
-  double sigma = 5.0;
-  double rtol = 1e-8, atol = 1e-10;
-  int dae_index = 2;
+  std::optional<double> dt, t_end;
+  SceneOverrides overrides;
+  std::optional<std::string> rk_method;
+  std::optional<double> sigma, tol, atol, nlp_tol;
+  std::optional<int> dae_index, substeps, contact_check;
   std::string out = "out/run";
+  std::string progress = "auto";
 };
 
 class Commands {
  public:
   void Register(CLI::App& app);
+  // After a successful parse: rejects arguments the selected subcommand did
+  // not recognise (UsageError) and prints deprecation notes.
+  void CheckParsed(const CLI::App& app) const;
   // Runs the parsed subcommand; returns the process exit code.
   int Run();
 
@@ -48,11 +64,14 @@ class Commands {
   SolveArgs solve_;
   RunArgs run_;
   BenchCommands bench_;
+  std::vector<DeprecatedSpelling> deprecated_;
 };
 
 int RunPose(const PoseArgs& args);
 int RunList();
 int RunSolve(const SolveArgs& args);
 int RunRun(const RunArgs& args);
+// `quasiroll --version`: version, commit, build type, compiled-in backends.
+std::string VersionText();
 
 }  // namespace quasiroll::cli

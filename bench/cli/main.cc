@@ -1,42 +1,76 @@
-// quasiroll command-line interface. Exit codes: 0 success, 1 a run/solve that
-// ended with a non-OK status, 2 bad input (message on stderr).
+// quasiroll command-line interface. Exit codes (docs/cli.md): 0 success,
+// 1 a run/solve that ended with a non-OK status, 2 bad input (one line on
+// stderr naming the flag or key), 3 internal or I/O error, 4 a missing
+// external tool (report), 130 interrupted (SIGINT).
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <stdexcept>
 
+#include "bench/cli/cli_support.h"
 #include "bench/cli/commands.h"
 #include "core/initial_configuration.h"
 #include "core/scene.h"
 
+namespace {
+
+int BadInput(const std::string& message) {
+  std::cerr << "error: " << message << "\n";
+  return quasiroll::cli::kExitBadInput;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  using namespace quasiroll::cli;
   CLI::App app{
       "quasiroll: quasi-static forward motion of a wheeled mobile robot on "
       "uneven terrain, and a testbed comparing the numerical methods that "
-      "simulate it."};
+      "simulate it. Exit codes and every flag: docs/cli.md."};
   app.require_subcommand(1);
-  quasiroll::cli::Commands commands;
+  app.set_version_flag(
+      "--version", [] { return VersionText(); },
+      "Print version, commit, build type and backends");
+  Commands commands;
   commands.Register(app);
+
+  std::vector<std::string> names;
+  for (const CLI::App* command : app.get_subcommands({}))
+    names.push_back(command->get_name());
+  std::string known;
+  for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
+  // `quasiroll` alone or `quasiroll <typo>`: name the commands.
+  if (argc < 2) return BadInput("a command is required (" + known + ")");
+  if (argv[1][0] != '-' &&
+      std::find(names.begin(), names.end(), argv[1]) == names.end()) {
+    const std::string hint = ClosestName(argv[1], names);
+    return BadInput("unknown command '" + std::string(argv[1]) + "'" +
+                    (hint.empty() ? "" : " (did you mean " + hint + "?)") +
+                    "; commands: " + known);
+  }
   try {
     app.parse(argc, argv);
+    commands.CheckParsed(app);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
-    std::cerr << "error: " << e.what() << "\n";      // one line, see --help
-    return 2;
+    if (dynamic_cast<const CLI::RequiredError*>(&e) != nullptr &&
+        app.get_subcommands().empty())
+      return BadInput("a command is required (" + known + ")");
+    return BadInput(e.what());  // one line, see --help
+  } catch (const UsageError& e) {
+    return BadInput(e.what());
   }
   try {
     return commands.Run();
   } catch (const quasiroll::SceneError& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return 2;
+    return BadInput(e.what());
   } catch (const quasiroll::GeometryError& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return 2;
+    return BadInput(e.what());
   } catch (const std::invalid_argument& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return 2;
+    return BadInput(e.what());
   } catch (const std::exception& e) {
     std::cerr << "internal error: " << e.what() << "\n";
-    return 3;
+    return kExitInternal;
   }
 }
