@@ -128,6 +128,7 @@ int RunBench(const BenchArgs& args) {
   std::string resume = "quasiroll bench --suite " + ShellQuote(args.suite) +
                        " --out " + ShellQuote(args.out) + " --resume";
   if (args.filter) resume += " --filter " + ShellQuote(*args.filter);
+  if (!args.shard.empty()) resume += " --shard " + ShellQuote(args.shard);
   if (args.jobs) resume += " --jobs " + std::to_string(*args.jobs);
   InstallInterruptMessage(
       "\nquasiroll bench: interrupted (SIGINT); the runs finished so far are "
@@ -141,10 +142,11 @@ int RunBench(const BenchArgs& args) {
       suite.name.c_str(), s.total, s.selected, s.executed, s.resumed,
       s.failures, s.wall_seconds);
   std::printf("%s/runs.csv\n", bench::SuiteOutputDir(options).c_str());
-  return 0;
+  return kExitOk;
 }
 
 int RunMerge(const MergeArgs& args) {
+  CheckOutputDirectory("--out", args.out);
   bench::MergeOptions options;
   options.inputs = args.inputs;
   options.out = args.out;

@@ -164,7 +164,7 @@ assert rows["incline_low_mu"]["critical_wheel"] == "2", rows["incline_low_mu"]["
 PY
 
 # --- every flag of every command is in docs/cli.md -----------------------------
-for cmd in pose solve run list bench report; do
+for cmd in pose solve run list bench merge report; do
   for flag in $("$bin" $cmd --help | grep -oE '^ +(-[a-z],)?--[a-z][a-z0-9-]*' | grep -oE -- '--[a-z][a-z0-9-]*'); do
     [ "$flag" = --help ] && continue
     grep -q -- "\`$flag" docs/cli.md && ok || bad "docs/cli.md does not document '$cmd $flag'"
