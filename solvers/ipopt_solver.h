@@ -49,19 +49,6 @@ enum class IpoptLinearSolver {
   kMumps,      // "ipopt-mumps"
 };
 
-// Ipopt 3.11 reads the process's CPU time (getrusage) around every phase of
-// every iteration for timing statistics quasiroll never uses; those system
-// calls were two thirds of a warm solve (docs/performance.md). By default
-// quasiroll answers them from Ipopt's own code with zero usage and no
-// system call; every other caller of getrusage is unaffected
-// (ipopt_solver.cc). Process-wide switch; enable it to get Ipopt's real
-// timers back (for its print_timing_statistics output or a max_cpu_time
-// limit; quasiroll sets neither).
-void SetIpoptTaskTimersEnabled(bool enabled);
-// How many of Ipopt's getrusage calls this thread has answered without a
-// system call (for tests and diagnostics).
-long IpoptTaskTimerCallsElidedOnThisThread();
-
 class IpoptSolver final : public NlpSolver {
  public:
   explicit IpoptSolver(
