@@ -22,7 +22,9 @@ os.environ["MPLBACKEND"] = "Agg"
 
 import make_fixture  # noqa: E402
 from quasiroll_report import selection as sel  # noqa: E402
+import numpy as np  # noqa: E402
 from quasiroll_report import plotting  # noqa: E402
+from quasiroll_report import robot  # noqa: E402
 from quasiroll_report.data import read_references, read_runs  # noqa: E402
 from quasiroll_report.report import FIGURE_NAMES  # noqa: E402
 
@@ -280,6 +282,55 @@ class GoodReportTest(unittest.TestCase):
         self.assertTrue(os.path.isfile(os.path.join(self.report_dir, "repro", "scenes",
                                                     "paper.yaml")))
         self.assertNotIn("Mixed hosts", html)
+
+
+class RobotAndReplayTest(unittest.TestCase):
+    GEOM = {"a": 0.25, "b": 0.25, "track": 0.4, "z_h": 0.05, "R": 0.08, "r": 0.02,
+            "e": 0.0}
+
+    def pose(self, **joints):
+        row = {"x": 0.0, "y": 0.0, "z": 0.15, "roll": 0.0, "pitch": 0.0, "yaw": 0.0}
+        row.update({name: 0.0 for name in robot.JOINTS})
+        row.update(joints)
+        return row
+
+    def test_level_robot_touches_flat_ground_under_each_mount(self):
+        # docs/model.md §1: on a plane the COM is z_h + R + r above the ground
+        # and each wheel's lowest point is under its mount.
+        geom, row = self.GEOM, self.pose()
+        frames = robot.wheel_frames_world(geom, row)
+        for (rot, centre), mount in zip(frames, robot.mount_points(geom)):
+            contact = [mount[0], mount[1], 0.0]
+            self.assertLess(robot.torus_residual(geom, rot, centre, contact), 1e-12)
+            self.assertAlmostEqual(float(np.linalg.det(rot)), 1.0, places=12)
+            # spin axis along the platform's y axis
+            self.assertAlmostEqual(abs(float(rot[1, 2])), 1.0, places=12)
+
+    def test_camber_tilts_the_rear_wheel_about_x(self):
+        row = self.pose(delta2=0.3)
+        rot, _ = robot.wheel_frames_world(self.GEOM, row)[1]
+        axis = rot[:, 2]
+        self.assertAlmostEqual(float(np.degrees(np.arccos(abs(axis[1])))), np.degrees(0.3),
+                               places=9)
+        self.assertAlmostEqual(float(axis[0]), 0.0, places=12)
+
+    def test_replay_written_with_three_js(self):
+        folder = os.path.join(Fixture.good, "report", "replay")
+        if not os.path.isfile("/usr/share/javascript/three/three.min.js"):
+            self.skipTest("libjs-three not installed")
+        for name in ("index.html", "three.min.js", "OrbitControls.js", "data.js"):
+            self.assertTrue(os.path.isfile(os.path.join(folder, name)), name)
+        with open(os.path.join(folder, "data.js"), encoding="utf-8") as handle:
+            text = handle.read()
+        data = json.loads(text[text.index("=") + 1:].rstrip().rstrip(";"))
+        self.assertEqual([d["scene"] for d in data], ["paper", "paper_pvc"])
+        frame = data[0]["frames"][0]
+        self.assertEqual(len(frame["wheels"]), 3)
+        self.assertEqual(len(frame["platform"]), 12)
+        normal = sum(frame["forces"][i][2] for i in range(3))
+        self.assertGreater(normal, 0.5 * make_fixture.MASS * make_fixture.G)
+        with open(os.path.join(Fixture.good, "report", "index.html"), encoding="utf-8") as f:
+            self.assertIn('<iframe src="replay/index.html"', f.read())
 
 
 class LegacyResultsTest(unittest.TestCase):

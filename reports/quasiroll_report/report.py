@@ -11,6 +11,7 @@ from .data import (ReportError, TrajectoryStore, read_meta, read_references,
                    read_runs, read_terrain)
 from .findings import key_findings
 from .html_page import render_page
+from .replay import write_replay
 from .plotting import MissingData, apply_style, placeholder_figure
 
 # (figure function, name used for a placeholder), in page order.
@@ -119,9 +120,11 @@ def build_report(results_dir, out_dir=None, allow_missing=False):
     if not ctx.meta and not os.path.isfile(os.path.join(ctx.results_dir, "meta.json")):
         warnings.append("meta.json is missing: metadata shown as unknown")
     records = _draw_figures(ctx, allow_missing, warnings)
+    replay, notes = write_replay(ctx, [ctx.primary, ctx.primary_pvc])
+    warnings += notes
     page = render_page(ctx, sel.method_summary(ctx.runs),
                        sel.accuracy_bands(ctx.runs, ctx.references), records, warnings,
-                       key_findings(ctx, records))
+                       key_findings(ctx, records), replay)
     index = os.path.join(out_dir, "index.html")
     with open(index, "w", encoding="utf-8") as handle:
         handle.write(page)
