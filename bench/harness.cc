@@ -479,6 +479,11 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
   w.Key("filter").Value(options.filter);
   w.Key("resume").Value(options.resume);
   w.EndObject();
+  if (options.mpi_ranks > 0) {
+    w.Key("mpi").BeginObject();
+    w.Key("ranks").Value(options.mpi_ranks);
+    w.EndObject();
+  }
   if (options.shard_count > 0) {
     w.Key("shard").BeginObject();
     w.Key("index").Value(options.shard_index);

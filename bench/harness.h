@@ -34,6 +34,8 @@ struct HarnessOptions {
   // DIR/shards/<I>-of-<N>/ so that the N shards may share DIR.
   int shard_index = 0;
   int shard_count = 0;
+  // quasiroll-mpi: number of MPI ranks (meta.json "mpi"); 0 = not MPI.
+  int mpi_ranks = 0;
 };
 
 struct HarnessSummary {

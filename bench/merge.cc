@@ -23,7 +23,7 @@ const std::vector<std::string>& InvocationMetaKeys() {
   static const std::vector<std::string> keys = {
       "machine",       "jobs",         "resume",   "options",
       "shard",         "start_time",   "end_time", "wall_s",
-      "runs_executed", "runs_resumed", "merge"};
+      "runs_executed", "runs_resumed", "merge",    "mpi"};
   return keys;
 }
 
@@ -547,7 +547,7 @@ MergeSummary MergeOutputs(const MergeOptions& options) {
     emitted.insert(k);
   };
   for (const auto& [k, v] : tmpl->members) {
-    if (k == "shard" || k == "merge") continue;
+    if (k == "shard" || k == "merge" || k == "mpi") continue;
     const auto it = replaced.find(k);
     emit(k, it == replaced.end() ? v : it->second);
   }

@@ -86,6 +86,19 @@ double EstimatedRunCost(const RunSpec& run) {
           holds * SecondsPerHold(run.nlp, run.dae, run.coupling) * f_tol);
 }
 
+double EstimatedReferenceCost(double scene_dt, double t_end,
+                              const ReferenceSettings& settings) {
+  RunSpec r;
+  r.nlp = settings.nlp;
+  r.dae = "rk-projection";
+  r.coupling = Coupling::kCoupled;
+  r.dt = scene_dt / settings.dt_divisor;
+  r.substeps = settings.substeps;
+  r.t_end = t_end;
+  r.tol = 1e-8;
+  return EstimatedRunCost(r);
+}
+
 std::pair<int, int> ParseShard(const std::string& text) {
   auto fail = [&text]() -> std::pair<int, int> {
     throw SceneError(

@@ -26,6 +26,13 @@ namespace quasiroll::bench {
 // partition.
 double EstimatedRunCost(const RunSpec& run);
 
+// Estimated cost of computing a numerical reference (docs/harness.md,
+// References) of a scene with hold interval `scene_dt` up to `t_end`: a
+// coupled rk-projection run of settings.nlp at step scene_dt / (dt_divisor *
+// substeps), by the same model.
+double EstimatedReferenceCost(double scene_dt, double t_end,
+                              const ReferenceSettings& settings);
+
 // "I/N" -> {I, N}: 0 <= I < N <= 1000000, decimal integers. Throws
 // SceneError naming --shard and the value otherwise.
 std::pair<int, int> ParseShard(const std::string& text);

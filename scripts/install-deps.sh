@@ -8,6 +8,7 @@ PACKAGES=(
   libeigen3-dev coinor-libipopt-dev liblapack-dev libnlopt-cxx-dev libceres-dev
   libsundials-dev libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev
   libcli11-dev python3 python3-matplotlib python3-numpy
+  libopenmpi-dev openmpi-bin python3-pandas
   chromium clang-format libjs-three
 )
 # Optional, not needed by scripts/test.sh: clang + libFuzzer runtime for

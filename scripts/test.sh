@@ -17,7 +17,12 @@ bash scripts/install-deps.sh
 jobs=$(nproc 2>/dev/null || echo 2)
 build_type=Release
 [ "$sanitize" = ON ] && build_type=RelWithDebInfo
+# The minutes-long tests (label long: the default suite through Slurm shards
+# and MPI, docs/cluster.md) in the Release build only.
+long_tests=ON
+[ "$sanitize" = ON ] && long_tests=OFF
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE="$build_type" \
-  -DQUASIROLL_WERROR=ON -DQUASIROLL_SANITIZE="$sanitize"
+  -DQUASIROLL_WERROR=ON -DQUASIROLL_SANITIZE="$sanitize" \
+  -DQUASIROLL_LONG_TESTS="$long_tests"
 cmake --build "$build_dir" -j "$jobs"
 ctest --test-dir "$build_dir" --output-on-failure -j "$jobs"

@@ -1,0 +1,518 @@
+// quasiroll-mpi: `quasiroll bench` over MPI ranks (docs/cluster.md).
+//
+//   mpirun -np K quasiroll-mpi bench --suite FILE --out DIR [--filter RE]
+//                                    [--resume] [--progress MODE]
+//
+// Rank 0 plans the suite (PlanSuite: filter, resume, references), hands out
+// work one task at a time and writes runs.csv and meta.json exactly as
+// `quasiroll bench --jobs 1` does; ranks 1..K-1 execute tasks. Tasks are the
+// references first (a run waits for its reference), then the runs, biggest
+// estimated cost first (bench/shard.h), to whichever worker is free: run
+// costs vary 1000x, so a static split would leave ranks idle. A worker
+// computes a reference into DIR/references/ and keeps it; a run executes
+// with the shared harness step ExecuteRun (row + trajectory + runs/<id>.csv
+// written by the worker; DIR must be on a file system every rank sees,
+// checked at start) and its row goes back to rank 0. A failing run is a
+// row; only an I/O error stops the job (MPI_Abort; --resume continues).
+//
+// Idle ranks do not spin: Open MPI's blocking receive busy-polls (a waiting
+// rank would burn a core), so every wait here is MPI_Iprobe plus a sleep
+// that grows from 50 us to 2 ms (measured CPU of idle ranks: DIR/mpi.json,
+// docs/cluster.md). Everything MPI stays in this file.
+#include <mpi.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <random>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bench/harness.h"
+#include "bench/json_writer.h"
+#include "bench/run_output.h"
+#include "bench/shard.h"
+#include "bench/suite.h"
+#include "core/initial_configuration.h"
+#include "core/scene.h"
+
+namespace quasiroll::mpi {
+namespace {
+
+using bench::ReferenceJob;
+using Clock = std::chrono::steady_clock;
+
+enum Tag : int { kTagTask = 1, kTagResult = 2, kTagStats = 3 };
+enum TaskKind : int { kReference = 0, kRun = 1, kStop = 2 };
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+double CpuSeconds() {
+  rusage u{};
+  ::getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+// Time and CPU time of this rank, in total and while waiting for messages.
+struct RankStats {
+  Clock::time_point start = Clock::now();
+  double cpu_start = CpuSeconds();
+  double idle_wall = 0, idle_cpu = 0;
+  int tasks = 0;
+  double busy_wall = 0;
+};
+
+// Waits for a message from `source` with `tag` without spinning: MPI_Iprobe,
+// then sleep 50 us, doubling up to 2 ms. Returns its status.
+MPI_Status WaitForMessage(int source, int tag, RankStats* stats) {
+  const auto t0 = Clock::now();
+  const double c0 = CpuSeconds();
+  int flag = 0;
+  MPI_Status status{};
+  std::chrono::microseconds pause(50);
+  for (;;) {
+    MPI_Iprobe(source, tag, MPI_COMM_WORLD, &flag, &status);
+    if (flag) break;
+    std::this_thread::sleep_for(pause);
+    pause = std::min(pause * 2, std::chrono::microseconds(2000));
+  }
+  stats->idle_wall += Seconds(t0);
+  stats->idle_cpu += CpuSeconds() - c0;
+  return status;
+}
+
+std::string ReceiveString(const MPI_Status& probed) {
+  int count = 0;
+  MPI_Get_count(&probed, MPI_CHAR, &count);
+  std::string text(static_cast<std::size_t>(count), '\0');
+  MPI_Recv(text.data(), count, MPI_CHAR, probed.MPI_SOURCE, probed.MPI_TAG,
+           MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  return text;
+}
+
+void SendString(const std::string& text, int dest, int tag) {
+  MPI_Send(text.data(), static_cast<int>(text.size()), MPI_CHAR, dest, tag,
+           MPI_COMM_WORLD);
+}
+
+void SendTask(int kind, int grid_index, int dest) {
+  const int task[2] = {kind, grid_index};
+  MPI_Send(task, 2, MPI_INT, dest, kTagTask, MPI_COMM_WORLD);
+}
+
+std::string Fmt(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.17g", v);
+  return buf;
+}
+
+// ------------------------------------------------------------- worker ----
+
+// References this worker has computed or loaded, by key.
+class ReferenceCache {
+ public:
+  ReferenceCache(const bench::Suite& suite, const std::string& dir)
+      : suite_(suite), dir_(dir) {}
+  const ReferenceJob& For(const bench::RunSpec& run) {
+    ReferenceJob job = bench::ReferenceJobFor(suite_, run);
+    auto it = jobs_.find(job.key);
+    if (it == jobs_.end()) {
+      job.Compute(dir_, suite_.reference);  // loads it if already cached
+      it = jobs_.emplace(job.key, std::move(job)).first;
+    }
+    return it->second;
+  }
+
+ private:
+  const bench::Suite& suite_;
+  std::string dir_;
+  std::map<std::string, ReferenceJob> jobs_;
+};
+
+void Worker(const bench::Suite& suite, const std::string& dir,
+            RankStats* stats) {
+  ReferenceCache references(suite, dir);
+  for (;;) {
+    const MPI_Status st = WaitForMessage(0, kTagTask, stats);
+    int task[2] = {0, 0};
+    MPI_Recv(task, 2, MPI_INT, st.MPI_SOURCE, kTagTask, MPI_COMM_WORLD,
+             MPI_STATUS_IGNORE);
+    if (task[0] == kStop) break;
+    const auto t0 = Clock::now();
+    const bench::RunSpec& run =
+        suite.runs.at(static_cast<std::size_t>(task[1]));
+    std::string reply =
+        std::to_string(task[0]) + "\n" + std::to_string(task[1]) + "\n";
+    try {
+      const ReferenceJob& ref = references.For(run);
+      if (task[0] == kReference) {
+        reply += "ok\n" + ref.error;
+      } else {
+        const bench::RunOutcome out = bench::ExecuteRun(
+            suite, run, bench::TerrainId(run, suite.scenes[run.scene_index]),
+            ref, dir);
+        reply += "ok\n" + out.status + "\n" + Fmt(out.t_reached) + "\n" +
+                 Fmt(out.wall_seconds) + "\n" + out.row;
+      }
+    } catch (const std::exception& e) {  // I/O: the job cannot go on
+      reply += std::string("io_error\n") + e.what();
+    }
+    stats->busy_wall += Seconds(t0);
+    ++stats->tasks;
+    SendString(reply, 0, kTagResult);
+  }
+}
+
+// ------------------------------------------------------------- rank 0 ----
+
+struct Task {
+  int kind;
+  int grid_index;  // the run (kRun), or a run whose reference it is
+  double cost;
+};
+
+class Dispatcher {
+ public:
+  Dispatcher(const bench::Suite& suite, bench::SuitePlan* plan,
+             bench::Progress* progress)
+      : suite_(suite), plan_(*plan), progress_(*progress) {
+    for (std::size_t i = 0; i < plan_.selected.size(); ++i)
+      selected_of_grid_[plan_.selected[i]->index] = static_cast<int>(i);
+    waiting_.resize(plan_.references.size());
+    for (int i : plan_.pending) waiting_[plan_.run_reference[i]].push_back(i);
+    for (std::size_t r = 0; r < plan_.references.size(); ++r) {
+      const ReferenceJob& j = plan_.references[r];
+      references_.push_back({kReference,
+                             plan_.selected[waiting_[r].front()]->index,
+                             bench::EstimatedReferenceCost(
+                                 j.scene.dt, j.scene.t_end, suite.reference)});
+    }
+    SortBiggestFirst(&references_);
+  }
+
+  // Next task, or false if none is ready now.
+  bool Next(Task* task) {
+    if (!references_.empty()) {
+      *task = references_.back();
+      references_.pop_back();
+      return true;
+    }
+    if (ready_.empty()) return false;
+    *task = ready_.back();
+    ready_.pop_back();
+    return true;
+  }
+
+  // Handles a worker's reply; throws on a worker's I/O error.
+  void Result(const std::string& reply) {
+    std::istringstream in(reply);
+    std::string kind, grid, verdict;
+    std::getline(in, kind);
+    std::getline(in, grid);
+    std::getline(in, verdict);
+    const int i = selected_of_grid_.at(std::stoi(grid));
+    if (verdict != "ok") {
+      std::string message((std::istreambuf_iterator<char>(in)), {});
+      throw std::runtime_error("run " + plan_.selected[i]->run_id + ": " +
+                               message);
+    }
+    if (std::stoi(kind) == kReference) {
+      const int r = plan_.run_reference[i];
+      std::string error((std::istreambuf_iterator<char>(in)), {});
+      if (!error.empty())
+        progress_.Message("reference for scene " + plan_.references[r].label +
+                          " failed: " + error);
+      for (int k : waiting_[r])
+        ready_.push_back({kRun, plan_.selected[k]->index,
+                          bench::EstimatedRunCost(*plan_.selected[k])});
+      SortBiggestFirst(&ready_);
+      return;
+    }
+    std::string status, t_reached, wall, row;
+    std::getline(in, status);
+    std::getline(in, t_reached);
+    std::getline(in, wall);
+    std::getline(in, row);
+    plan_.rows[i] = row;
+    ++runs_done_;
+    progress_.Done(plan_.selected[i]->run_id, status, std::stod(t_reached),
+                   std::stod(wall));
+  }
+
+  bool AllRunsDone() const {
+    return runs_done_ == static_cast<int>(plan_.pending.size());
+  }
+
+ private:
+  // Ascending, so that back() is the biggest; ties: lower grid index last
+  // (taken first).
+  static void SortBiggestFirst(std::vector<Task>* tasks) {
+    std::stable_sort(tasks->begin(), tasks->end(),
+                     [](const Task& a, const Task& b) {
+                       if (a.cost != b.cost) return a.cost < b.cost;
+                       return a.grid_index > b.grid_index;
+                     });
+  }
+
+  const bench::Suite& suite_;
+  bench::SuitePlan& plan_;
+  bench::Progress& progress_;
+  std::map<int, int> selected_of_grid_;
+  std::vector<std::vector<int>> waiting_;  // per reference: selected runs
+  std::vector<Task> references_, ready_;
+  int runs_done_ = 0;
+};
+
+// Runs the plan on rank 0 alone (mpirun -np 1): the same steps in order.
+void RunLocally(const bench::Suite& suite, bench::SuitePlan* plan,
+                const std::string& dir, bench::Progress* progress) {
+  for (ReferenceJob& j : plan->references) {
+    j.Compute(dir, suite.reference);
+    if (!j.error.empty())
+      progress->Message("reference for scene " + j.label +
+                        " failed: " + j.error);
+  }
+  for (int i : plan->pending) {
+    const bench::RunOutcome out =
+        bench::ExecuteRun(suite, *plan->selected[i], plan->terrain_ids[i],
+                          plan->references[plan->run_reference[i]], dir);
+    plan->rows[i] = out.row;
+    progress->Done(plan->selected[i]->run_id, out.status, out.t_reached,
+                   out.wall_seconds);
+  }
+}
+
+// ------------------------------------------------------------------ CLI ----
+
+struct Args {
+  std::string suite, out, filter, progress = "auto";
+  bool resume = false;
+};
+
+// Every rank reports whether it succeeded; true if all did.
+bool AllRanksOk(bool ok) {
+  int mine = ok ? 1 : 0, all = 0;
+  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  return all == 1;
+}
+
+// Can every rank read a file rank 0 wrote into DIR? (Workers write their
+// trajectories there and rank 0 relies on them for --resume.)
+bool SharedDirectory(const std::string& dir, int rank) {
+  std::string token(32, '\0');
+  if (rank == 0) {
+    std::random_device rd;
+    std::snprintf(token.data(), token.size(), "%08x%08x", rd(), rd());
+    AtomicWriteFile(dir + "/.mpi-probe", token);
+  }
+  MPI_Bcast(token.data(), static_cast<int>(token.size()), MPI_CHAR, 0,
+            MPI_COMM_WORLD);
+  std::ifstream in(dir + "/.mpi-probe", std::ios::binary);
+  std::string seen((std::istreambuf_iterator<char>(in)), {});
+  const bool ok = seen == token;
+  if (!ok)
+    std::fprintf(stderr,
+                 "error: rank %d on %s cannot see %s/.mpi-probe that rank 0 "
+                 "wrote: --out must be on a file system shared by all ranks\n",
+                 rank, ThisMachine().hostname.c_str(), dir.c_str());
+  const bool all = AllRanksOk(ok);
+  if (rank == 0) std::remove((dir + "/.mpi-probe").c_str());
+  return all;
+}
+
+void WriteRankStats(const std::string& dir,
+                    const std::vector<std::string>& rows) {
+  std::string json = "{\"ranks\":[";
+  for (std::size_t k = 0; k < rows.size(); ++k)
+    json += (k ? "," : "") + rows[k];
+  json += "]}\n";
+  AtomicWriteFile(dir + "/mpi.json", json);
+}
+
+std::string StatsJson(int rank, const RankStats& s) {
+  JsonWriter w;
+  w.BeginObject();
+  w.Key("rank").Value(rank);
+  w.Key("host").Value(ThisMachine().hostname);
+  w.Key("tasks").Value(s.tasks);
+  w.Key("wall_s").Value(Seconds(s.start));
+  w.Key("cpu_s").Value(CpuSeconds() - s.cpu_start);
+  w.Key("busy_wall_s").Value(s.busy_wall);
+  w.Key("idle_wall_s").Value(s.idle_wall);
+  w.Key("idle_cpu_s").Value(s.idle_cpu);
+  w.EndObject();
+  return w.str();
+}
+
+int Bench(const Args& args, int rank, int size) {
+  RankStats stats;
+  // Every rank loads the suite (deterministic: same runs, same order). A
+  // failure is reported once: by rank 0, or by the ranks that failed alone.
+  std::optional<bench::Suite> suite;
+  std::string error;
+  try {
+    suite.emplace(bench::LoadSuite(args.suite));
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  int rank0_ok = error.empty() ? 1 : 0;
+  MPI_Bcast(&rank0_ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (!AllRanksOk(error.empty())) {
+    if (!error.empty() && rank == 0)
+      std::fprintf(stderr, "error: %s\n", error.c_str());
+    else if (!error.empty() && rank0_ok)
+      std::fprintf(stderr, "error: rank %d on %s: %s\n", rank,
+                   ThisMachine().hostname.c_str(), error.c_str());
+    return 2;
+  }
+
+  bench::HarnessOptions options;
+  options.out_dir = args.out;
+  options.filter = args.filter;
+  options.resume = args.resume;
+  options.jobs = 1;  // one run at a time per rank
+  options.mpi_ranks = size;
+  options.progress = args.progress == "auto"    ? -1
+                     : args.progress == "none"  ? 0
+                     : args.progress == "lines" ? 1
+                                                : 2;
+  const auto t_start = Clock::now();
+  const std::string start_time = IsoTimeNow();
+  std::optional<bench::SuitePlan> plan;
+  bool ok = true;
+  if (rank == 0) {
+    try {
+      plan.emplace(bench::PlanSuite(*suite, options));
+      bench::BeginSuiteOutput(*suite, options, *plan, options.jobs, start_time);
+    } catch (const SceneError& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      ok = false;
+    }
+  }
+  if (!AllRanksOk(ok)) return 2;
+  if (!SharedDirectory(args.out, rank)) return 2;
+
+  if (rank != 0) {
+    Worker(*suite, args.out, &stats);
+    SendString(StatsJson(rank, stats), 0, kTagStats);
+    return 0;
+  }
+
+  bench::Progress progress(options.log, options.progress,
+                           static_cast<int>(plan->pending.size()));
+  if (plan->resumed > 0)
+    progress.Message("resume: " + std::to_string(plan->resumed) + " of " +
+                     std::to_string(plan->selected.size()) +
+                     " runs already done");
+  if (size == 1) {
+    RunLocally(*suite, &*plan, args.out, &progress);
+  } else {
+    Dispatcher dispatcher(*suite, &*plan, &progress);
+    std::vector<int> idle;
+    for (int r = 1; r < size; ++r) idle.push_back(r);
+    int busy = 0;
+    for (;;) {
+      Task task{};
+      while (!idle.empty() && dispatcher.Next(&task)) {
+        SendTask(task.kind, task.grid_index, idle.back());
+        idle.pop_back();
+        ++busy;
+      }
+      if (busy == 0) break;  // nothing running, nothing ready: all done
+      const MPI_Status st = WaitForMessage(MPI_ANY_SOURCE, kTagResult, &stats);
+      const std::string reply = ReceiveString(st);
+      --busy;
+      idle.push_back(st.MPI_SOURCE);
+      try {
+        dispatcher.Result(reply);
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "error: rank %d: %s\n", st.MPI_SOURCE, e.what());
+        MPI_Abort(MPI_COMM_WORLD, 3);
+      }
+    }
+    if (!dispatcher.AllRunsDone()) {
+      std::fprintf(stderr, "internal error: runs left undispatched\n");
+      MPI_Abort(MPI_COMM_WORLD, 3);
+    }
+  }
+  const bench::HarnessSummary s = bench::FinishSuiteOutput(
+      *suite, options, *plan, options.jobs, start_time, Seconds(t_start));
+  // Stop the workers only now: a rank waiting inside MPI_Finalize may spin.
+  for (int r = 1; r < size; ++r) SendTask(kStop, 0, r);
+  std::vector<std::string> rank_stats(static_cast<std::size_t>(size));
+  for (int r = 1; r < size; ++r) {
+    const MPI_Status st = WaitForMessage(r, kTagStats, &stats);
+    rank_stats[static_cast<std::size_t>(r)] = ReceiveString(st);
+  }
+  rank_stats[0] = StatsJson(0, stats);
+  WriteRankStats(args.out, rank_stats);
+  std::fprintf(stderr,
+               "suite %s: %d runs (%d selected, %d executed, %d resumed), %d "
+               "not successful, %.1f s on %d MPI ranks\n",
+               suite->name.c_str(), s.total, s.selected, s.executed, s.resumed,
+               s.failures, s.wall_seconds, size);
+  std::printf("%s/runs.csv\n", args.out.c_str());
+  return 0;
+}
+
+}  // namespace
+}  // namespace quasiroll::mpi
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  CLI::App app{
+      "quasiroll-mpi: quasiroll bench over MPI ranks (mpirun -np K "
+      "quasiroll-mpi bench ...); rank 0 dispatches, ranks 1..K-1 run"};
+  app.require_subcommand(1);
+  quasiroll::mpi::Args args;
+  CLI::App* bench = app.add_subcommand(
+      "bench", "Run a benchmark suite; writes DIR/runs.csv as quasiroll bench");
+  bench->add_option("--suite", args.suite, "Suite YAML file")->required();
+  bench
+      ->add_option("--out", args.out,
+                   "Output directory (on a file system all ranks share)")
+      ->required();
+  bench->add_option(
+      "--filter", args.filter,
+      "Keep only runs whose run_id matches this regex (ECMAScript)");
+  bench->add_flag("--resume", args.resume,
+                  "Skip runs already finished in DIR/runs/");
+  bench
+      ->add_option("--progress", args.progress,
+                   "auto (bar on a TTY, else lines) | bar | lines | none")
+      ->check(CLI::IsMember({"auto", "bar", "lines", "none"}))
+      ->capture_default_str();
+  int code = 0;
+  try {
+    app.parse(argc, argv);
+    code = quasiroll::mpi::Bench(args, rank, size);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) {
+      if (rank == 0) app.exit(e);
+    } else {
+      if (rank == 0) std::cerr << "error: " << e.what() << "\n";
+      code = 2;
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "internal error (rank " << rank << "): " << e.what() << "\n";
+    MPI_Abort(MPI_COMM_WORLD, 3);
+  }
+  MPI_Finalize();
+  return code;
+}
