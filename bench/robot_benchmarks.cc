@@ -7,10 +7,12 @@
 //       the paper scene: the quasi-static solve, the recorded sample and the
 //       integration (Simulator::Advance).
 //   BM_PaperScene/<nlp>/<dae>  the whole paper scene (20 s, 400 intervals).
+//   BM_KktCheck/<mode>  NlpSolver::Solve()'s KKT check alone at a root.
 // Run: build/bench/quasiroll_benchmarks --benchmark_out=bench.json
 //      --benchmark_out_format=json   (scripts/run-benchmarks.sh does this)
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <memory>
 #include <string>
 
@@ -62,6 +64,42 @@ void BM_QuasiStaticSolve(benchmark::State& state, std::string nlp,
   }
   state.counters["nlp_iters"] = benchmark::Counter(
       static_cast<double>(iterations) / std::max(1LL, solves));
+}
+
+// The independent first-order check NlpSolver::Solve() runs after every
+// claimed convergence (core/nlp.h), alone: at a newton root of the paper
+// scene, without backend multipliers (newton gives none), as in a warm solve.
+void BM_KktCheck(benchmark::State& state, ActuationMode mode) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  Scene scene = PaperScene(mode);
+  scene.t_end = 0.1;
+  Simulator sim(scene, SimulationOptions{});
+  const SimulationResult run = sim.Run();
+  QuasiStaticSolver solver(sim.model(), QuasiStaticParameters::FromScene(scene),
+                           NlpSolverRegistry::Create("newton"));
+  QuasiStaticSolution sol;
+  if (run.samples.size() < 2 ||
+      solver.Solve(run.samples[1].theta, &sol) != QuasiStaticStatus::kOk) {
+    state.SkipWithError("paper scene solve failed");
+    return;
+  }
+  const QuasiStaticProblem& p = solver.problem();
+  const int n = p.num_variables(), m = p.num_constraints();
+  Eigen::VectorXd xl(n), xu(n), gl(m), gu(m), g(m);
+  p.GetBounds(xl, xu, gl, gu);
+  p.Constraints(sol.z, g);
+  const NlpOptions options;
+  const double tol = options.EffectiveKktTolerance();
+  KktVerifier verifier;
+  double residual = 0;
+  for (auto _ : state) {
+    residual =
+        verifier.Verify(p, sol.z, g, xl, xu, gl, gu, nullptr,
+                        std::max(options.feasibility_tolerance, tol), tol);
+    benchmark::DoNotOptimize(residual);
+  }
+  state.counters["kkt_residual"] = residual;
 }
 
 void BM_Step(benchmark::State& state, std::string dae, Coupling coupling) {
@@ -122,6 +160,11 @@ int RegisterAll() {
             ->Unit(benchmark::kMicrosecond);
       }
     }
+  }
+  for (ActuationMode mode : {ActuationMode::kPaper, ActuationMode::kPvc}) {
+    const std::string name = std::string("BM_KktCheck/") + ToString(mode);
+    benchmark::RegisterBenchmark(name.c_str(), BM_KktCheck, mode)
+        ->Unit(benchmark::kMicrosecond);
   }
   for (const std::string& dae : IntegratorRegistry::Names()) {
     for (Coupling c : {Coupling::kZoh, Coupling::kCoupled}) {

@@ -223,6 +223,7 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.Key("rejected_steps").Value(r.rejected_steps);
   j.EndObject();
   j.Key("wall_s").Value(r.wall_seconds);
+  j.Key("kkt_residual").Value(r.kkt_residual);
   j.Key("scene").BeginObject();
   j.Key("name").Value(scene.name);
   j.Key("file").Value(scene.source_path);

@@ -1,7 +1,12 @@
 #include "core/nlp.h"
 
+#include <Eigen/LU>
+#include <Eigen/QR>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <sstream>
 #include <stdexcept>
 
@@ -28,6 +33,8 @@ const char* ToString(NlpStatus status) {
       return "iteration_limit";
     case NlpStatus::kNumericalFailure:
       return "numerical_failure";
+    case NlpStatus::kNotOptimal:
+      return "not_optimal";
     case NlpStatus::kInvalidInput:
       return "invalid_input";
     case NlpStatus::kNotRun:
@@ -47,12 +54,271 @@ bool NlpOptions::IsValid(std::string* why) const {
   if (!(std::isfinite(optimality_tolerance) && optimality_tolerance > 0))
     return fail("optimality_tolerance: must be finite and > 0, got " +
                 std::to_string(optimality_tolerance));
+  if (!(std::isfinite(kkt_tolerance) && kkt_tolerance >= 0))
+    return fail(
+        "kkt_tolerance: must be finite and >= 0 (0 = "
+        "sqrt(optimality_tolerance)), got " +
+        std::to_string(kkt_tolerance));
   if (max_iterations < 1)
     return fail("max_iterations: must be >= 1, got " +
                 std::to_string(max_iterations));
   if (verbosity < 0)
     return fail("verbosity: must be >= 0, got " + std::to_string(verbosity));
   return true;
+}
+
+double NlpOptions::EffectiveKktTolerance() const {
+  return kkt_tolerance > 0 ? kkt_tolerance : std::sqrt(optimality_tolerance);
+}
+
+// ------------------------------------------------------------ KKT check ----
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// min over z >= 0 of max(|t - z|, z s), t >= 0: the error of one bound side
+// with slack s (infinite slack: the side does not exist, t counts in full).
+double SideError(double t, double slack) {
+  if (!(slack < kInf)) return t;
+  slack = std::max(slack, 0.0);
+  return t * slack / (1.0 + slack);
+}
+}  // namespace
+
+struct KktVerifier::Workspace {
+  int n = -1, m = -1;
+  Eigen::VectorXd grad, r, lambda, rhs, c, x_lb, x_ub, g_lb, g_ub, g, absr;
+  Eigen::MatrixXd jac, ls;
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
+  // Square equality systems (as many equality rows as variables, e.g. the
+  // quasi-static problem): stage 1 by an LU of J_eq^T, 4-5x cheaper than
+  // the pivoted QR; a singular J_eq shows in the residual, and stage 2 (QR)
+  // follows.
+  int num_equalities = 0;
+  Eigen::VectorXi equality_rows;
+  Eigen::MatrixXd square;
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+  // Active sides: -1 lower, +1 upper, 0 inactive (rows: inequality rows only;
+  // variables: bounds). Fixed variables and equality rows are handled apart.
+  Eigen::VectorXi row_side, var_side;
+
+  void Resize(int nn, int mm) {
+    if (nn == n && mm == m) return;
+    n = nn;
+    m = mm;
+    grad.resize(n);
+    r.resize(n);
+    rhs.resize(n);
+    c.resize(n);
+    absr.resize(n);
+    x_lb.resize(n);
+    x_ub.resize(n);
+    var_side.resize(n);
+    lambda.resize(m);
+    g_lb.resize(m);
+    g_ub.resize(m);
+    g.resize(m);
+    row_side.resize(m);
+    jac.resize(m, n);
+    ls.resize(n, m);
+    qr = Eigen::ColPivHouseholderQR<Eigen::MatrixXd>(n, std::max(m, 1));
+    equality_rows.resize(m);
+    square.resize(n, n);
+    lu = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
+  }
+
+  // Stage 1 for square equality systems: lambda_eq = -J_eq^{-T} grad f.
+  void SolveSquareEqualities() {
+    lambda.setZero();
+    for (int k = 0; k < n; ++k)
+      square.col(k) = jac.row(equality_rows(k)).transpose();
+    lu.compute(square);
+    rhs = -grad;
+    c.noalias() = lu.solve(rhs);
+    for (int k = 0; k < n; ++k) lambda(equality_rows(k)) = c(k);
+  }
+
+  // lambda = argmin |grad f + J_A^T lambda_A| over the components not
+  // absorbed by a bound (fixed or bound-active variables), A = equality rows
+  // + rows with an active side; other multipliers 0. A fixed-size
+  // n x max(m, 1) system (unused rows/columns zeroed) so that the
+  // factorisation reuses its storage; rank-revealing (basic solution).
+  void SolveLeastSquares() {
+    lambda.setZero();
+    if (m == 0) return;
+    ls.setZero();
+    for (int j = 0; j < n; ++j) {
+      const bool absorbed = x_lb(j) == x_ub(j) || var_side(j) != 0;
+      rhs(j) = absorbed ? 0.0 : -grad(j);
+      if (absorbed) continue;
+      for (int i = 0; i < m; ++i)
+        if (g_lb(i) == g_ub(i) || row_side(i) != 0) ls(j, i) = jac(i, j);
+    }
+    qr.compute(ls);
+    const Eigen::Index rank = qr.rank();
+    if (rank == 0) return;
+    c = rhs;
+    qr.householderQ().setLength(rank).adjoint().applyThisOnTheLeft(c);
+    qr.matrixQR()
+        .topLeftCorner(rank, rank)
+        .triangularView<Eigen::Upper>()
+        .solveInPlace(c.head(rank));
+    const auto& perm = qr.colsPermutation().indices();
+    for (Eigen::Index k = 0; k < rank; ++k) lambda(perm(k)) = c(k);
+  }
+
+  // kkt_residual(x, lambda) with grad, jac, g and the bounds loaded.
+  double Residual(const Eigen::Ref<const Eigen::VectorXd>& x,
+                  const Eigen::Ref<const Eigen::VectorXd>& lam) {
+    r = grad;
+    if (m > 0) r.noalias() += jac.transpose() * lam;
+    absr.setZero();
+    if (m > 0) absr.noalias() += jac.cwiseAbs().transpose() * lam.cwiseAbs();
+    double scale = std::max(1.0, grad.lpNorm<Eigen::Infinity>());
+    if (m > 0) scale = std::max(scale, absr.maxCoeff());
+    double err = 0.0;
+    for (int j = 0; j < n; ++j) {
+      if (x_lb(j) == x_ub(j)) continue;
+      if (r(j) > 0)
+        err = std::max(err, SideError(r(j), x(j) - x_lb(j)));
+      else if (r(j) < 0)
+        err = std::max(err, SideError(-r(j), x_ub(j) - x(j)));
+    }
+    for (int i = 0; i < m; ++i) {
+      if (g_lb(i) == g_ub(i)) continue;
+      if (lam(i) > 0)
+        err = std::max(err, SideError(lam(i), g_ub(i) - g(i)));
+      else if (lam(i) < 0)
+        err = std::max(err, SideError(-lam(i), g(i) - g_lb(i)));
+    }
+    return err / scale;
+  }
+};
+
+KktVerifier::KktVerifier() : ws_(std::make_unique<Workspace>()) {}
+KktVerifier::~KktVerifier() = default;
+
+double KktVerifier::ResidualWith(
+    const NlpProblem& problem, const Eigen::Ref<const Eigen::VectorXd>& x,
+    const Eigen::Ref<const Eigen::VectorXd>& lambda) {
+  Workspace& w = *ws_;
+  w.Resize(problem.num_variables(), problem.num_constraints());
+  problem.GetBounds(w.x_lb, w.x_ub, w.g_lb, w.g_ub);
+  problem.Constraints(x, w.g);
+  problem.ObjectiveGradient(x, w.grad);
+  if (w.m > 0) problem.ConstraintJacobian(x, w.jac);
+  return w.Residual(x, lambda);
+}
+
+double KktVerifier::Verify(const NlpProblem& problem,
+                           const Eigen::Ref<const Eigen::VectorXd>& x,
+                           const Eigen::Ref<const Eigen::VectorXd>& g,
+                           const Eigen::Ref<const Eigen::VectorXd>& x_lb,
+                           const Eigen::Ref<const Eigen::VectorXd>& x_ub,
+                           const Eigen::Ref<const Eigen::VectorXd>& g_lb,
+                           const Eigen::Ref<const Eigen::VectorXd>& g_ub,
+                           const Eigen::VectorXd* backend_multipliers,
+                           double activity_tolerance, double accept_below) {
+  Workspace& w = *ws_;
+  const int n = problem.num_variables(), m = problem.num_constraints();
+  w.Resize(n, m);
+  w.x_lb = x_lb;
+  w.x_ub = x_ub;
+  w.g_lb = g_lb;
+  w.g_ub = g_ub;
+  w.g = g;
+  problem.ObjectiveGradient(x, w.grad);
+  if (m > 0) problem.ConstraintJacobian(x, w.jac);
+  used_least_squares_ = false;
+  double best = kInf;
+  if (backend_multipliers != nullptr && backend_multipliers->size() == m &&
+      backend_multipliers->allFinite()) {
+    best = w.Residual(x, *backend_multipliers);
+    if (best <= accept_below) return best;
+  }
+  if (!w.grad.allFinite() || !w.jac.allFinite()) return kInf;
+
+  // Stage 1: least-squares multipliers of the equality rows alone
+  // (inequality multipliers 0, bound multipliers from the closed form): the
+  // answer for square systems and problems without active inequalities.
+  w.row_side.setZero();
+  w.var_side.setZero();
+  w.num_equalities = 0;
+  for (int i = 0; i < m; ++i)
+    if (g_lb(i) == g_ub(i)) w.equality_rows(w.num_equalities++) = i;
+  if (w.num_equalities == n) w.SolveSquareEqualities();
+  // Exactly singular J_eq (non-finite LU solution): pivoted QR instead.
+  if (w.num_equalities != n || !w.lambda.allFinite()) w.SolveLeastSquares();
+  const double equality_only = w.Residual(x, w.lambda);
+  if (equality_only < best) {
+    best = equality_only;
+    used_least_squares_ = true;
+  }
+  if (best <= accept_below) return best;
+
+  // Stage 2: the active set A = equality rows + inequality sides and bounds
+  // with slack <= activity_tolerance (bound-active components are absorbed
+  // by their z). An active side whose multiplier has the wrong sign is
+  // released and the least squares re-solved, until the signs are right;
+  // only that sign-consistent estimate is a candidate (an estimate with a
+  // wrong-sign multiplier can look small relative to large cancelling
+  // multipliers of a degenerate active set).
+  int active_sides = 0;
+  for (int i = 0; i < m; ++i) {
+    if (g_lb(i) == g_ub(i)) continue;
+    const double lo = g(i) - g_lb(i), hi = g_ub(i) - g(i);
+    if (lo <= activity_tolerance && lo <= hi)
+      w.row_side(i) = -1;
+    else if (hi <= activity_tolerance)
+      w.row_side(i) = 1;
+    active_sides += w.row_side(i) != 0;
+  }
+  for (int j = 0; j < n; ++j) {
+    if (x_lb(j) == x_ub(j)) continue;
+    const double lo = x(j) - x_lb(j), hi = x_ub(j) - x(j);
+    if (lo <= activity_tolerance && lo <= hi)
+      w.var_side(j) = -1;
+    else if (hi <= activity_tolerance)
+      w.var_side(j) = 1;
+    active_sides += w.var_side(j) != 0;
+  }
+  if (active_sides == 0) return best;
+  for (int pass = 0; pass <= active_sides; ++pass) {
+    w.SolveLeastSquares();
+    const double residual = w.Residual(x, w.lambda);
+    // The active side whose multiplier has the wrong sign by most (rows:
+    // lower side needs lambda <= 0, upper >= 0; bounds: z_L = r_j >= 0,
+    // z_U = -r_j >= 0).
+    double worst = 0.0;
+    int worst_row = -1, worst_var = -1;
+    for (int i = 0; i < m; ++i) {
+      const double wrong =
+          w.row_side(i) * w.lambda(i) < 0 ? std::abs(w.lambda(i)) : 0.0;
+      if (wrong > worst) {
+        worst = wrong;
+        worst_row = i;
+        worst_var = -1;
+      }
+    }
+    for (int j = 0; j < n; ++j) {
+      const double wrong = w.var_side(j) * w.r(j) > 0 ? std::abs(w.r(j)) : 0.0;
+      if (wrong > worst) {
+        worst = wrong;
+        worst_var = j;
+        worst_row = -1;
+      }
+    }
+    if (worst_row < 0 && worst_var < 0) {
+      if (residual < best) {
+        best = residual;
+        used_least_squares_ = true;
+      }
+      break;
+    }
+    if (worst_row >= 0) w.row_side(worst_row) = 0;
+    if (worst_var >= 0) w.var_side(worst_var) = 0;
+  }
+  return best;
 }
 
 double MaxConstraintViolation(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -138,6 +404,8 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
   result->status = NlpStatus::kNotRun;
   result->backend = name();
   result->backend_status.clear();
+  result->has_multipliers = false;
+  result->kkt_residual = std::numeric_limits<double>::quiet_NaN();
   result->iterations = result->objective_evaluations = 0;
   result->constraint_evaluations = result->jacobian_evaluations = 0;
   result->x.resize(n);
@@ -179,6 +447,22 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
        << options.feasibility_tolerance << "]";
     result->status = NlpStatus::kNumericalFailure;
     result->backend_status += os.str();
+  } else if (result->status == NlpStatus::kConverged) {
+    // Independent first-order check (formula in nlp.h).
+    const double tol = options.EffectiveKktTolerance();
+    result->kkt_residual =
+        kkt_.Verify(problem, result->x, g_, x_lb_, x_ub_, g_lb_, g_ub_,
+                    result->has_multipliers ? &result->multipliers : nullptr,
+                    std::max(options.feasibility_tolerance, tol), tol);
+    if (!(result->kkt_residual <= tol)) {
+      std::ostringstream os;
+      os << " [claimed convergence rejected: KKT residual "
+         << result->kkt_residual << " > " << tol << " ("
+         << (kkt_.used_least_squares() ? "least-squares" : "backend")
+         << " multipliers)]";
+      result->status = NlpStatus::kNotOptimal;
+      result->backend_status += os.str();
+    }
   }
   return result->status;
 }

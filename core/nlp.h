@@ -9,13 +9,49 @@
 //
 // Style follows Drake's solvers/: the public non-virtual NlpSolver::Solve()
 // validates inputs and options (misuse -> std::invalid_argument), calls the
-// backend's private DoSolve(), then checks the answer independently (a backend
+// backend's private DoSolve(), then checks the answer independently: a backend
 // that claims convergence with violated constraints or non-finite output is
-// downgraded). Numerical failure is a status, never an exception.
+// downgraded to kNumericalFailure, one whose point is not first-order optimal
+// (KKT residual below) to kNotOptimal. Numerical failure is a status, never an
+// exception.
+//
+// First-order optimality (KKT) residual, computed by NlpSolver::Solve() for
+// every backend at a claimed convergence, in the problem's own (scaled) units.
+// Multipliers follow Ipopt's convention: L = f + lambda^T g, lambda_i >= 0
+// pushes against g_ub_i, lambda_i <= 0 against g_lb_i; bound multipliers
+// z = z_L - z_U are eliminated in closed form. With
+//   r      = grad f(x) + J(x)^T lambda                       (n)
+//   w(t,s) = t s / (1 + s)  for a finite slack s >= 0,   w(t, inf) = t
+// (w(t, s) = min over z >= 0 of max(|t - z|, z s): the best trade-off between
+// stationarity and the complementarity product z s of one bound side), the
+// per-entry errors are
+//   variable j:  0 if x_lb_j == x_ub_j;  w(r_j, x_j - x_lb_j) if r_j > 0;
+//                w(-r_j, x_ub_j - x_j) if r_j < 0
+//   row i:       0 for equalities;  w(lambda_i, g_ub_i - g_i) if lambda_i > 0;
+//                w(-lambda_i, g_i - g_lb_i) if lambda_i < 0
+// (an infinite bound has infinite slack: a multiplier or a gradient pushing
+// against a side that does not exist counts in full — the sign test), and
+//   kkt_residual(x, lambda) = max(all errors) / s_d,
+//   s_d = max(1, |grad f(x)|_inf, max_j sum_i |J_ij lambda_i|),
+// relative to the magnitudes that cancel in r, so that round-off in r gives
+// ~1e-16 whatever the scale of f. NlpResult::kkt_residual is the smallest
+// residual over these multiplier estimates (each an upper bound of
+// min over lambda of kkt_residual(x, lambda); a point passes if some
+// multipliers certify it):
+//   1. the backend's own (NlpResult::has_multipliers);
+//   2. least squares on the equality rows alone (inequality multipliers 0):
+//      the answer for square systems such as the quasi-static problem;
+//   3. least squares on the active set: equality rows plus inequality sides
+//      and bounds with slack <= max(feasibility, kkt tolerance); a side whose
+//      multiplier comes out with the wrong sign is released and the least
+//      squares re-solved until every sign is right (only that
+//      sign-consistent estimate counts).
+// Later estimates are skipped once one passes.
 #pragma once
 
 #include <Eigen/Core>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -64,6 +100,8 @@ enum class NlpStatus {
   kInfeasible,        // backend detected (local) infeasibility
   kIterationLimit,    // max_iterations reached before convergence
   kNumericalFailure,  // NaN/Inf, line-search failure, singular system, ...
+  kNotOptimal,        // claimed convergence, but the KKT residual recomputed
+                      // by Solve() exceeds NlpOptions::kkt_tolerance
   kInvalidInput,      // only set by Solve() for problems rejected at run time
   kNotRun,            // default state of a fresh result
 };
@@ -77,6 +115,18 @@ struct NlpOptions {
   // Converged requires the backend's optimality measure (KKT residual, relative
   // step or cost change) <= optimality_tolerance.
   double optimality_tolerance = 1e-10;
+  // Converged also requires  kkt_residual <= kkt_tolerance  (the relative
+  // first-order residual defined at the top of this file), checked by
+  // NlpSolver::Solve() for every backend. 0 (default) means
+  // sqrt(optimality_tolerance): backends stop on measures of different order
+  // (Ipopt's scaled KKT error, SLSQP's relative change of f or x, a penalty
+  // method's inner gradient); a change of f of delta near a minimum with
+  // Hessian O(1) leaves a gradient of O(sqrt(delta)), so sqrt is the
+  // first-order counterpart every backend's own test can meet, while a point
+  // that is not a KKT point (a residual O(1), e.g. ||grad f|| ~ 1e2 with no
+  // active constraint) fails it by orders of magnitude. Side activity for the
+  // least-squares multipliers uses the same tolerance.
+  double kkt_tolerance = 0.0;
   // Upper bound on major iterations of the backend.
   int max_iterations = 200;
   // Start from result->multipliers if they have the right size (Ipopt uses
@@ -86,15 +136,24 @@ struct NlpOptions {
   int verbosity = 0;
 
   bool IsValid(std::string* why) const;
+  // kkt_tolerance, or sqrt(optimality_tolerance) when it is 0.
+  double EffectiveKktTolerance() const;
 };
 
 struct NlpResult {
   NlpStatus status = NlpStatus::kNotRun;
   Eigen::VectorXd x;
   Eigen::VectorXd multipliers;  // constraint multipliers, sign as in Ipopt
+  // Set by a backend's DoSolve() when `multipliers` are its own estimate at
+  // the returned x (Solve() clears it first); the KKT check then tries them.
+  bool has_multipliers = false;
   double objective = 0.0;
   // Independently recomputed after the solve by NlpSolver::Solve().
   double max_constraint_violation = 0.0;
+  // Relative first-order optimality residual at x (top of this file),
+  // recomputed by Solve() whenever the backend claims convergence; NaN
+  // otherwise.
+  double kkt_residual = std::numeric_limits<double>::quiet_NaN();
   int iterations = 0;
   int objective_evaluations = 0;
   int constraint_evaluations = 0;
@@ -102,6 +161,43 @@ struct NlpResult {
   double wall_seconds = 0.0;
   std::string backend;         // registry name
   std::string backend_status;  // the backend's own return code / message
+};
+
+// Evaluates the KKT residual defined at the top of this file with
+// preallocated workspaces: after a first call with given sizes, Verify()
+// does not allocate. NlpSolver::Solve() owns one; public for tests and
+// diagnostics.
+class KktVerifier {
+ public:
+  KktVerifier();
+  ~KktVerifier();
+  KktVerifier(const KktVerifier&) = delete;
+  KktVerifier& operator=(const KktVerifier&) = delete;
+
+  // kkt_residual(x, lambda) for the given multipliers (size m).
+  double ResidualWith(const NlpProblem& problem,
+                      const Eigen::Ref<const Eigen::VectorXd>& x,
+                      const Eigen::Ref<const Eigen::VectorXd>& lambda);
+  // min(residual with *backend_multipliers (if not null), residual with
+  // least-squares multipliers on the active set at `activity_tolerance`);
+  // the least squares are skipped when the backend's multipliers already
+  // give <= `accept_below`. `g` = constraints at x; bounds as GetBounds().
+  double Verify(const NlpProblem& problem,
+                const Eigen::Ref<const Eigen::VectorXd>& x,
+                const Eigen::Ref<const Eigen::VectorXd>& g,
+                const Eigen::Ref<const Eigen::VectorXd>& x_lb,
+                const Eigen::Ref<const Eigen::VectorXd>& x_ub,
+                const Eigen::Ref<const Eigen::VectorXd>& g_lb,
+                const Eigen::Ref<const Eigen::VectorXd>& g_ub,
+                const Eigen::VectorXd* backend_multipliers,
+                double activity_tolerance, double accept_below);
+  // True if the last Verify() result came from the least-squares multipliers.
+  bool used_least_squares() const { return used_least_squares_; }
+
+ private:
+  struct Workspace;
+  std::unique_ptr<Workspace> ws_;
+  bool used_least_squares_ = false;
 };
 
 class NlpSolver {
@@ -140,6 +236,7 @@ class NlpSolver {
                        const NlpOptions& options, NlpResult* result) = 0;
 
   Eigen::VectorXd x_lb_, x_ub_, g_lb_, g_ub_, g_;  // validation workspace
+  KktVerifier kkt_;
 };
 
 // Max violation of bounds and constraint bounds at x (>= 0).

@@ -479,6 +479,7 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
   out->nlp_solves = 0;
   out->message.clear();
   out->mu_min = kNaN;
+  out->kkt_residual = kNaN;
   out->condition_number = kNaN;
   out->critical_contact = -1;
   if (!theta.allFinite())
@@ -531,6 +532,7 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
     if (ok) {
       out->status = QuasiStaticStatus::kOk;
       out->z = result_.x;
+      out->kkt_residual = result_.kkt_residual;
       if (have_warm_) {
         previous_z_ = warm_z_;
         have_previous_ = true;

@@ -24,6 +24,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -166,7 +167,10 @@ struct QuasiStaticSolution {
   double mu_min = 0.0;        // NaN unless computed (failure or requested)
   int critical_contact = -1;  // contact naming the failure (0-based)
   double min_normal_force = 0.0;
-  double residual = 0.0;          // max scaled equality residual
+  double residual = 0.0;  // max scaled equality residual
+  // First-order optimality residual of the accepted NLP solve
+  // (NlpResult::kkt_residual, core/nlp.h); NaN unless status is kOk.
+  double kkt_residual = std::numeric_limits<double>::quiet_NaN();
   double condition_number = 0.0;  // NaN unless requested
   NlpStatus nlp_status = NlpStatus::kNotRun;
   int nlp_iterations = 0;  // summed over homotopy stages

@@ -55,6 +55,9 @@ class Simulator::RobotOde final : public ConstrainedOde {
   const QuasiStaticSolution& last_solution() const { return sol_; }
   bool nlp_failed() const { return nlp_failed_; }
   int nlp_solves() const { return nlp_solves_; }
+  // Max KKT residual of the accepted solves since ResetKkt() (NaN: none).
+  double kkt_residual() const { return kkt_residual_; }
+  void ResetKkt() { kkt_residual_ = std::numeric_limits<double>::quiet_NaN(); }
   long long nlp_iterations() const { return nlp_iterations_; }
 
   int state_size() const override { return kConfigSize; }
@@ -76,6 +79,7 @@ class Simulator::RobotOde final : public ConstrainedOde {
         nlp_failed_ = true;
         return false;
       }
+      kkt_residual_ = std::fmax(kkt_residual_, sol_.kkt_residual);
       w = solver_->problem().JointSpaceVelocity(sol_.z);
     }
     Configuration qd;
@@ -112,6 +116,7 @@ class Simulator::RobotOde final : public ConstrainedOde {
   bool nlp_failed_ = false;
   int nlp_solves_ = 0;
   long long nlp_iterations_ = 0;
+  double kkt_residual_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 double GeometricGap(const KinematicModel& model, const Configuration& theta) {
@@ -301,6 +306,7 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   s.n = static_cast<int>(std::ceil(t_end_ / dt_ - 1e-9));
   s.ode_solves_seen = s.ode.nlp_solves();
   s.ode_iterations_seen = s.ode.nlp_iterations();
+  s.ode.ResetKkt();
   s.done = false;
   *result = SimulationResult{};
   result->samples.reserve(s.n + 1);
@@ -319,6 +325,7 @@ bool Simulator::Advance(SimulationResult* result) {
   result->nlp_iterations += s.ode.nlp_iterations() - s.ode_iterations_seen;
   s.ode_solves_seen = s.ode.nlp_solves();
   s.ode_iterations_seen = s.ode.nlp_iterations();
+  result->kkt_residual = std::fmax(result->kkt_residual, s.ode.kkt_residual());
   result->rhs_evaluations = s.ires.rhs_evaluations;
   result->jacobian_evaluations = s.ires.jacobian_evaluations;
   result->steps = s.ires.steps;
@@ -350,6 +357,8 @@ bool Simulator::Interval(SimulationResult* result) {
   }
   Record(t, s.theta, sol, result, k);
   result->t_reached = t;
+  if (sol.status == QuasiStaticStatus::kOk)
+    result->kkt_residual = std::fmax(result->kkt_residual, sol.kkt_residual);
   if (sol.status != QuasiStaticStatus::kOk) {
     result->status = ToString(sol.status);
     result->stop_configuration = s.theta;

@@ -87,6 +87,11 @@ struct SimulationResult {
   int steps = 0;
   int rejected_steps = 0;
   double wall_seconds = 0;
+  // Max over the run's accepted quasi-static solves (output times and, in
+  // coupled mode, every right-hand side) of NlpResult::kkt_residual, the
+  // independently recomputed first-order optimality residual (core/nlp.h);
+  // NaN if no solve was accepted.
+  double kkt_residual = std::numeric_limits<double>::quiet_NaN();
   bool success() const { return status == "success"; }
 };
 

@@ -538,6 +538,7 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
     result->multipliers(s.eq_rows[k]) = s.lam_eq(k);
   for (size_t k = 0; k < n_side; ++k)
     result->multipliers(s.side_rows[k]) += s.side_sign[k] * s.mu_side(k);
+  result->has_multipliers = true;
   finish(status);
 }
 

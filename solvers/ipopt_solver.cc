@@ -323,8 +323,10 @@ class Adapter final : public Ipopt::TNLP {
                          const Number* lambda, Number, const Ipopt::IpoptData*,
                          Ipopt::IpoptCalculatedQuantities*) override {
     result->x = Eigen::Map<const Eigen::VectorXd>(x, nv);
-    if (lambda != nullptr)
+    if (lambda != nullptr) {
       result->multipliers = Eigen::Map<const Eigen::VectorXd>(lambda, mc);
+      result->has_multipliers = true;
+    }
     finalized = true;
   }
 

@@ -384,6 +384,60 @@ TEST_P(QuasiStaticBackends, ConcurrentInstancesMatchSequentialSolves) {
   EXPECT_GE(ok, static_cast<int>(states.size()) / 2) << "too few solves";
 }
 
+// Every accepted solve carries the KKT residual NlpSolver::Solve() recomputed
+// (core/nlp.h). The equality system is square and regular at the roots, so
+// least-squares equality multipliers make grad f + J^T lambda vanish: the
+// residual is round-off whatever the backend (no backend returns non-KKT
+// points here; the check bites on problems with degrees of freedom).
+TEST_P(QuasiStaticBackends, AcceptedSolvesCarryTheirKktResidual) {
+  for (ActuationMode mode : {ActuationMode::kPaper, ActuationMode::kPvc}) {
+    const Scenario s =
+        MakeSetup(std::make_shared<PlaneTerrain>(0.0), mode, 0.0,
+                  {0.2, 0, 0, 0, 0, 0}, {0, 0.6, 0, 0.6, 0, 0.6});
+    const QuasiStaticSolution sol = Solve(s);
+    ASSERT_EQ(sol.status, QuasiStaticStatus::kOk) << sol.message;
+    // Round-off of r = grad f + J^T lambda relative to s_d (O(1) terms,
+    // n <= 18): far below 1e-12.
+    EXPECT_LE(sol.kkt_residual, 1e-12) << GetParam() << " " << ToString(mode);
+  }
+}
+
+// What a client sees when Solve() downgrades a claimed convergence
+// (kNotOptimal): never OK; with mu > mu_min the solve is an honest
+// SOLVER_FAILURE naming the NLP status.
+class NotOptimalBackend final : public NlpSolver {
+ public:
+  std::string name() const override { return "not-optimal"; }
+
+ private:
+  void DoSolve(const NlpProblem& problem,
+               const Eigen::Ref<const Eigen::VectorXd>& x0,
+               const NlpOptions& options, NlpResult* result) override {
+    newton_->Solve(problem, x0, options, result);
+    result->backend = name();
+    result->status = NlpStatus::kNotOptimal;
+    result->backend_status += " [claimed convergence rejected: KKT residual]";
+  }
+  std::unique_ptr<NlpSolver> newton_ = NlpSolverRegistry::Create("newton");
+};
+
+TEST(QuasiStaticSolver, DowngradedSolveIsSolverFailure) {
+  RegisterBuiltinNlpSolvers();
+  const Scenario s =
+      MakeSetup(std::make_shared<PlaneTerrain>(0.0), ActuationMode::kPaper, 0.0,
+                {0, 0, 0, 0, 0, 0}, {0, 0.6, 0, 0.6, 0, 0.6});
+  QuasiStaticSolver solver(*s.model, s.params,
+                           std::make_unique<NotOptimalBackend>());
+  QuasiStaticSolution sol;
+  EXPECT_EQ(solver.Solve(s.theta, &sol), QuasiStaticStatus::kSolverFailure)
+      << sol.message;
+  EXPECT_EQ(sol.nlp_status, NlpStatus::kNotOptimal);
+  EXPECT_NE(sol.message.find("not_optimal"), std::string::npos) << sol.message;
+  EXPECT_TRUE(std::isnan(sol.kkt_residual));
+  // Flat ground, mu = 0.5 > mu_min = 0: not a friction limit.
+  EXPECT_LT(sol.mu_min, s.params.mu);
+}
+
 INSTANTIATE_TEST_SUITE_P(AllBackends, QuasiStaticBackends,
                          ::testing::ValuesIn([] {
                            RegisterBuiltinNlpSolvers();
