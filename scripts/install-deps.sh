@@ -9,6 +9,7 @@ PACKAGES=(
   libsundials-dev libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev
   libcli11-dev python3 python3-matplotlib python3-numpy
   libopenmpi-dev openmpi-bin python3-pandas
+  python3-dev pybind11-dev python3-pybind11 python3-pytest
   chromium clang-format libjs-three
 )
 # Optional, not needed by scripts/test.sh: clang + libFuzzer runtime for

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "bench/command_json.h"
 #include "bench/harness.h"
 #include "bench/json_writer.h"
 #include "bench/run_output.h"
@@ -195,28 +196,8 @@ int RunPose(const PoseArgs& args) {
   for (int i = 0; i < 3; ++i) model.EvaluateChain(theta, i, &chains[i]);
 
   if (args.json) {
-    JsonWriter w;
-    w.BeginObject();
-    w.Key("scene").Value(scene.name);
-    w.Key("position").Array(p);
-    w.Key("rpy").Array(rpy);
-    w.Key("joint_angles").Array(theta.tail<6>());
-    w.Key("H_norm").Value(report.loop_closure);
-    w.Key("contact_residual").Value(report.contact_residual);
-    w.Key("contacts").BeginArray();
-    for (int i = 0; i < 3; ++i) {
-      w.BeginObject();
-      w.Key("point").Array(chains[i].p_c);
-      w.Key("normal").Array(Vec3(chains[i].ground.frame.col(2)));
-      w.Key("psi").Value(theta(ConfigIndex::Psi(i)));
-      w.Key("u_w").Value(theta(ConfigIndex::U(i)));
-      w.Key("v_w").Value(theta(ConfigIndex::V(i)));
-      w.EndObject();
-    }
-    w.EndArray();
-    w.EndObject();
-    std::cout << w.str() << "\n";
-    return 0;
+    std::cout << PoseJson(scene, model, theta, report) << "\n";
+    return kExitOk;
   }
   std::printf("scene        %s (%s)\n", scene.name.c_str(),
               scene.terrain->Describe().c_str());
@@ -266,13 +247,6 @@ void ApplyOverrides(Scene* scene, const SceneOverrides& o) {
   if (o.mode == "pvc") scene->mode = ActuationMode::kPvc;
 }
 
-// Arrays of `n` nulls: the JSON of a value the solve did not produce.
-void NullArray(JsonWriter* w, int n) {
-  w->BeginArray();
-  for (int i = 0; i < n; ++i) w->Null();
-  w->EndArray();
-}
-
 }  // namespace
 
 int RunSolve(const SolveArgs& args) {
@@ -293,60 +267,7 @@ int RunSolve(const SolveArgs& args) {
   const int critical_wheel =
       sol.critical_contact >= 0 ? sol.critical_contact + 1 : 0;
   if (args.json) {
-    // A failed solve has no twist, rates, torques, gap or contact outputs:
-    // those keys are null (arrays of nulls keep their length), never zeros.
-    JsonWriter w;
-    w.BeginObject();
-    w.Key("status").Value(ToString(status));
-    w.Key("message").Value(sol.message);
-    w.Key("nlp").Value(args.nlp);
-    w.Key("mode").Value(ToString(scene.mode));
-    w.Key("mu").Value(scene.mu);
-    w.Key("mu_min").Value(sol.mu_min);
-    w.Key("twist");
-    ok ? (void)w.Array(sol.twist) : NullArray(&w, 6);
-    w.Key("joint_rates");
-    ok ? (void)w.Array(sol.joint_rates) : NullArray(&w, 6);
-    w.Key("actuator_torques");
-    ok ? (void)w.Array(sol.actuator_torques) : NullArray(&w, 6);
-    w.Key("gap");
-    ok ? (void)w.Value(sol.gap) : (void)w.Null();
-    w.Key("iterations").Value(sol.nlp_iterations);
-    w.Key("nlp_solves").Value(sol.nlp_solves);
-    w.Key("residual").Value(sol.residual);
-    w.Key("condition_number").Value(sol.condition_number);
-    w.Key("wall_s").Value(sol.wall_seconds);
-    w.Key("critical_wheel");
-    critical_wheel > 0 ? (void)w.Value(critical_wheel) : (void)w.Null();
-    w.Key("contacts").BeginArray();
-    for (const ContactOutput& c : sol.contacts) {
-      w.BeginObject();
-      if (ok) {
-        w.Key("normal_force").Value(c.normal_force);
-        w.Key("traction").Array(c.traction);
-        w.Key("force_world").Array(c.force_world);
-        w.Key("slip").Array(c.slip);
-        w.Key("normal_velocity").Value(c.normal_velocity);
-        w.Key("friction_use").Value(c.friction_use);
-        w.Key("point").Array(c.point);
-      } else {
-        w.Key("normal_force").Null();
-        w.Key("traction");
-        NullArray(&w, 2);
-        w.Key("force_world");
-        NullArray(&w, 3);
-        w.Key("slip");
-        NullArray(&w, 2);
-        w.Key("normal_velocity").Null();
-        w.Key("friction_use").Null();
-        w.Key("point");
-        NullArray(&w, 3);
-      }
-      w.EndObject();
-    }
-    w.EndArray();
-    w.EndObject();
-    std::cout << w.str() << "\n";
+    std::cout << SolveJson(scene, args.nlp, status, sol) << "\n";
     return ok ? kExitOk : kExitNotOk;
   }
   std::printf("status       %s%s%s\n", ToString(status),

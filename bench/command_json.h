@@ -1,0 +1,27 @@
+// The JSON documents of `quasiroll pose --json` and `quasiroll solve --json`
+// (docs/formats.md), shared by the CLI and the Python module (bench/python).
+#pragma once
+
+#include <string>
+
+#include "core/initial_configuration.h"
+#include "core/kinematics.h"
+#include "core/quasi_static.h"
+#include "core/scene.h"
+
+namespace quasiroll {
+
+// `pose --json`: the initial configuration `theta` of `scene` (solved with
+// `report`).
+std::string PoseJson(const Scene& scene, const KinematicModel& model,
+                     const Configuration& theta,
+                     const InitialConfigurationReport& report);
+
+// `solve --json`: one quasi-static solve by backend `nlp`. A value the solve
+// did not produce (everything but the diagnostics when the status is not
+// OK) is null, arrays keeping their length; critical_wheel is 1-based or
+// null (docs/cli.md, "Conventions").
+std::string SolveJson(const Scene& scene, const std::string& nlp,
+                      QuasiStaticStatus status, const QuasiStaticSolution& sol);
+
+}  // namespace quasiroll

@@ -1,0 +1,127 @@
+"""quasiroll from Python: scenes, poses, quasi-static solves, simulations and
+benchmark results (docs/python.md).
+
+    import quasiroll
+    scene = quasiroll.load_scene("bench/scenes/paper.yaml")
+    traj, stats = quasiroll.run(scene, nlp="newton", dae="rk-projection", t_end=5)
+    traj.plot(x="x", y="y")
+
+Every result has the keys and columns of the CLI's outputs (docs/formats.md):
+``pose`` and ``solve`` the ``--json`` documents, ``run`` the columns of
+trajectory.csv and the keys of run.json. Vectors are numpy arrays; a value
+the computation did not produce is ``None`` (JSON null), never zero.
+Keyword names are the CLI's flag names with '-' written '_' (docs/cli.md).
+"""
+
+import io
+import json
+import os
+
+import numpy as np
+
+from ._quasiroll import GeometryError, Scene, SceneError, backends, commit
+from ._quasiroll import load_scene as _load_scene
+from . import _quasiroll
+
+__all__ = ["Scene", "SceneError", "GeometryError", "load_scene", "pose",
+           "solve", "run", "backends", "load_runs", "commit"]
+
+
+def load_scene(path):
+    """Loads and validates a scene YAML file (docs/scenes.md)."""
+    return _load_scene(os.fspath(path))
+
+
+def _arrays(value):
+    """JSON lists of numbers -> numpy arrays, recursively; a list holding
+    only nulls (a value that was not computed) -> None."""
+    if isinstance(value, dict):
+        return {k: _arrays(v) for k, v in value.items()}
+    if isinstance(value, list):
+        if value and all(v is None for v in value):
+            return None
+        if all(isinstance(v, (int, float)) or v is None for v in value):
+            return np.array([np.nan if v is None else v for v in value],
+                            dtype=float)
+        return [_arrays(v) for v in value]
+    return value
+
+
+def pose(scene):
+    """The initial consistent configuration of `scene` (`quasiroll pose
+    --json`): position, rpy, joint_angles (numpy), H_norm, contact_residual,
+    contacts (list of 3 dicts: point, normal, psi, u_w, v_w)."""
+    return _arrays(json.loads(_quasiroll._pose_json(scene)))
+
+
+def solve(scene, nlp="newton", *, mu=None, eps=None, mode=None, nlp_tol=None):
+    """One quasi-static solve at the scene's initial configuration
+    (`quasiroll solve --json`). Returns a dict: status, message, mu_min,
+    twist, joint_rates, actuator_torques (numpy; None when the status is not
+    OK), gap, iterations, residual, condition_number, wall_s, critical_wheel
+    (1-based or None), contacts (list of 3 dicts of numpy arrays, or None)
+    and ok (status == "OK")."""
+    d = json.loads(_quasiroll._solve_json(scene, nlp, mu, eps, mode, nlp_tol))
+    if d["status"] != "OK":
+        d["contacts"] = None
+    d = _arrays(d)
+    d["ok"] = d["status"] == "OK"
+    return d
+
+
+def run(scene, nlp="newton", dae="rk-projection", *, coupling="zoh", dt=None,
+        t_end=None, mu=None, eps=None, mode=None, rk_method=None, sigma=None,
+        tol=None, atol=None, nlp_tol=None, dae_index=None, substeps=None,
+        contact_check=None, as_frame=True):
+    """Simulates `scene` (`quasiroll run`). Returns (trajectory, stats):
+    trajectory is a pandas DataFrame with the columns of trajectory.csv (or,
+    with as_frame=False, a dict of numpy arrays), stats the run.json dict
+    (status, stop_reason, t_reached, counters, wall_s, options, ...).
+    Options left at None take the scene's value or the library default. The
+    GIL is released while the simulation runs; Ctrl-C raises
+    KeyboardInterrupt."""
+    csv_text, run_json = _quasiroll._run_text(
+        scene, nlp, dae, coupling, dt, t_end, mu, eps, mode, rk_method, sigma,
+        tol, atol, nlp_tol, dae_index, substeps, contact_check)
+    stats = json.loads(run_json)
+    if as_frame:
+        import pandas as pd
+        # round_trip: pandas' default parser is off by an ulp at times; the
+        # files' 17 significant digits are meant to be read exactly.
+        trajectory = pd.read_csv(io.StringIO(csv_text),
+                                 dtype={"nlp_status": str},
+                                 float_precision="round_trip")
+    else:
+        header, *rows = csv_text.splitlines()
+        columns = header.split(",")
+        cells = [row.split(",") for row in rows]
+        trajectory = {}
+        for i, name in enumerate(columns):
+            values = [c[i] for c in cells]
+            if name == "nlp_status":
+                trajectory[name] = np.array(values, dtype=object)
+            else:
+                trajectory[name] = np.array(values, dtype=float)
+    return trajectory, stats
+
+
+def load_runs(directory):
+    """runs.csv of a `quasiroll bench` output directory as a pandas DataFrame
+    (docs/harness.md): empty fields (not applicable) and `nan` become NaN;
+    text columns stay strings."""
+    import pandas as pd
+    path = os.path.join(os.fspath(directory), "runs.csv")
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"{path}: no runs.csv (run 'quasiroll bench' "
+                                "first, or 'quasiroll merge' for shards)")
+    text_columns = {"run_id", "suite_group", "scene", "terrain", "nlp", "dae",
+                    "coupling", "rk_method", "status", "stop_reason",
+                    "ref_kind", "ref_status", "ref_hash", "cause",
+                    "cause_detail", "host", "cpu_model", "wall_s_all",
+                    "nlp_options", "dae_options"}
+    header = pd.read_csv(path, nrows=0).columns
+    dtypes = {c: str for c in header if c in text_columns}
+    return pd.read_csv(path, dtype=dtypes, keep_default_na=False,
+                       na_values={c: ["", "nan"] for c in header
+                                  if c not in text_columns},
+                       float_precision="round_trip")

@@ -1,0 +1,260 @@
+// quasiroll._quasiroll: the pybind11 extension behind `import quasiroll`
+// (bench/python/quasiroll/__init__.py adds the pandas / numpy layer;
+// docs/python.md). Outputs are the documents the CLI writes — pose and solve
+// JSON, trajectory.csv and run.json text (docs/formats.md) — so the Python
+// results have exactly the CLI's keys, columns and digits.
+//
+// The GIL is released while C++ computes; a run gives it back every 0.1 s
+// of wall time to let Ctrl-C (KeyboardInterrupt) through.
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <string>
+
+#include "bench/command_json.h"
+#include "bench/run_output.h"
+#include "bench/suite.h"
+#include "core/dae.h"
+#include "core/initial_configuration.h"
+#include "core/kinematics.h"
+#include "core/nlp.h"
+#include "core/quasi_static.h"
+#include "core/scene.h"
+#include "core/simulator.h"
+
+namespace py = pybind11;
+
+namespace quasiroll {
+namespace {
+
+// Keyword-argument checks with the CLI's wording (docs/cli.md), naming the
+// keyword as the caller wrote it.
+void RequirePositive(const char* name, const std::optional<double>& v) {
+  if (v && !(std::isfinite(*v) && *v > 0))
+    throw std::invalid_argument(std::string(name) +
+                                ": must be a finite number > 0, got " +
+                                bench::Num(*v));
+}
+void RequireNonNegative(const char* name, const std::optional<double>& v) {
+  if (v && !(std::isfinite(*v) && *v >= 0))
+    throw std::invalid_argument(std::string(name) +
+                                ": must be a finite number >= 0, got " +
+                                bench::Num(*v));
+}
+void RequireIn(const char* name, const std::optional<int>& v, int lo, int hi) {
+  if (v && (*v < lo || *v > hi))
+    throw std::invalid_argument(
+        std::string(name) + ": must be an integer in [" + std::to_string(lo) +
+        ", " + std::to_string(hi) + "], got " + bench::Num(*v));
+}
+
+ActuationMode ModeFromString(const std::string& mode) {
+  if (mode == "paper") return ActuationMode::kPaper;
+  if (mode == "pvc") return ActuationMode::kPvc;
+  throw std::invalid_argument("mode: must be one of paper, pvc, got '" + mode +
+                              "'");
+}
+
+Scene WithOverrides(Scene scene, const std::optional<double>& mu,
+                    const std::optional<double>& eps,
+                    const std::optional<std::string>& mode) {
+  RequirePositive("mu", mu);
+  RequirePositive("eps", eps);
+  if (mu) scene.mu = *mu;
+  if (eps) scene.epsilon = *eps;
+  if (mode) scene.mode = ModeFromString(*mode);
+  return scene;
+}
+
+void RequireBackend(const char* kind, const std::string& name,
+                    const std::vector<std::string>& known) {
+  for (const std::string& k : known)
+    if (k == name) return;
+  std::string list;
+  for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+  throw std::invalid_argument(std::string(kind) + ": must be one of " + list +
+                              ", got '" + name + "'");
+}
+
+std::string PoseText(const Scene& scene) {
+  std::string json;
+  {
+    py::gil_scoped_release release;
+    const KinematicModel model(scene.geometry, scene.terrain);
+    InitialConfigurationReport report;
+    const Configuration theta =
+        SolveInitialConfiguration(model, scene, &report);
+    json = PoseJson(scene, model, theta, report);
+  }
+  return json;
+}
+
+std::string SolveText(const Scene& scene_in, const std::string& nlp,
+                      std::optional<double> mu, std::optional<double> eps,
+                      std::optional<std::string> mode,
+                      std::optional<double> nlp_tol) {
+  RegisterBuiltinNlpSolvers();
+  RequireBackend("nlp", nlp, NlpSolverRegistry::Names());
+  RequirePositive("nlp_tol", nlp_tol);
+  const Scene scene = WithOverrides(scene_in, mu, eps, mode);
+  std::string json;
+  {
+    py::gil_scoped_release release;
+    const KinematicModel model(scene.geometry, scene.terrain);
+    const Configuration theta = SolveInitialConfiguration(model, scene);
+    QuasiStaticOptions options;
+    options.diagnostics = true;
+    if (nlp_tol) options.residual_tolerance = *nlp_tol;
+    QuasiStaticSolver solver(model, QuasiStaticParameters::FromScene(scene),
+                             NlpSolverRegistry::Create(nlp), options);
+    QuasiStaticSolution sol;
+    const QuasiStaticStatus status = solver.Solve(theta, &sol);
+    json = SolveJson(scene, nlp, status, sol);
+  }
+  return json;
+}
+
+// (trajectory.csv text, run.json text) of one simulation.
+std::pair<std::string, std::string> RunText(
+    const Scene& scene_in, const std::string& nlp, const std::string& dae,
+    const std::string& coupling, std::optional<double> dt,
+    std::optional<double> t_end, std::optional<double> mu,
+    std::optional<double> eps, std::optional<std::string> mode,
+    std::optional<std::string> rk_method, std::optional<double> sigma,
+    std::optional<double> tol, std::optional<double> atol,
+    std::optional<double> nlp_tol, std::optional<int> dae_index,
+    std::optional<int> substeps, std::optional<int> contact_check) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  RequireBackend("nlp", nlp, NlpSolverRegistry::Names());
+  RequireBackend("dae", dae, IntegratorRegistry::Names());
+  RequirePositive("dt", dt);
+  RequirePositive("t_end", t_end);
+  RequireNonNegative("sigma", sigma);
+  RequirePositive("tol", tol);
+  RequirePositive("atol", atol);
+  RequirePositive("nlp_tol", nlp_tol);
+  RequireIn("dae_index", dae_index, 1, 2);
+  RequireIn("substeps", substeps, 1, 100000);
+  RequireIn("contact_check", contact_check, 1, 1000000000);
+  const Scene scene = WithOverrides(scene_in, mu, eps, mode);
+  SimulationOptions options;
+  options.nlp = nlp;
+  options.dae = dae;
+  options.coupling = CouplingFromString(coupling);
+  options.dt = dt.value_or(scene.dt);
+  options.t_end = t_end.value_or(scene.t_end);
+  if (options.dt > options.t_end)
+    throw std::invalid_argument("dt: must be <= the end time " +
+                                bench::Num(options.t_end) + " s, got " +
+                                bench::Num(options.dt));
+  if (rk_method) options.integrator.rk_method = RkMethodFromString(*rk_method);
+  if (sigma) options.integrator.baumgarte_sigma = *sigma;
+  if (tol) options.integrator.rtol = *tol;
+  if (atol) options.integrator.atol = *atol;
+  if (dae_index) options.integrator.dae_index = *dae_index;
+  if (substeps) options.integrator.step = options.dt / *substeps;
+  if (nlp_tol) options.quasi_static.residual_tolerance = *nlp_tol;
+  if (contact_check) options.second_contact_check_every = *contact_check;
+
+  std::optional<Simulator> sim;
+  SimulationResult result;
+  {
+    py::gil_scoped_release release;
+    sim.emplace(scene, options);
+    sim->Begin(sim->initial_configuration(), &result);
+  }
+  bool more = true;
+  while (more) {
+    {
+      py::gil_scoped_release release;
+      const auto until =
+          std::chrono::steady_clock::now() + std::chrono::milliseconds(100);
+      do {
+        more = sim->Advance(&result);
+      } while (more && std::chrono::steady_clock::now() < until);
+    }
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+  }
+  std::pair<std::string, std::string> out;
+  {
+    py::gil_scoped_release release;
+    out.first = TrajectoryCsv(result);
+    out.second = RunJson(scene, options, sim->dt(), sim->t_end(), result);
+  }
+  return out;
+}
+
+}  // namespace
+}  // namespace quasiroll
+
+PYBIND11_MODULE(_quasiroll, m) {
+  using namespace quasiroll;
+  m.doc() = "quasiroll C++ core (use the `quasiroll` package)";
+
+  static py::exception<SceneError> scene_error(m, "SceneError",
+                                               PyExc_ValueError);
+  static py::exception<GeometryError> geometry_error(m, "GeometryError",
+                                                     PyExc_ValueError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const SceneError& e) {
+      scene_error(e.what());
+    } catch (const GeometryError& e) {
+      geometry_error(e.what());
+    }
+  });
+
+  py::class_<Scene>(m, "Scene",
+                    "A scene (docs/scenes.md). Copy with copy.copy() before "
+                    "changing attributes you want to keep.")
+      .def_readonly("name", &Scene::name)
+      .def_readonly("source_path", &Scene::source_path)
+      .def_property(
+          "mu", [](const Scene& s) { return s.mu; },
+          [](Scene& s, double v) { s = WithOverrides(s, v, {}, {}); })
+      .def_property(
+          "epsilon", [](const Scene& s) { return s.epsilon; },
+          [](Scene& s, double v) { s = WithOverrides(s, {}, v, {}); })
+      .def_property(
+          "mode", [](const Scene& s) { return std::string(ToString(s.mode)); },
+          [](Scene& s, const std::string& v) { s.mode = ModeFromString(v); })
+      .def_readonly("dt", &Scene::dt)
+      .def_readonly("t_end", &Scene::t_end)
+      .def_property_readonly("terrain",
+                             [](const Scene& s) {
+                               return s.terrain ? s.terrain->Describe()
+                                                : std::string();
+                             })
+      .def("__copy__", [](const Scene& s) { return Scene(s); })
+      .def("__deepcopy__", [](const Scene& s, py::dict) { return Scene(s); })
+      .def("__repr__", [](const Scene& s) {
+        return "<quasiroll.Scene '" + s.name + "' mode=" + ToString(s.mode) +
+               " mu=" + std::to_string(s.mu) + " from '" + s.source_path + "'>";
+      });
+
+  m.def(
+      "load_scene", [](const std::string& path) { return LoadScene(path); },
+      py::arg("path"), "Load and validate a scene YAML file");
+  m.def("_pose_json", &PoseText, py::arg("scene"));
+  m.def("_solve_json", &SolveText, py::arg("scene"), py::arg("nlp"),
+        py::arg("mu"), py::arg("eps"), py::arg("mode"), py::arg("nlp_tol"));
+  m.def("_run_text", &RunText, py::arg("scene"), py::arg("nlp"), py::arg("dae"),
+        py::arg("coupling"), py::arg("dt"), py::arg("t_end"), py::arg("mu"),
+        py::arg("eps"), py::arg("mode"), py::arg("rk_method"), py::arg("sigma"),
+        py::arg("tol"), py::arg("atol"), py::arg("nlp_tol"),
+        py::arg("dae_index"), py::arg("substeps"), py::arg("contact_check"));
+  m.def("backends", [] {
+    RegisterBuiltinNlpSolvers();
+    RegisterBuiltinIntegrators();
+    py::dict d;
+    d["nlp"] = NlpSolverRegistry::Names();
+    d["dae"] = IntegratorRegistry::Names();
+    return d;
+  });
+  m.attr("commit") = GitCommit();
+}
