@@ -1,5 +1,5 @@
 // Reference trajectories of the benchmark harness (docs/harness.md):
-// closed-form solutions where the scene admits one (model-notes §9, oracles
+// closed-form solutions where the scene admits one (model.md §9.1, oracles
 // O1, O2, O3), otherwise the most accurate numerical configuration; cached on
 // disk under DIR/references/<hash>.csv keyed by FNV-1a 64 of a canonical text
 // of the scene's effective parameters and the reference settings.

@@ -52,6 +52,9 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/reports/
         DESTINATION ${QUASIROLL_INSTALL_DATADIR}/reports COMPONENT runtime
         PATTERN "__pycache__" EXCLUDE PATTERN "*.pyc" EXCLUDE)
 
+install(FILES ${PROJECT_SOURCE_DIR}/LICENSE ${PROJECT_SOURCE_DIR}/CITATION.cff
+        DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT runtime)
+
 install(EXPORT quasirollTargets NAMESPACE quasiroll::
         DESTINATION ${QUASIROLL_INSTALL_CMAKEDIR} COMPONENT devel)
 configure_package_config_file(

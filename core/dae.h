@@ -3,12 +3,15 @@
 //   y' = F(t, y),   H(y) = 0   (holonomic constraints, J = dH/dy)
 //
 // Backends (integrators/) enforce H = 0 in different ways:
-//   rk-baumgarte   y' = F - D J^T (J D J^T)^{-1} (J F + sigma H)   (model §8.3)
-//   rk-projection  RK step of y' = F, then y <- y - D J^T (J D J^T)^{-1} H(y)
-//                  repeated until ||H||_inf <= tol                (model §8.4)
+//   rk-baumgarte   y' = F - D J^T (J D J^T)^{-1} (J F + sigma H)   (model.md
+//   §8.3) rk-projection  RK step of y' = F, then y <- y - D J^T (J D J^T)^{-1}
+//   H(y)
+//                  repeated until ||H||_inf <= tol                (model.md
+//                  §8.4)
 //   ida            residual [y' - F - D J^T nu ; H(y)] = 0, nu algebraic
 //                  (index 2, GGL type), or [..; J y' + sigma H] (index 1)
-//                                                                 (model §8.5)
+//                                                                 (model.md
+//                                                                 §8.5)
 // D = diag(CorrectionWeights()) >= 0 chooses which coordinates the correction
 // may move (weight 0 = never corrected). Nothing here knows about robots.
 #pragma once

@@ -7,8 +7,8 @@
 //   (C2) [x_g y_g]^T R_GW n_w(u, v) = 0                      (2 per wheel)
 // with R = Rz(yaw0) Ry(pitch) Rx(roll), p = (x0, y0, z) and
 // T_GW = (R, p) T_PW(theta0). Damped Newton with variable scaling until
-// ||residual||_inf <= 1e-10 (model-notes §3 reports Levenberg–Marquardt
-// without scaling stalling near 1e-4 on oblique inclines). Then psi_i follows
+// ||residual||_inf <= 1e-10 (unscaled Levenberg–Marquardt stalls near 1e-4
+// on oblique inclines, model.md §3.1). Then psi_i follows
 // from model.md §1.6 and ||H(Theta0)||_inf <= 1e-10 is checked.
 #pragma once
 

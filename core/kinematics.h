@@ -1,6 +1,6 @@
 // Kinematics of the three-wheeled robot on a terrain (model.md §2, §4–§6).
 //
-// Configuration Theta in R^21 (model-notes §2): per chain i = 0, 1, 2 the
+// Configuration Theta in R^21 (model.md §2): per chain i = 0, 1, 2 the
 // contact coordinates eta_i = (u_w, v_w, x_g, y_g, psi) at 5i..5i+4, then the
 // joint angles theta = (phi1, alpha1, delta2, alpha2, delta3, alpha3)
 // at 15..20. The platform pose is not a state: each chain gives one by forward

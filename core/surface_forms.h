@@ -1,6 +1,6 @@
 // Contact geometry of the two surfaces in contact: the torus wheel and the
 // terrain graph z = h(x, y), with the general-chart forms of model.md §1.2/§1.4
-// (model-notes §1.2, §1.4; Montana 1988 generalised to non-orthogonal charts):
+// (model.md §1.2, §1.3; Montana 1988 generalised to non-orthogonal charts):
 //
 //   metric       A   = E^T Dc                     (E = [x y], Dc = [c_u c_v])
 //   curvature    K   = E^T Dn A^{-1} = -A^{-T} II A^{-1},  II_jk = c_jk . n

@@ -1,6 +1,6 @@
 // Concrete terrains z = h(x, y). Every implementation evaluates h and all of
 // its partial derivatives up to third order analytically (no finite
-// differences). See model-notes §1.2 for the formulas of plane, incline and
+// differences). See model.md §1.2 for the formulas of plane, incline and
 // sum-of-Gaussians terrains; docs/scenes.md for how scenes select them.
 #pragma once
 

@@ -1,5 +1,5 @@
 // Weighted minimal-norm constraint correction shared by the backends
-// (model notes §8.3-§8.5):
+// (model.md §8.3–§8.5):
 //
 //   A = J D J^T  (m x m, factorised by LDLT),   delta = D J^T A^{-1} r
 //

@@ -1,5 +1,5 @@
 // ida: SUNDIALS IDA (variable-order BDF) on the DAE in y = (x, nu)
-// (model notes §8.5):
+// (model.md §8.5):
 //
 //   dae_index = 2 (GGL type):    x' - F(t, x) - D J(x)^T nu = 0,  H(x) = 0
 //   dae_index = 1 (Baumgarte):   x' - F(t, x) - D J(x)^T nu = 0,

@@ -15,16 +15,18 @@ void RegisterBuiltinIntegrators() {
   std::call_once(once, [] {
     IntegratorRegistry::Register(
         "rk-baumgarte",
-        "explicit Runge-Kutta on the Baumgarte-corrected field (model §8.3)",
+        "explicit Runge-Kutta on the Baumgarte-corrected field (model.md §8.3)",
         [] { return std::make_unique<RkBaumgarteIntegrator>(); });
     IntegratorRegistry::Register(
         "rk-projection",
-        "explicit Runge-Kutta step + Newton projection onto H = 0 (model §8.4)",
+        "explicit Runge-Kutta step + Newton projection onto H = 0 (model.md "
+        "§8.4)",
         [] { return std::make_unique<RkProjectionIntegrator>(); });
 #ifdef QUASIROLL_HAVE_SUNDIALS
     IntegratorRegistry::Register(
         "ida",
-        "SUNDIALS IDA on the index-2 GGL / index-1 Baumgarte DAE (model §8.5)",
+        "SUNDIALS IDA on the index-2 GGL / index-1 Baumgarte DAE (model.md "
+        "§8.5)",
         [] { return std::make_unique<IdaIntegrator>(); });
 #endif
   });

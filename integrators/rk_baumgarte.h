@@ -1,5 +1,5 @@
 // rk-baumgarte: explicit Runge-Kutta on the Baumgarte-corrected field
-// (model notes §8.3)
+// (model.md §8.3)
 //
 //   y' = F - D J^T (J D J^T)^{-1} (J F + sigma H),
 //

@@ -1,7 +1,7 @@
 // rk-projection: explicit Runge-Kutta step of y' = F, then the Newton
 // projection y <- y - D J^T (J D J^T)^{-1} H(y), repeated until
 // ||H||_inf <= projection_tolerance (at most max_projection_iterations, else
-// kConstraintFailure) (model notes §8.4). The initial state is projected too.
+// kConstraintFailure) (model.md §8.4). The initial state is projected too.
 // With an FSAL pair the first stage is re-evaluated whenever the projection
 // moved y. Methods, step control and events: integrators/runge_kutta.h.
 //

@@ -1,4 +1,4 @@
-// References: detection of the analytic cases (model-notes §9: O1, O2, O3),
+// References: detection of the analytic cases (model.md §9.1: O1, O2, O3),
 // agreement of the numerical reference with the closed forms, and the disk
 // cache.
 #include "bench/reference.h"

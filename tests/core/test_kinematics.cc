@@ -281,7 +281,7 @@ TEST(Kinematics, ObliqueInclineStraightDriveCoversRhoAlphaDotT) {
         // round-off level; 1e-12 m leaves room for 100 steps of round-off.
         EXPECT_NEAR(dist, 0.3, 1e-12) << "wheel " << i;
       } else {
-        // The notes report ~1.7% (5 mm) error for this geometry.
+        // About 1.7 % (5 mm) off for this geometry (model.md §5).
         EXPECT_GT(std::abs(dist - 0.3), 1e-3) << "wheel " << i;
       }
     }

@@ -1,5 +1,5 @@
 // The quasi-static problem (model.md §7) against the analytic oracles of
-// model-notes §9 (O1, O3, O3-num, O4, O6), on every registered NLP backend.
+// model.md §9.1 (O1, O3, O3-num, O4, O6), on every registered NLP backend.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>

@@ -17,7 +17,7 @@ const std::string kSource = QUASIROLL_SOURCE_DIR;
 const std::string kScenes = kSource + "/bench/scenes/";
 const std::string kBad = kSource + "/tests/data/bad_scenes/";
 
-// Reference terrain R1, typed in from model-notes Appendix A:
+// Reference terrain R1, typed in from model.md §9.3:
 // {A_k, x_k, y_k, s_k}.
 const double kR1[30][4] = {
     {0.0009, 1.0514, -0.5423, 0.3883},  {0.0360, -0.2292, -1.1830, 0.2857},

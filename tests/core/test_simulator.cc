@@ -1,5 +1,5 @@
 // Time integration of the robot (model.md §8) against the oracles O1, O2, O2b,
-// O8 of model-notes §9, drift behaviour, backend agreement and clean stops.
+// O8 of model.md §9.1, drift behaviour, backend agreement and clean stops.
 #include <gtest/gtest.h>
 
 #include <cmath>

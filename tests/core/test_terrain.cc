@@ -104,7 +104,7 @@ const std::vector<std::array<double, 2>> kPoints = {{0.0, 0.0},  {0.37, -0.21},
                                                     {-1.3, 0.8}, {1.1, 1.7},
                                                     {2.2, -0.9}, {0.05, 0.55}};
 
-// R1 terrain of model-notes Appendix A (also tested against paper.yaml).
+// R1 terrain of model.md §9.3 (also tested against paper.yaml).
 std::vector<GaussianBump> SomeBumps() {
   return {{0.0360, -0.2292, -1.1830, 0.2857},
           {-0.0285, 1.3952, 0.3497, 0.3293},

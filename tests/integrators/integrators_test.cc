@@ -298,7 +298,7 @@ INSTANTIATE_TEST_SUITE_P(Rk, RkBackendTest, ::testing::ValuesIn(RkBackends()),
 // |H(0)| = 1e-3, sigma = 5, RK4 with h = 0.05 over 1 s. With a linear
 // constraint H_k = R(-sigma h)^k H_0 exactly, R(z) = 1 + z + z^2/2 + z^3/6 +
 // z^4/24, so |H(t)| / (|H0| e^{-sigma t}) = (R(-0.25) e^{0.25})^{t/h} rises
-// monotonically from 1 to 1.0002 (model notes O8: RK4 amplification error);
+// monotonically from 1 to 1.0002 (model.md §9.1, O8: RK4 amplification error);
 // the bound [1, 1.001] leaves 5x margin plus rounding.
 TEST(RkBaumgarteTest, ConstraintDecaysAtTheBaumgarteRate) {
   RegisterBuiltinIntegrators();

@@ -103,7 +103,7 @@ class PendulumOde : public ConstrainedOde {
 // Nonlinear 3-D field with the linear constraint H = y0 + 2 y1 - y2 - c.
 // Under rk-baumgarte H obeys H' = -sigma H exactly, and because H is linear
 // the RK iterates obey H_{k+1} = R(-sigma h) H_k with R the method's
-// stability function (model notes O8).
+// stability function (model.md §9.1, O8).
 class LinearConstraintOde : public ConstrainedOde {
  public:
   explicit LinearConstraintOde(double c = 1.0) : c_(c) {}
