@@ -4,6 +4,8 @@
 #include <cmath>
 #include <map>
 
+#include "bench/harness.h"
+#include "bench/reference.h"
 #include "core/scene.h"
 
 namespace quasiroll::bench {
@@ -151,6 +153,27 @@ std::vector<int> AssignShards(const std::vector<double>& costs,
     }
   }
   return shard;
+}
+
+std::string PlanCsv(const Suite& suite, const HarnessOptions& options) {
+  HarnessOptions selection = options;
+  selection.resume = false;  // every selected run, finished or not
+  const SuitePlan plan = PlanSuite(suite, selection);
+  std::string csv =
+      "run_id,suite_group,scene,nlp,dae,coupling,dt,t_end,repeats,"
+      "estimated_cost_s,reference,reference_cost_s\n";
+  for (std::size_t i = 0; i < plan.selected.size(); ++i) {
+    const RunSpec& r = *plan.selected[i];
+    const ReferenceJob& ref = plan.references[plan.run_reference[i]];
+    csv += r.run_id + "," + r.group + "," + r.scene + "," + r.nlp + "," +
+           r.dae + "," + ToString(r.coupling) + "," + Num(r.dt) + "," +
+           Num(r.t_end) + "," + std::to_string(r.repeats) + "," +
+           Num(EstimatedRunCost(r)) + "," + Hex64(Fnv1a64(ref.key)) + "," +
+           Num(EstimatedReferenceCost(ref.scene.dt, ref.scene.t_end,
+                                      suite.reference)) +
+           "\n";
+  }
+  return csv;
 }
 
 }  // namespace quasiroll::bench

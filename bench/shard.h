@@ -10,6 +10,10 @@
 #include "bench/suite.h"
 
 namespace quasiroll::bench {
+struct HarnessOptions;
+}
+
+namespace quasiroll::bench {
 
 // Estimated cost of a run in seconds (docs/cluster.md, "Cost model"):
 //
@@ -49,5 +53,11 @@ std::pair<int, int> ParseShard(const std::string& text);
 std::vector<int> AssignShards(const std::vector<double>& costs,
                               const std::vector<std::string>& reference_keys,
                               int count);
+
+// `bench --plan`: the runs the options select (--filter, --shard), in grid
+// order, as CSV: run_id, suite_group, scene, nlp, dae, coupling, dt, t_end,
+// repeats, estimated_cost_s, reference (the ref_hash the run will have),
+// reference_cost_s (EstimatedReferenceCost). Runs nothing.
+std::string PlanCsv(const Suite& suite, const HarnessOptions& options);
 
 }  // namespace quasiroll::bench

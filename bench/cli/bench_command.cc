@@ -42,6 +42,9 @@ void BenchCommands::Register(CLI::App& app, std::function<int()>* selected) {
                     "I/N: run only slice I (0-based) of N cost-balanced "
                     "slices; runs.csv and meta.json go to DIR/shards/I-of-N/ "
                     "(then 'quasiroll merge')");
+  bench->add_flag("--plan", bench_.plan,
+                  "Print the selected runs with their estimated cost (CSV) "
+                  "and exit without running anything (docs/cluster.md)");
   bench
       ->add_option("--progress", bench_.progress,
                    "auto (bar on a TTY, else lines) | bar | lines | none")
@@ -123,6 +126,10 @@ int RunBench(const BenchArgs& args) {
                      : args.progress == "none"  ? 0
                      : args.progress == "lines" ? 1
                                                 : 2;
+  if (args.plan) {
+    std::fputs(bench::PlanCsv(suite, options).c_str(), stdout);
+    return kExitOk;
+  }
   // Every finished run is already on disk (atomic files), so Ctrl-C can end
   // the process at once; the message says how to continue.
   std::string resume = "quasiroll bench --suite " + ShellQuote(args.suite) +

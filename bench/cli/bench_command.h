@@ -17,6 +17,7 @@ struct BenchArgs {
   std::optional<std::string> filter;
   bool resume = false;
   std::string shard;  // "I/N", "" = the whole suite
+  bool plan = false;  // print the selected runs and their costs, run nothing
   std::string progress = "auto";
 };
 

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <map>
 #include <numeric>
+#include <set>
 #include <sstream>
 
 #include "bench/harness.h"
@@ -178,6 +179,33 @@ TEST(Json, MembersAreTheRawValueTexts) {
   EXPECT_EQ(m[3].second, "true");
   EXPECT_THROW(JsonMembers("{\"a\":1"), std::runtime_error);
   EXPECT_THROW(JsonMembers("[1]"), std::runtime_error);
+}
+
+TEST(Atlas, EveryMethodOnEveryStabilityAxisWithTwentySeeds) {
+  const Suite atlas =
+      LoadSuite(std::string(QUASIROLL_SOURCE_DIR) + "/bench/suites/atlas.yaml");
+  EXPECT_GE(atlas.runs.size(), 2000u);
+  const std::set<std::string> groups(atlas.groups.begin(), atlas.groups.end());
+  EXPECT_EQ(groups,
+            (std::set<std::string>{"stability_dt", "stability_sigma_dt",
+                                   "stability_tol", "stability_mu",
+                                   "stability_roughness", "stability_seed"}));
+  std::map<std::string, std::set<std::string>> methods;  // group -> methods
+  std::set<std::uint64_t> seeds;
+  for (const RunSpec& r : atlas.runs) {
+    methods[r.group].insert(r.nlp + "/" + r.dae + "/" + ToString(r.coupling));
+    if (r.group == "stability_seed" && r.seed) seeds.insert(*r.seed);
+  }
+  for (const auto& [group, set] : methods) {
+    // sigma only exists for rk-baumgarte and ida's index-1 form.
+    const std::size_t daes = group == "stability_sigma_dt" ? 2 : 3;
+    EXPECT_EQ(set.size(), 4 * daes * 2) << group;
+    for (const char* nlp : {"newton", "ipopt", "slsqp", "ceres"})
+      for (const char* c : {"zoh", "coupled"})
+        EXPECT_TRUE(set.count(std::string(nlp) + "/rk-baumgarte/" + c))
+            << group << " " << nlp << " " << c;
+  }
+  EXPECT_GE(seeds.size(), 20u);
 }
 
 class ShardMerge : public ::testing::Test {
@@ -412,6 +440,24 @@ TEST_F(ShardMerge, CliExitCodes) {
   EXPECT_EQ(RunCli("merge " + (root_ / "nonexistent").string() + " --out " +
                    (root_ / "cli").string()),
             2);
+  // --plan: the selected runs and their costs, nothing run or written.
+  const fs::path plan = root_ / "plan.csv";
+  EXPECT_EQ(std::system((std::string(QUASIROLL_CLI_PATH) + " bench" + suite +
+                         " --plan --shard 1/3 > " + plan.string())
+                            .c_str()),
+            0);
+  const auto rows = CsvRows(ReadAll(plan));
+  ASSERT_GE(rows.size(), 2u);
+  EXPECT_EQ(rows[0][0], "run_id");
+  EXPECT_EQ(rows[0][9], "estimated_cost_s");
+  const auto shard1 =
+      CsvRows(ReadAll(root_ / "shared" / "shards" / "1-of-3" / "runs.csv"));
+  ASSERT_EQ(rows.size(), shard1.size());
+  for (std::size_t k = 1; k < rows.size(); ++k) {
+    EXPECT_EQ(rows[k][0], shard1[k][0]);  // the runs shard 1 ran
+    EXPECT_GT(std::stod(rows[k][9]), 0);
+  }
+  EXPECT_FALSE(fs::exists(root_ / "cli"));
   EXPECT_EQ(RunCli("bench" + suite + " --shard 0/40 --filter unstable"), 0);
   EXPECT_EQ(RunCli("merge " + (root_ / "cli").string() + " --out " +
                    (root_ / "cli").string()),
