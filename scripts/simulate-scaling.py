@@ -3,7 +3,11 @@
 
     quasiroll bench --suite S --out X --plan > plan.csv
     quasiroll bench --suite S --out SAMPLE --jobs 1 --filter '0$'   # a slice
-    /usr/bin/python3 scripts/simulate-scaling.py plan.csv SAMPLE [--ranks 1,8,64,256]
+    /usr/bin/python3 scripts/simulate-scaling.py plan.csv SAMPLE [--ranks=1,8,64,256]
+                                                 [--scale=F]
+
+--scale=F multiplies every cost (e.g. the measuring run's CPU time / elapsed
+time when the machine was shared, to estimate an idle machine; default 1).
 
 Per-run cost (seconds of one core of the machine that measured SAMPLE):
   * a run of the slice: its measured elapsed time in the --jobs 1 run (time
@@ -182,14 +186,21 @@ def fmt(seconds):
 def main():
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     ranks = [1, 8, 64, 256]
+    scale = 1.0
     for a in sys.argv[1:]:
         if a.startswith("--ranks="):
             ranks = [int(x) for x in a.split("=", 1)[1].split(",")]
+        elif a.startswith("--scale="):
+            scale = float(a.split("=", 1)[1])
     if len(args) != 2:
         print(__doc__, file=sys.stderr)
         return 2
     plan = read_csv(args[0])
     run_cost, ref_cost, info = costs(plan, args[1])
+    run_cost = {k: v * scale for k, v in run_cost.items()}
+    ref_cost = {k: v * scale for k, v in ref_cost.items()}
+    if scale != 1.0:
+        print(f"costs scaled by {scale}")
     total_runs = sum(run_cost.values())
     total_refs = sum(ref_cost.values())
     chain = max(ref_cost[r["reference"]] + run_cost[r["run_id"]] for r in plan)
