@@ -82,7 +82,10 @@ const std::vector<std::string>& RunsCsvColumns() {
                                                    "drift_final",
                                                    "gap_max",
                                                    "host",
-                                                   "cpu_model"};
+                                                   "cpu_model",
+                                                   "nlp_options",
+                                                   "dae_options",
+                                                   "scene_fields"};
   return columns;
 }
 
@@ -141,6 +144,15 @@ class RowBuilder {
   std::vector<std::string> values_;
 };
 
+// A YAML flow value (scene_fields) as JSON: numbers and [..] sequences of
+// numbers are JSON already; anything else (mode: pvc) becomes a string.
+std::string ValueAsJson(const std::string& flow) {
+  const bool numeric =
+      !flow.empty() &&
+      flow.find_first_not_of("0123456789+-.eE[], ") == std::string::npos;
+  return numeric ? flow : "\"" + flow + "\"";
+}
+
 void SetParameters(const RunSpec& run, const std::string& terrain_id,
                    RowBuilder* b) {
   b->Set("run_id", run.run_id);
@@ -150,7 +162,7 @@ void SetParameters(const RunSpec& run, const std::string& terrain_id,
   b->Set("nlp", run.nlp);
   b->Set("dae", run.dae);
   b->Set("coupling", ToString(run.coupling));
-  b->Set("rk_method", ToString(run.rk_method));
+  b->Set("rk_method", run.rk_method);
   b->Set("dt", run.dt);
   b->Set("tol", run.tol);
   b->Set("atol", run.atol);
@@ -167,6 +179,12 @@ void SetParameters(const RunSpec& run, const std::string& terrain_id,
   b->SetInt("repeats", run.repeats);
   b->Set("host", ThisMachine().hostname);
   b->Set("cpu_model", ThisMachine().cpu);
+  std::string fields = "{";
+  for (const auto& [field, value] : run.scene_fields) {
+    if (fields.size() > 1) fields += ",";
+    fields += "\"" + field + "\":" + ValueAsJson(value);
+  }
+  b->Set("scene_fields", run.scene_fields.empty() ? "" : fields + "}");
 }
 
 void SetReference(const Reference* ref, const std::string& error,
@@ -217,6 +235,8 @@ std::vector<std::string> MakeRow(const RunSpec& run,
   b.SetInt("steps", result.steps);
   b.SetInt("rejected_steps", result.rejected_steps);
   b.SetInt("samples", static_cast<long long>(result.samples.size()));
+  b.Set("nlp_options", result.nlp_options.Json());
+  b.Set("dae_options", result.dae_options.Json());
   SetReference(reference, reference_error, &b);
   SetNanMetrics(&b);
   if (reference) {

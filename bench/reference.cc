@@ -275,7 +275,7 @@ SimulationResult ComputeNumericalReference(const Scene& scene,
   o.coupling = Coupling::kCoupled;
   o.dt = scene.dt / settings.dt_divisor;
   o.t_end = scene.t_end;
-  o.integrator.rk_method = RkMethod::kRk4;
+  o.dae_options = {{"rk_method", "rk4"}};
   o.integrator.step = o.dt / settings.substeps;
   o.integrator.max_steps = 100000000;
   o.quasi_static.residual_tolerance = settings.residual_tolerance;
@@ -286,7 +286,7 @@ SimulationResult ComputeNumericalReference(const Scene& scene,
   // A numerical breakdown (solver or integrator failure) of the primary
   // configuration: try DP5(4) at rtol 1e-10 (other stage points) and keep
   // whichever gets further.
-  o.integrator.rk_method = RkMethod::kDormandPrince54;
+  o.dae_options = {{"rk_method", "dp54"}};
   o.integrator.rtol = 1e-10;
   o.integrator.atol = 1e-12;
   Simulator alt(scene, o);

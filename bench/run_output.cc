@@ -13,6 +13,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <thread>
+#include <variant>
 
 #include "quasiroll_git_commit.h"
 
@@ -238,16 +239,56 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.Key("coupling").Value(ToString(options.coupling));
   j.Key("dt").Value(dt);
   j.Key("t_end").Value(t_end);
-  j.Key("rk_method").Value(ToString(options.integrator.rk_method));
+  // rk_method, sigma, projection_tolerance and dae_index are integrator
+  // options now; these keys keep their meaning for the integrators that have
+  // them and show the former defaults for the others (dae_options.used is
+  // the complete record).
+  const OptionValues& dae_used = r.dae_options;
+  j.Key("rk_method")
+      .Value(dae_used.Has("rk_method") ? dae_used.GetString("rk_method")
+                                       : std::string("rk4"));
   j.Key("step").Value(options.integrator.step > 0 ? options.integrator.step
                                                   : dt);
   j.Key("rtol").Value(options.integrator.rtol);
   j.Key("atol").Value(options.integrator.atol);
-  j.Key("sigma").Value(options.integrator.baumgarte_sigma);
-  j.Key("projection_tolerance").Value(options.integrator.projection_tolerance);
-  j.Key("dae_index").Value(options.integrator.dae_index);
+  j.Key("sigma").Value(dae_used.Has("baumgarte_sigma")
+                           ? dae_used.GetDouble("baumgarte_sigma")
+                           : 5.0);
+  j.Key("projection_tolerance")
+      .Value(dae_used.Has("projection_tolerance")
+                 ? dae_used.GetDouble("projection_tolerance")
+                 : 1e-12);
+  j.Key("dae_index")
+      .Value(dae_used.Has("dae_index")
+                 ? static_cast<int>(dae_used.GetInt("dae_index"))
+                 : 2);
   j.Key("nlp_residual_tolerance")
       .Value(options.quasi_static.residual_tolerance);
+  // Backend options: as given, and as used (every option of the table).
+  auto write_options = [&j](const char* key, const GivenOptions& given,
+                            const OptionValues& used) {
+    j.Key(key).BeginObject();
+    j.Key("given").BeginObject();
+    for (const auto& [name, text] : given) j.Key(name).Value(text);
+    j.EndObject();
+    j.Key("used").BeginObject();
+    for (const auto& [name, value] : used.values()) {
+      j.Key(name);
+      if (std::holds_alternative<bool>(value)) {
+        j.Value(std::get<bool>(value));
+      } else if (std::holds_alternative<long long>(value)) {
+        j.Value(std::get<long long>(value));
+      } else if (std::holds_alternative<double>(value)) {
+        j.Value(std::get<double>(value));
+      } else {
+        j.Value(std::get<std::string>(value));
+      }
+    }
+    j.EndObject();
+    j.EndObject();
+  };
+  write_options("nlp_options", options.nlp_options, r.nlp_options);
+  write_options("dae_options", options.dae_options, r.dae_options);
   j.EndObject();
   j.Key("commit").Value(GitCommit());
   j.Key("library_versions");

@@ -56,12 +56,11 @@ SimulationOptions RunSpec::Options() const {
   o.coupling = coupling;
   o.dt = dt;
   o.t_end = t_end;
-  o.integrator.rk_method = rk_method;
   o.integrator.step = dt / substeps;
   o.integrator.rtol = tol;
   o.integrator.atol = atol;
-  o.integrator.baumgarte_sigma = sigma;
-  o.integrator.dae_index = dae_index;
+  o.nlp_options = nlp_options;
+  o.dae_options = dae_options;
   o.quasi_static.residual_tolerance = nlp_tol;
   o.second_contact_check_every = contact_check;
   return o;
@@ -259,12 +258,11 @@ std::string CanonicalRunKey(const RunSpec& r) {
   std::ostringstream os;
   os << "group=" << r.group << ";scene=" << r.scene << ";nlp=" << r.nlp
      << ";dae=" << r.dae << ";coupling=" << ToString(r.coupling)
-     << ";rk=" << ToString(r.rk_method) << ";dt=" << Num(r.dt)
-     << ";tol=" << Num(r.tol) << ";atol=" << Num(r.atol)
-     << ";nlp_tol=" << Num(r.nlp_tol) << ";sigma=" << Num(r.sigma)
-     << ";eps=" << Num(r.eps) << ";dae_index=" << r.dae_index
-     << ";substeps=" << r.substeps << ";contact_check=" << r.contact_check
-     << ";mu=" << Num(r.mu)
+     << ";rk=" << r.rk_method << ";dt=" << Num(r.dt) << ";tol=" << Num(r.tol)
+     << ";atol=" << Num(r.atol) << ";nlp_tol=" << Num(r.nlp_tol)
+     << ";sigma=" << Num(r.sigma) << ";eps=" << Num(r.eps)
+     << ";dae_index=" << r.dae_index << ";substeps=" << r.substeps
+     << ";contact_check=" << r.contact_check << ";mu=" << Num(r.mu)
      << ";seed=" << (r.seed ? std::to_string(*r.seed) : "-")
      << ";roughness=" << Num(r.roughness) << ";t_end=" << Num(r.t_end)
      << ";repeats=" << r.repeats;
@@ -272,6 +270,10 @@ std::string CanonicalRunKey(const RunSpec& r) {
   // run ids) of suites without them are those of the original fixed grid.
   for (const auto& [field, value] : r.scene_fields)
     os << ";scene." << field << "=" << value;
+  for (const auto& [name, value] : r.nlp_options_explicit)
+    os << ";nlp_options." << name << "=" << value;
+  for (const auto& [name, value] : r.dae_options_explicit)
+    os << ";dae_options." << name << "=" << value;
   return os.str();
 }
 
@@ -415,15 +417,133 @@ std::vector<Axis> ReadSceneFieldAxes(const YAML::Node& node,
   return axes;
 }
 
+// Option tables of backends by registry name (created once per load).
+class OptionTables {
+ public:
+  const OptionTable& Nlp(const std::string& name) {
+    auto it = nlp_.find(name);
+    if (it == nlp_.end())
+      it = nlp_.emplace(name, NlpSolverRegistry::Create(name)->option_table())
+               .first;
+    return it->second;
+  }
+  const OptionTable& Dae(const std::string& name) {
+    auto it = dae_.find(name);
+    if (it == dae_.end())
+      it = dae_.emplace(name, IntegratorRegistry::Create(name)->option_table())
+               .first;
+    return it->second;
+  }
+
+ private:
+  std::map<std::string, OptionTable> nlp_, dae_;
+};
+
+// The `nlp_options` / `dae_options` mapping of a group: option name -> a
+// value or a sequence of values (an axis). Every option must be in the table
+// of every backend of the group, and every value valid for each of them.
+std::vector<Axis> ReadOptionAxes(
+    const YAML::Node& node, const std::string& path, const std::string& key,
+    const std::vector<std::string>& backends,
+    const std::function<const OptionTable&(const std::string&)>& table_of,
+    const std::string& kind) {
+  std::vector<Axis> axes;
+  auto map = Child(node, key);
+  if (!map) return axes;
+  const std::string mp = JoinKey(path, key);
+  if (!map->IsMap() || map->size() == 0)
+    Fail(mp, "expected a non-empty mapping of option names to values, got " +
+                 yaml::DescribeNode(*map));
+  const bool nlp = key == "nlp_options";
+  for (auto it = map->begin(); it != map->end(); ++it) {
+    const std::string name = it->first.as<std::string>();
+    const std::string op = JoinKey(mp, name);
+    for (const std::string& b : backends) {
+      if (FindOption(table_of(b), name) == nullptr) {
+        const std::string known = OptionNames(table_of(b));
+        Fail(op, "unknown option of " + kind + " '" + b +
+                     "' (known: " + (known.empty() ? "none" : known) +
+                     "), got \"" + name + "\"");
+      }
+    }
+    const YAML::Node v = it->second;
+    std::vector<std::string> texts;
+    if (v.IsSequence()) {
+      if (v.size() == 0) Fail(op, "empty grid axis, got []");
+      for (std::size_t i = 0; i < v.size(); ++i)
+        texts.push_back(yaml::ReadString(v[i], JoinIndex(op, i)));
+    } else {
+      texts.push_back(yaml::ReadString(v, op));
+    }
+    Axis axis{key + "." + name, {}};
+    for (std::size_t i = 0; i < texts.size(); ++i) {
+      const std::string vp = v.IsSequence() ? JoinIndex(op, i) : op;
+      for (const std::string& b : backends) {
+        try {
+          ParseOptionValue(*FindOption(table_of(b), name), texts[i],
+                           kind + " '" + b + "'");
+        } catch (const std::invalid_argument& e) {
+          Fail(vp, e.what());
+        }
+      }
+      const std::string text = texts[i];
+      axis.values.push_back({text, [nlp, name, text](RunSpec* r) {
+                               (nlp ? r->nlp_options_explicit
+                                    : r->dae_options_explicit)[name] = text;
+                             }});
+    }
+    if (v.IsSequence()) CheckNoDuplicates(texts, op);
+    axes.push_back(std::move(axis));
+  }
+  return axes;
+}
+
+// Completes a run's backend options: the explicit ones, plus the shorthand
+// keys for the integrator options of the same meaning. An explicit integrator
+// option with a shorthand also sets the shorthand's field (the runs.csv
+// column keeps its meaning).
+void ResolveRunOptions(const YAML::Node& group_node, const std::string& path,
+                       const OptionTable& dae_table, RunSpec* r) {
+  r->nlp_options = r->nlp_options_explicit;
+  r->dae_options = r->dae_options_explicit;
+  struct Shorthand {
+    const char* key;     // group key
+    const char* option;  // integrator option
+  };
+  for (const Shorthand& sh : {Shorthand{"rk_method", "rk_method"},
+                              Shorthand{"sigma", "baumgarte_sigma"},
+                              Shorthand{"dae_index", "dae_index"}}) {
+    const auto explicit_it = r->dae_options_explicit.find(sh.option);
+    if (explicit_it != r->dae_options_explicit.end()) {
+      if (Child(group_node, sh.key))
+        Fail(JoinKey(JoinKey(path, "dae_options"), sh.option),
+             std::string("given twice: also as the group key ") + sh.key +
+                 ", got \"" + explicit_it->second + "\"");
+      const std::string& v = explicit_it->second;
+      const std::string shorthand(sh.key);
+      if (shorthand == "rk_method") r->rk_method = v;
+      if (shorthand == "sigma") r->sigma = std::stod(v);
+      if (shorthand == "dae_index") r->dae_index = std::stoi(v);
+      continue;
+    }
+    if (FindOption(dae_table, sh.option) == nullptr) continue;
+    const std::string shorthand(sh.key);
+    r->dae_options[sh.option] = shorthand == "rk_method" ? r->rk_method
+                                : shorthand == "sigma"
+                                    ? Num(r->sigma)
+                                    : std::to_string(r->dae_index);
+  }
+}
+
 void ExpandGroup(const YAML::Node& node, const std::string& path,
-                 const std::string& group, Suite* suite) {
+                 const std::string& group, Suite* suite, OptionTables* tables) {
   yaml::CheckKeys(node, path,
-                  {"description", "scenes",        "nlp",       "dae",
-                   "coupling",    "rk_method",     "dt",        "tol",
-                   "atol_ratio",  "nlp_tol",       "sigma",     "eps",
-                   "mu",          "seed",          "roughness", "dae_index",
-                   "substeps",    "contact_check", "t_end",     "repeats",
-                   "scene_fields"});
+                  {"description",  "scenes",        "nlp",        "dae",
+                   "coupling",     "rk_method",     "dt",         "tol",
+                   "atol_ratio",   "nlp_tol",       "sigma",      "eps",
+                   "mu",           "seed",          "roughness",  "dae_index",
+                   "substeps",     "contact_check", "t_end",      "repeats",
+                   "scene_fields", "nlp_options",   "dae_options"});
   if (auto n = Child(node, "description"))
     yaml::ReadString(*n, JoinKey(path, "description"));
 
@@ -492,8 +612,22 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
   if (auto n = Child(node, "repeats"))
     repeats =
         static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "repeats"), 1, 1000));
-  const std::vector<Axis> generic_axes =
+  std::vector<Axis> generic_axes =
       ReadSceneFieldAxes(node, path, scene_idx, *suite);
+  for (Axis& a : ReadOptionAxes(
+           node, path, "nlp_options", nlps,
+           [tables](const std::string& b) -> const OptionTable& {
+             return tables->Nlp(b);
+           },
+           "NLP backend"))
+    generic_axes.push_back(std::move(a));
+  for (Axis& a : ReadOptionAxes(
+           node, path, "dae_options", daes,
+           [tables](const std::string& b) -> const OptionTable& {
+             return tables->Dae(b);
+           },
+           "integrator"))
+    generic_axes.push_back(std::move(a));
 
   for (int si : scene_idx) {
     const SuiteScene& sc = suite->scenes[si];
@@ -553,9 +687,8 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
           r->coupling = CouplingFromString(v);
         }));
     axes.push_back(
-        MakeAxis("rk_method", rks, [](RunSpec* r, const std::string& v) {
-          r->rk_method = RkMethodFromString(v);
-        }));
+        MakeAxis("rk_method", rks,
+                 [](RunSpec* r, const std::string& v) { r->rk_method = v; }));
     axes.push_back(
         MakeAxis("dae_index", dae_indices, [](RunSpec* r, std::int64_t v) {
           r->dae_index = static_cast<int>(v);
@@ -591,6 +724,7 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
       for (std::size_t k = 0; k < axes.size(); ++k)
         axes[k].values[at[k]].apply(&r);
       r.index = static_cast<int>(suite->runs.size());
+      ResolveRunOptions(node, path, tables->Dae(r.dae), &r);
       r.key = CanonicalRunKey(r);
       r.run_id = group + "-" + sc.name + "-" + r.nlp + "-" + r.dae + "-" +
                  ToString(r.coupling) + "-" +
@@ -650,6 +784,7 @@ Suite LoadSuiteFromString(const std::string& text, const std::string& origin,
     Fail("groups", "expected a non-empty mapping of named groups, got " +
                        yaml::DescribeNode(groups));
   std::set<std::string> run_ids, group_names;
+  OptionTables tables;
   for (auto it = groups.begin(); it != groups.end(); ++it) {
     const std::string raw = it->first.as<std::string>();
     const std::string p = JoinKey("groups", raw);
@@ -660,7 +795,7 @@ Suite LoadSuiteFromString(const std::string& text, const std::string& origin,
       Fail(p, "duplicate group, got \"" + raw + "\"");
     suite.groups.push_back(raw);
     const std::size_t first = suite.runs.size();
-    ExpandGroup(it->second, p, raw, &suite);
+    ExpandGroup(it->second, p, raw, &suite, &tables);
     if (suite.runs.size() == first) Fail(p, "empty grid, got 0 runs");
     for (std::size_t k = first; k < suite.runs.size(); ++k)
       if (!run_ids.insert(suite.runs[k].run_id).second)

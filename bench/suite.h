@@ -74,15 +74,15 @@ struct RunSpec {
   // Method.
   std::string nlp, dae;
   Coupling coupling = Coupling::kZoh;
-  RkMethod rk_method = RkMethod::kRk4;
-  double dt = 0;       // hold / output interval [s]
-  double tol = 0;      // integrator rtol (adaptive RK, IDA)
-  double atol = 0;     // integrator atol = tol * atol_ratio
-  double nlp_tol = 0;  // quasi-static residual tolerance
-  double sigma = 0;    // Baumgarte gain [1/s]
-  double eps = 0;      // regularisation velocity epsilon [m/s]
-  int dae_index = 2;
-  int substeps = 1;  // integrator steps per dt (step = dt / substeps)
+  std::string rk_method = "rk4";  // shorthand of dae option rk_method
+  double dt = 0;                  // hold / output interval [s]
+  double tol = 0;                 // integrator rtol (adaptive RK, IDA)
+  double atol = 0;                // integrator atol = tol * atol_ratio
+  double nlp_tol = 0;             // quasi-static residual tolerance
+  double sigma = 0;   // Baumgarte gain [1/s] (dae option baumgarte_sigma)
+  double eps = 0;     // regularisation velocity epsilon [m/s]
+  int dae_index = 2;  // IDA formulation (dae option dae_index)
+  int substeps = 1;   // integrator steps per dt (step = dt / substeps)
   // Sampled second-contact (single-point contact) check every N samples,
   // 0 = never (SimulationOptions::second_contact_check_every).
   int contact_check = 0;
@@ -96,6 +96,13 @@ struct RunSpec {
   // -> the value as YAML flow text, in file order; applied to the scene with
   // the scene loader's rules.
   std::vector<std::pair<std::string, std::string>> scene_fields;
+  // Backend options handed to the run's backends: the group's nlp_options /
+  // dae_options plus the shorthand keys rk_method, sigma, dae_index for the
+  // integrator options of the same meaning (rk_method, baumgarte_sigma,
+  // dae_index) that the run's integrator has.
+  GivenOptions nlp_options, dae_options;
+  // The group's explicit backend options only (part of the key).
+  GivenOptions nlp_options_explicit, dae_options_explicit;
 
   std::string key;     // canonical text of every parameter above
   std::string run_id;  // <group>-<scene>-<nlp>-<dae>-<coupling>-<8 hex>

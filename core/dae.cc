@@ -31,26 +31,6 @@ const char* ToString(IntegratorStatus status) {
   return "unknown";
 }
 
-const char* ToString(RkMethod method) {
-  switch (method) {
-    case RkMethod::kRk4:
-      return "rk4";
-    case RkMethod::kDormandPrince54:
-      return "dp54";
-    case RkMethod::kBogackiShampine32:
-      return "bs32";
-  }
-  return "unknown";
-}
-
-RkMethod RkMethodFromString(const std::string& name) {
-  if (name == "rk4") return RkMethod::kRk4;
-  if (name == "dp54" || name == "dopri5") return RkMethod::kDormandPrince54;
-  if (name == "bs32") return RkMethod::kBogackiShampine32;
-  throw std::invalid_argument("unknown Runge-Kutta method '" + name +
-                              "' (known: rk4, dp54, bs32)");
-}
-
 namespace {
 std::string Num(double v) {
   std::ostringstream os;
@@ -64,10 +44,6 @@ bool IntegratorOptions::IsValid(std::string* why) const {
     if (why) *why = msg;
     return false;
   };
-  if (rk_method != RkMethod::kRk4 && rk_method != RkMethod::kDormandPrince54 &&
-      rk_method != RkMethod::kBogackiShampine32)
-    return fail("rk_method: unknown value " +
-                std::to_string(static_cast<int>(rk_method)));
   if (!(std::isfinite(step) && step >= 0))
     return fail("step: must be finite and >= 0, got " + Num(step));
   if (!(std::isfinite(rtol) && rtol > 0))
@@ -78,18 +54,19 @@ bool IntegratorOptions::IsValid(std::string* why) const {
     return fail("min_step: must be finite and >= 0, got " + Num(min_step));
   if (max_steps < 1)
     return fail("max_steps: must be >= 1, got " + std::to_string(max_steps));
-  if (!(std::isfinite(baumgarte_sigma) && baumgarte_sigma >= 0))
-    return fail("baumgarte_sigma: must be finite and >= 0, got " +
-                Num(baumgarte_sigma));
-  if (!(std::isfinite(projection_tolerance) && projection_tolerance > 0))
-    return fail("projection_tolerance: must be finite and > 0, got " +
-                Num(projection_tolerance));
-  if (max_projection_iterations < 1)
-    return fail("max_projection_iterations: must be >= 1, got " +
-                std::to_string(max_projection_iterations));
-  if (dae_index != 1 && dae_index != 2)
-    return fail("dae_index: must be 1 or 2, got " + std::to_string(dae_index));
   return true;
+}
+
+void Integrator::SetBackendOptions(const GivenOptions& given) {
+  OptionValues values =
+      ResolveOptions(option_table(), given, "integrator '" + name() + "'");
+  ApplyBackendOptions(values);
+  backend_options_ = std::move(values);
+}
+
+const OptionValues& Integrator::backend_options() {
+  if (!backend_options_) SetBackendOptions({});
+  return *backend_options_;
 }
 
 IntegratorStatus Integrator::Integrate(ConstrainedOde& ode, double t0,
@@ -142,6 +119,7 @@ IntegratorStatus Integrator::Integrate(ConstrainedOde& ode, double t0,
   result->root_index = -1;
   result->message.clear();
 
+  if (!backend_options_) SetBackendOptions({});  // the table's defaults
   const auto start = std::chrono::steady_clock::now();
   try {
     ode.MakeConsistent(t0, y);

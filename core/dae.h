@@ -19,8 +19,11 @@
 #include <Eigen/Core>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "core/options.h"
 
 namespace quasiroll {
 
@@ -109,34 +112,22 @@ enum class IntegratorStatus {
 
 const char* ToString(IntegratorStatus status);
 
-enum class RkMethod { kRk4, kDormandPrince54, kBogackiShampine32 };
-const char* ToString(RkMethod method);
-// Throws std::invalid_argument naming the value on an unknown name.
-RkMethod RkMethodFromString(const std::string& name);
-
+// Settings every integrator understands. Settings of one method (the RK
+// scheme, the Baumgarte gain, the projection tolerance, IDA's index, ...)
+// are backend options (Integrator::option_table(); docs/plugins.md), so a
+// setting a method does not use is never validated against it here.
 struct IntegratorOptions {
-  // Runge-Kutta scheme of rk-baumgarte / rk-projection. RK4 is fixed step;
-  // the embedded pairs adapt h with the error test below.
-  RkMethod rk_method = RkMethod::kRk4;
-  // Fixed step of RK4, and the initial step of the adaptive schemes. 0 means
-  // one step over the whole [t0, t1] interval.
+  // Fixed step of fixed-step methods (0 = one step over [t0, t1]) and the
+  // initial step of adaptive ones (0 = the method's own estimate, e.g. the
+  // Hairer-Norsett-Wanner starting-step heuristic of the embedded RK pairs).
   double step = 0.0;
-  // Error test of adaptive methods (and IDA):
+  // Error test of adaptive methods:
   //   ||e_i / (atol + rtol * |y_i|)||_rms <= 1.
   double rtol = 1e-8;
   double atol = 1e-10;
   // Smallest step an adaptive method may take before kStepSizeTooSmall.
   double min_step = 1e-12;
   int max_steps = 100000;
-  // Baumgarte gain sigma [1/s] (rk-baumgarte, ida index 1). RK4 is stable for
-  // sigma * h < 2.785.
-  double baumgarte_sigma = 5.0;
-  // Projection stops when ||H||_inf <= projection_tolerance.
-  double projection_tolerance = 1e-12;
-  int max_projection_iterations = 10;
-  // IDA: 2 = index-2 GGL residual (H = 0 exact), 1 = index-1 Baumgarte
-  // residual.
-  int dae_index = 2;
 
   bool IsValid(std::string* why) const;
 };
@@ -176,10 +167,27 @@ class Integrator {
 
   virtual std::string name() const = 0;
 
+  // Backend options (docs/plugins.md, "Backend options"): the settings this
+  // method owns (name, type, default, range, doc). Default: none.
+  virtual OptionTable option_table() const { return {}; }
+  // Checks `given` against option_table() and makes them (the others at
+  // their defaults) this object's settings for every later Integrate().
+  // Throws std::invalid_argument naming an unknown or ill-typed option and
+  // the known ones; the previous settings are then kept.
+  void SetBackendOptions(const GivenOptions& given);
+  // The settings in effect: every option of option_table().
+  const OptionValues& backend_options();
+
  protected:
   Integrator() = default;
 
  private:
+  // Receives validated settings (every option of the table): before the
+  // first Integrate() the defaults, then whatever SetBackendOptions() was
+  // given. Backends copy them into typed members here.
+  virtual void ApplyBackendOptions(const OptionValues& /*values*/) {}
+  std::optional<OptionValues> backend_options_;
+
   virtual void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
                            Eigen::Ref<Eigen::VectorXd> y,
                            const IntegratorOptions& options,

@@ -340,6 +340,18 @@ double MaxConstraintViolation(const Eigen::Ref<const Eigen::VectorXd>& x,
   return v;
 }
 
+void NlpSolver::SetBackendOptions(const GivenOptions& given) {
+  OptionValues values =
+      ResolveOptions(option_table(), given, "NLP backend '" + name() + "'");
+  ApplyBackendOptions(values);
+  backend_options_ = std::move(values);
+}
+
+const OptionValues& NlpSolver::backend_options() {
+  if (!backend_options_) SetBackendOptions({});
+  return *backend_options_;
+}
+
 NlpStatus NlpSolver::Solve(const NlpProblem& problem,
                            const Eigen::Ref<const Eigen::VectorXd>& x0,
                            const NlpOptions& options, NlpResult* result) {
@@ -412,6 +424,7 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
   result->x = x0;
   if (result->multipliers.size() != m) result->multipliers.setZero(m);
 
+  if (!backend_options_) SetBackendOptions({});  // the table's defaults
   const auto start = std::chrono::steady_clock::now();
   try {
     DoSolve(problem, x0, options, result);

@@ -53,8 +53,11 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "core/options.h"
 
 namespace quasiroll {
 
@@ -225,10 +228,26 @@ class NlpSolver {
   // the harness until it says otherwise; one object is never shared.
   virtual bool SupportsConcurrentInstances() const { return false; }
 
+  // Backend options (docs/plugins.md, "Backend options"): the settings this
+  // backend owns (name, type, default, range, doc). Default: none.
+  virtual OptionTable option_table() const { return {}; }
+  // Checks `given` against option_table() and makes them (the others at
+  // their defaults) this object's settings for every later Solve(). Throws
+  // std::invalid_argument naming an unknown or ill-typed option and the
+  // known ones; the previous settings are then kept.
+  void SetBackendOptions(const GivenOptions& given);
+  // The settings in effect: every option of option_table().
+  const OptionValues& backend_options();
+
  protected:
   NlpSolver() = default;
 
  private:
+  // Receives validated settings (every option of the table): before the
+  // first Solve() the defaults, then whatever SetBackendOptions() was given.
+  // Backends copy them into typed members here, so a solve does no lookup.
+  virtual void ApplyBackendOptions(const OptionValues& /*values*/) {}
+
   // Called with validated inputs; result->x is sized, result->backend set.
   // Must fill status, x, iterations, evaluation counts, backend_status.
   virtual void DoSolve(const NlpProblem& problem,
@@ -237,6 +256,7 @@ class NlpSolver {
 
   Eigen::VectorXd x_lb_, x_ub_, g_lb_, g_ub_, g_;  // validation workspace
   KktVerifier kkt_;
+  std::optional<OptionValues> backend_options_;  // set before DoSolve
 };
 
 // Max violation of bounds and constraint bounds at x (>= 0).

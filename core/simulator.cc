@@ -210,6 +210,9 @@ Simulator::Simulator(const Scene& scene, const SimulationOptions& options)
   if (!params.IsValid(&why)) throw std::invalid_argument(why);
   model_ = std::make_unique<KinematicModel>(scene_.geometry, scene_.terrain);
   theta0_ = SolveInitialConfiguration(*model_, scene_);
+  // Creates the backends now, so that bad backend options are reported here
+  // (std::invalid_argument) rather than at the first step.
+  session_ = std::make_unique<Session>(*this);
 }
 
 Simulator::~Simulator() = default;
@@ -257,19 +260,39 @@ QuasiStaticOptions SolverOptions(const SimulationOptions& options) {
   qs.extrapolate_warm_start = options.coupling == Coupling::kZoh;
   return qs;
 }
+
+// The backends, configured with the given backend options; *used receives
+// the options in effect.
+std::unique_ptr<NlpSolver> CreateNlp(const SimulationOptions& options,
+                                     OptionValues* used) {
+  std::unique_ptr<NlpSolver> nlp = NlpSolverRegistry::Create(options.nlp);
+  nlp->SetBackendOptions(options.nlp_options);
+  *used = nlp->backend_options();
+  return nlp;
+}
+std::unique_ptr<Integrator> CreateIntegrator(const SimulationOptions& options,
+                                             OptionValues* used) {
+  std::unique_ptr<Integrator> integrator =
+      IntegratorRegistry::Create(options.dae);
+  integrator->SetBackendOptions(options.dae_options);
+  *used = integrator->backend_options();
+  return integrator;
+}
 }  // namespace
 
 struct Simulator::Session {
   Session(const Simulator& sim)
       : solver(*sim.model_, QuasiStaticParameters::FromScene(sim.scene_),
-               NlpSolverRegistry::Create(sim.options_.nlp),
+               CreateNlp(sim.options_, &nlp_options),
                SolverOptions(sim.options_)),
-        integrator(IntegratorRegistry::Create(sim.options_.dae)),
+        integrator(CreateIntegrator(sim.options_, &dae_options)),
         ode(*sim.model_, sim.options_.coupling, &solver),
         y(kConfigSize) {
     iopts = sim.options_.integrator;
     if (iopts.step <= 0) iopts.step = sim.dt_;
   }
+  // Declared before the backends, which fill them while being created.
+  OptionValues nlp_options, dae_options;
   QuasiStaticSolver solver;
   std::unique_ptr<Integrator> integrator;
   RobotOde ode;
@@ -292,6 +315,13 @@ SimulationResult Simulator::Run(const Configuration& theta0) {
   return result;
 }
 
+const OptionValues& Simulator::nlp_options_used() const {
+  return session_->nlp_options;
+}
+const OptionValues& Simulator::dae_options_used() const {
+  return session_->dae_options;
+}
+
 void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   const auto start = std::chrono::steady_clock::now();
   if (!session_) session_ = std::make_unique<Session>(*this);
@@ -309,6 +339,8 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   s.ode.ResetKkt();
   s.done = false;
   *result = SimulationResult{};
+  result->nlp_options = s.nlp_options;
+  result->dae_options = s.dae_options;
   result->samples.reserve(s.n + 1);
   result->wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)

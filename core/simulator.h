@@ -36,6 +36,11 @@ struct SimulationOptions {
   double t_end = 0.0;
   // Integrator options; step <= 0 means one RK4 step per hold interval.
   IntegratorOptions integrator;
+  // Backend options (docs/plugins.md): name -> value text, checked against
+  // the backend's option_table() by the Simulator constructor (unknown or
+  // ill-typed -> std::invalid_argument naming the option and the known ones).
+  GivenOptions nlp_options;
+  GivenOptions dae_options;
   QuasiStaticOptions quasi_static;
   // Run the sampled second-contact check every N samples (0 = never).
   int second_contact_check_every = 0;
@@ -92,6 +97,9 @@ struct SimulationResult {
   // independently recomputed first-order optimality residual (core/nlp.h);
   // NaN if no solve was accepted.
   double kkt_residual = std::numeric_limits<double>::quiet_NaN();
+  // The backend options the run used: every option of each backend's table
+  // (given ones and defaults), as in Ceres' Solver::Summary.
+  OptionValues nlp_options, dae_options;
   bool success() const { return status == "success"; }
 };
 
@@ -116,6 +124,9 @@ class Simulator {
   const SimulationOptions& options() const { return options_; }
   double dt() const { return dt_; }
   double t_end() const { return t_end_; }
+  // The backend options in effect (every option of the tables).
+  const OptionValues& nlp_options_used() const;
+  const OptionValues& dae_options_used() const;
 
   SimulationResult Run() { return Run(theta0_); }
   // Starts from a given configuration instead of the scene's consistent one

@@ -84,6 +84,20 @@ struct IdaIntegrator::Impl {
   int n = -1, m = -1;
   int registered_roots = 0;
 
+  // Backend options (option_table()).
+  struct Settings {
+    int dae_index = 2;
+    double sigma = 5.0;
+    double projection_tolerance = 1e-12;
+    int max_projection_iterations = 10;
+    double multiplier_atol = 1e3;
+    int max_order = 5;
+    int max_nonlin_iters = 4;
+    int max_conv_fails = 10;
+    int max_err_test_fails = 10;
+    bool suppress_alg = true;
+  } settings;
+
   // Per-call data.
   ConstrainedOde* ode = nullptr;
   IntegratorResult* result = nullptr;
@@ -263,6 +277,60 @@ void IdaIntegrator::Impl::ErrorHandler(int error_code, const char* module,
 }
 
 IdaIntegrator::IdaIntegrator() : impl_(std::make_unique<Impl>()) {}
+
+OptionTable IdaIntegrator::option_table() const {
+  return {
+      OptionSpec::Int("dae_index", 2,
+                      "2: index-2 GGL residual (H = 0 exact); 1: index-1 "
+                      "Baumgarte residual J x' + sigma H = 0")
+          .AtLeast(1)
+          .AtMost(2),
+      OptionSpec::Double("baumgarte_sigma", 5.0,
+                         "Baumgarte gain sigma [1/s] of the index-1 form")
+          .AtLeast(0),
+      OptionSpec::Double("projection_tolerance", 1e-12,
+                         "index 2: initial and final projection until "
+                         "||H||_inf <= this")
+          .GreaterThan(0),
+      OptionSpec::Int("max_projection_iterations", 10,
+                      "Newton corrections per projection")
+          .AtLeast(1),
+      OptionSpec::Double("multiplier_atol", 1e3,
+                         "absolute tolerance of the multipliers nu in IDA's "
+                         "Newton test (they are excluded from the error test)")
+          .GreaterThan(0),
+      OptionSpec::Int("max_order", 5, "largest BDF order (IDASetMaxOrd)")
+          .AtLeast(1)
+          .AtMost(5),
+      OptionSpec::Int("max_nonlin_iters", 4,
+                      "Newton iterations per step (IDASetMaxNonlinIters)")
+          .AtLeast(1),
+      OptionSpec::Int("max_conv_fails", 10,
+                      "Newton failures per step (IDASetMaxConvFails)")
+          .AtLeast(1),
+      OptionSpec::Int("max_err_test_fails", 10,
+                      "error-test failures per step (IDASetMaxErrTestFails)")
+          .AtLeast(1),
+      OptionSpec::Bool("suppress_alg", true,
+                       "exclude the algebraic variables from the error test "
+                       "(IDASetSuppressAlg)"),
+  };
+}
+
+void IdaIntegrator::ApplyBackendOptions(const OptionValues& values) {
+  Impl::Settings& s = impl_->settings;
+  s.dae_index = static_cast<int>(values.GetInt("dae_index"));
+  s.sigma = values.GetDouble("baumgarte_sigma");
+  s.projection_tolerance = values.GetDouble("projection_tolerance");
+  s.max_projection_iterations =
+      static_cast<int>(values.GetInt("max_projection_iterations"));
+  s.multiplier_atol = values.GetDouble("multiplier_atol");
+  s.max_order = static_cast<int>(values.GetInt("max_order"));
+  s.max_nonlin_iters = static_cast<int>(values.GetInt("max_nonlin_iters"));
+  s.max_conv_fails = static_cast<int>(values.GetInt("max_conv_fails"));
+  s.max_err_test_fails = static_cast<int>(values.GetInt("max_err_test_fails"));
+  s.suppress_alg = values.GetBool("suppress_alg");
+}
 IdaIntegrator::~IdaIntegrator() = default;
 
 namespace {
@@ -280,7 +348,7 @@ std::string FlagName(int flag) {
 // outcome; shared by the GGL form and the user residual form.
 void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
                            Eigen::Ref<Eigen::VectorXd> y,
-                           const IntegratorOptions& options,
+                           const IntegratorOptions& /*options*/,
                            IntegratorResult* result) {
   const int n = s.n, m = s.m;
   const int nr = s.registered_roots;
@@ -347,10 +415,10 @@ void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
   // --- polish: IDA enforces H = 0 only to its Newton tolerance ---
   if ((status == IntegratorStatus::kSuccess ||
        status == IntegratorStatus::kEvent) &&
-      options.dae_index == 2 && m > 0) {
-    const IntegratorStatus projected =
-        s.correction.Project(ode, y, options.projection_tolerance,
-                             options.max_projection_iterations, result, &moved);
+      s.settings.dae_index == 2 && m > 0) {
+    const IntegratorStatus projected = s.correction.Project(
+        ode, y, s.settings.projection_tolerance,
+        s.settings.max_projection_iterations, result, &moved);
     if (projected != IntegratorStatus::kSuccess) {
       status = projected;
       result->message = "final projection: " + result->message;
@@ -370,8 +438,8 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
   const int m = s.residual_form ? 0 : ode.num_constraints();
   s.ode = &ode;
   s.result = result;
-  s.dae_index = options.dae_index;
-  s.sigma = options.baumgarte_sigma;
+  s.dae_index = s.settings.dae_index;
+  s.sigma = s.settings.sigma;
   s.rhs_failed = false;
   s.last_error.clear();
   s.correction.Begin(ode);
@@ -423,10 +491,10 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
     ConfigureAndSolve(s, ode, flag, t0, t1, y, options, result);
     return;
   }
-  if (options.dae_index == 2 && m > 0) {
-    const IntegratorStatus status =
-        s.correction.Project(ode, y, options.projection_tolerance,
-                             options.max_projection_iterations, result, &moved);
+  if (s.settings.dae_index == 2 && m > 0) {
+    const IntegratorStatus status = s.correction.Project(
+        ode, y, s.settings.projection_tolerance,
+        s.settings.max_projection_iterations, result, &moved);
     if (status != IntegratorStatus::kSuccess)
       return fail(status, "initial state: " + result->message);
   }
@@ -452,9 +520,9 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
       return fail(IntegratorStatus::kConstraintFailure,
                   "initial multipliers: " + result->message);
     s.correction.r().noalias() = s.correction.jacobian() * s.f;
-    if (options.dae_index == 1) {
+    if (s.settings.dae_index == 1) {
       ode.Constraints(y, s.h);
-      s.correction.r() += options.baumgarte_sigma * s.h;
+      s.correction.r() += s.settings.sigma * s.h;
     }
     s.correction.SolveMultiplier(s.correction.r(), s.correction.lambda());
     yy.tail(m) = -s.correction.lambda();  // nu0
@@ -473,11 +541,10 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
   // h J D J^T), so an atol of 1e-10 on nu makes the corrector fail at every
   // small h (observed: IDA_CONV_FAIL at h = hmin on the first step). nu acts
   // on the solution only through D J^T nu in x', whose convergence is tested
-  // on x, so nu gets the loose kMultiplierAtol (results identical for any
-  // value in [1, 1e6]; 1e-6 already works, 1e-10 does not).
-  constexpr double kMultiplierAtol = 1e3;
+  // on x, so nu gets the loose multiplier_atol (default 1e3; results identical
+  // for any value in [1, 1e6]; 1e-6 already works, 1e-10 does not).
   for (int i = 0; i < n + m; ++i)
-    NV_Ith_S(s.atol, i) = i < n ? options.atol : kMultiplierAtol;
+    NV_Ith_S(s.atol, i) = i < n ? options.atol : s.settings.multiplier_atol;
   ConfigureAndSolve(s, ode, flag, t0, t1, y, options, result);
 }
 
@@ -495,6 +562,16 @@ void IdaIntegrator::ConfigureAndSolve(Impl& s, ConstrainedOde& ode, int flag,
   if (flag == IDA_SUCCESS) flag = IDASetMinStep(s.mem, options.min_step);
   if (flag == IDA_SUCCESS) flag = IDASetInitStep(s.mem, options.step);
   if (flag == IDA_SUCCESS) flag = IDASetStopTime(s.mem, t1);
+  if (flag == IDA_SUCCESS) flag = IDASetMaxOrd(s.mem, s.settings.max_order);
+  if (flag == IDA_SUCCESS)
+    flag = IDASetMaxNonlinIters(s.mem, s.settings.max_nonlin_iters);
+  if (flag == IDA_SUCCESS)
+    flag = IDASetMaxConvFails(s.mem, s.settings.max_conv_fails);
+  if (flag == IDA_SUCCESS)
+    flag = IDASetMaxErrTestFails(s.mem, s.settings.max_err_test_fails);
+  if (flag == IDA_SUCCESS && !s.residual_form)
+    flag =
+        IDASetSuppressAlg(s.mem, s.settings.suppress_alg ? SUNTRUE : SUNFALSE);
   if (flag == IDA_SUCCESS && nr != s.registered_roots) {
     flag = IDARootInit(s.mem, nr, nr > 0 ? &Impl::RootFunction : nullptr);
     s.registered_roots = nr;

@@ -12,6 +12,12 @@
 // x'0 = F + D J^T nu0. For index 2 the final x is projected again, so H holds
 // to projection_tolerance and not only to the Newton tolerance of IDA.
 //
+// Backend options (option_table()): dae_index, baumgarte_sigma,
+// projection_tolerance / max_projection_iterations (initial and final
+// projection), multiplier_atol, and IDA's max_order (IDASetMaxOrd),
+// max_nonlin_iters (IDASetMaxNonlinIters), max_conv_fails
+// (IDASetMaxConvFails), max_err_test_fails (IDASetMaxErrTestFails),
+// suppress_alg (IDASetSuppressAlg); defaults are IDA's own.
 // Options: rtol / atol -> IDASVtolerances on x (nu gets a loose atol of 1e3:
 // it only has to converge through D J^T nu, see ida_integrator.cc), step ->
 // IDASetInitStep (0 = IDA's estimate), min_step -> IDASetMinStep, max_steps
@@ -49,8 +55,10 @@ class IdaIntegrator final : public Integrator {
   IdaIntegrator();
   ~IdaIntegrator() override;
   std::string name() const override { return "ida"; }
+  OptionTable option_table() const override;
 
  private:
+  void ApplyBackendOptions(const OptionValues& values) override;
   void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
                    Eigen::Ref<Eigen::VectorXd> y,
                    const IntegratorOptions& options,

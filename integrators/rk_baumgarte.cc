@@ -21,16 +21,32 @@ IntegratorStatus RkBaumgarteIntegrator::CorrectedField::Field(
   return IntegratorStatus::kSuccess;
 }
 
+OptionTable RkBaumgarteIntegrator::option_table() const {
+  OptionTable table = {
+      OptionSpec::Double("baumgarte_sigma", 5.0,
+                         "Baumgarte gain sigma [1/s]: J y' = -sigma H (RK4 "
+                         "is stable for sigma h < 2.785)")
+          .AtLeast(0)};
+  for (OptionSpec& s : integrators_internal::RkOptionTable())
+    table.push_back(std::move(s));
+  return table;
+}
+
+void RkBaumgarteIntegrator::ApplyBackendOptions(const OptionValues& values) {
+  settings_ = integrators_internal::RkSettingsFrom(values);
+  sigma_ = values.GetDouble("baumgarte_sigma");
+}
+
 void RkBaumgarteIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
                                         double t1,
                                         Eigen::Ref<Eigen::VectorXd> y,
                                         const IntegratorOptions& options,
                                         IntegratorResult* result) {
   field_.ode = &ode;
-  field_.sigma = options.baumgarte_sigma;
+  field_.sigma = sigma_;
   field_.correction.Begin(ode);
   if (field_.delta.size() != y.size()) field_.delta.resize(y.size());
-  driver_.Run(field_, ode, t0, t1, y, options, result);
+  driver_.Run(field_, ode, t0, t1, y, options, settings_, result);
 }
 
 }  // namespace quasiroll

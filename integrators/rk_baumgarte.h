@@ -7,6 +7,8 @@
 // ||H(t)|| = ||H(0)|| e^{-sigma t} in exact arithmetic. RK4 is stable for
 // sigma * h < 2.785. Methods, step control and events:
 // integrators/runge_kutta.h.
+// Options (option_table()): baumgarte_sigma and the RK driver's (rk_method,
+// safety, max_growth, max_shrink, stage_failure_shrink).
 #pragma once
 
 #include <string>
@@ -21,8 +23,10 @@ class RkBaumgarteIntegrator final : public Integrator {
  public:
   RkBaumgarteIntegrator() = default;
   std::string name() const override { return "rk-baumgarte"; }
+  OptionTable option_table() const override;
 
  private:
+  void ApplyBackendOptions(const OptionValues& values) override;
   class CorrectedField final : public integrators_internal::RkSystem {
    public:
     IntegratorStatus Field(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -40,6 +44,8 @@ class RkBaumgarteIntegrator final : public Integrator {
                    IntegratorResult* result) override;
 
   CorrectedField field_;
+  integrators_internal::RkSettings settings_;
+  double sigma_ = 5.0;
   integrators_internal::RungeKuttaDriver driver_;
 };
 

@@ -14,14 +14,35 @@ IntegratorStatus RkProjectionIntegrator::System::PostStep(
   return correction.Project(*ode, y, tolerance, max_iterations, result, moved);
 }
 
+OptionTable RkProjectionIntegrator::option_table() const {
+  OptionTable table = {
+      OptionSpec::Double("projection_tolerance", 1e-12,
+                         "projection stops when ||H||_inf <= this")
+          .GreaterThan(0),
+      OptionSpec::Int("max_projection_iterations", 10,
+                      "Newton corrections per projection before "
+                      "constraint_failure")
+          .AtLeast(1)};
+  for (OptionSpec& s : integrators_internal::RkOptionTable())
+    table.push_back(std::move(s));
+  return table;
+}
+
+void RkProjectionIntegrator::ApplyBackendOptions(const OptionValues& values) {
+  settings_ = integrators_internal::RkSettingsFrom(values);
+  projection_tolerance_ = values.GetDouble("projection_tolerance");
+  max_projection_iterations_ =
+      static_cast<int>(values.GetInt("max_projection_iterations"));
+}
+
 void RkProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
                                          double t1,
                                          Eigen::Ref<Eigen::VectorXd> y,
                                          const IntegratorOptions& options,
                                          IntegratorResult* result) {
   system_.ode = &ode;
-  system_.tolerance = options.projection_tolerance;
-  system_.max_iterations = options.max_projection_iterations;
+  system_.tolerance = projection_tolerance_;
+  system_.max_iterations = max_projection_iterations_;
   system_.correction.Begin(ode);
   bool moved = false;
   const IntegratorStatus status = system_.PostStep(t0, y, result, &moved);
@@ -31,7 +52,7 @@ void RkProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
     result->message = "initial state: " + result->message;
     return;
   }
-  driver_.Run(system_, ode, t0, t1, y, options, result);
+  driver_.Run(system_, ode, t0, t1, y, options, settings_, result);
 }
 
 }  // namespace quasiroll

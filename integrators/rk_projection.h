@@ -4,6 +4,9 @@
 // kConstraintFailure) (model.md §8.4). The initial state is projected too.
 // With an FSAL pair the first stage is re-evaluated whenever the projection
 // moved y. Methods, step control and events: integrators/runge_kutta.h.
+// Options (option_table()): projection_tolerance, max_projection_iterations
+// and the RK driver's (rk_method, safety, max_growth, max_shrink,
+// stage_failure_shrink).
 //
 // Accuracy note: the method has the order of the RK scheme only when F is
 // tangent to the constraint manifold (J F = 0 on H = 0, as for a velocity
@@ -26,8 +29,10 @@ class RkProjectionIntegrator final : public Integrator {
  public:
   RkProjectionIntegrator() = default;
   std::string name() const override { return "rk-projection"; }
+  OptionTable option_table() const override;
 
  private:
+  void ApplyBackendOptions(const OptionValues& values) override;
   class System final : public integrators_internal::RkSystem {
    public:
     IntegratorStatus Field(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -47,6 +52,9 @@ class RkProjectionIntegrator final : public Integrator {
                    IntegratorResult* result) override;
 
   System system_;
+  integrators_internal::RkSettings settings_;
+  double projection_tolerance_ = 1e-12;
+  int max_projection_iterations_ = 10;
   integrators_internal::RungeKuttaDriver driver_;
 };
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 namespace quasiroll::integrators_internal {
 namespace {
@@ -78,6 +79,63 @@ ButcherTableau MakeBogackiShampine32() {
 }
 
 }  // namespace
+
+const char* ToString(RkMethod method) {
+  switch (method) {
+    case RkMethod::kRk4:
+      return "rk4";
+    case RkMethod::kDormandPrince54:
+      return "dp54";
+    case RkMethod::kBogackiShampine32:
+      return "bs32";
+  }
+  return "unknown";
+}
+
+RkMethod RkMethodFromString(const std::string& name) {
+  if (name == "rk4") return RkMethod::kRk4;
+  if (name == "dp54" || name == "dopri5") return RkMethod::kDormandPrince54;
+  if (name == "bs32") return RkMethod::kBogackiShampine32;
+  throw std::invalid_argument("unknown Runge-Kutta method '" + name +
+                              "' (known: rk4, dp54, bs32)");
+}
+
+OptionTable RkOptionTable() {
+  return {
+      OptionSpec::Choice("rk_method", "rk4", {"rk4", "dp54", "bs32"},
+                         "RK scheme: classic RK4 (fixed step) or the "
+                         "embedded pairs DP5(4), BS3(2) (adaptive)"),
+      OptionSpec::Double("safety", 0.9,
+                         "step controller safety factor: h_new = h * safety "
+                         "* err^(-1/(q+1))")
+          .GreaterThan(0)
+          .AtMost(1),
+      OptionSpec::Double("max_growth", 5.0,
+                         "largest step increase factor after an accepted "
+                         "step")
+          .AtLeast(1),
+      OptionSpec::Double("max_shrink", 0.2,
+                         "smallest step decrease factor after an error-test "
+                         "failure")
+          .GreaterThan(0)
+          .AtMost(1),
+      OptionSpec::Double("stage_failure_shrink", 0.25,
+                         "step factor after a trial step whose constraint "
+                         "correction failed (singular J D J^T at a stage)")
+          .GreaterThan(0)
+          .LessThan(1),
+  };
+}
+
+RkSettings RkSettingsFrom(const OptionValues& values) {
+  RkSettings s;
+  s.method = RkMethodFromString(values.GetString("rk_method"));
+  s.safety = values.GetDouble("safety");
+  s.max_growth = values.GetDouble("max_growth");
+  s.max_shrink = values.GetDouble("max_shrink");
+  s.stage_failure_shrink = values.GetDouble("stage_failure_shrink");
+  return s;
+}
 
 const ButcherTableau& Tableau(RkMethod method) {
   static const ButcherTableau rk4 = MakeRk4();
@@ -217,11 +275,50 @@ IntegratorStatus RungeKuttaDriver::LocateRoot(
   return IntegratorStatus::kSuccess;
 }
 
+double RungeKuttaDriver::WeightedNorm(
+    const Eigen::Ref<const Eigen::VectorXd>& v,
+    const Eigen::Ref<const Eigen::VectorXd>& y,
+    const IntegratorOptions& options) const {
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    const double e = v(i) / (options.atol + options.rtol * std::abs(y(i)));
+    sum += e * e;
+  }
+  return std::sqrt(sum / static_cast<double>(v.size()));
+}
+
+double RungeKuttaDriver::InitialStep(RkSystem& system,
+                                     const ButcherTableau& tab, double t0,
+                                     double span,
+                                     const IntegratorOptions& options,
+                                     IntegratorResult* result) {
+  const double d0 = WeightedNorm(y_, y_, options);
+  const double d1 = WeightedNorm(k_.col(0), y_, options);
+  double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
+  h0 = std::min(h0, span);
+  // One explicit Euler step to estimate the second derivative. If the field
+  // cannot be evaluated there, h0 alone is the (cautious) answer.
+  y_stage_ = y_ + h0 * k_.col(0);
+  if (system.Field(t0 + h0, y_stage_, k_.col(1), result) !=
+      IntegratorStatus::kSuccess) {
+    result->message.clear();  // a probe, not a failure of this call
+    return h0;
+  }
+  err_ = k_.col(1) - k_.col(0);
+  const double d2 = WeightedNorm(err_, y_, options) / h0;
+  const double dmax = std::max(d1, d2);
+  const double h1 = dmax <= 1e-15
+                        ? std::max(1e-6, 1e-3 * h0)
+                        : std::pow(0.01 / dmax, 1.0 / (tab.order + 1));
+  return std::min({100.0 * h0, h1, span});
+}
+
 void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
                            double t1, Eigen::Ref<Eigen::VectorXd> y,
                            const IntegratorOptions& options,
+                           const RkSettings& settings,
                            IntegratorResult* result) {
-  const ButcherTableau& tab = Tableau(options.rk_method);
+  const ButcherTableau& tab = Tableau(settings.method);
   const int n = static_cast<int>(y.size());
   const int nr = ode.num_roots();
   Resize(n, tab.stages, nr);
@@ -234,6 +331,8 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
   };
 
   const bool adaptive = tab.embedded_order > 0;
+  int accepted = 0;
+  bool last_rejected = false;
   const double span = t1 - t0;
   int fixed_steps = 1;
   double h = span;
@@ -260,9 +359,31 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
   if (nr > 0) ode.Roots(t, y_, g_old_);
   IntegratorStatus status = system.Field(t, y_, k_.col(0), result);
   if (status != IntegratorStatus::kSuccess) return finish(status);
+  if (adaptive && !(options.step > 0.0))
+    h = InitialStep(system, tab, t0, span, options, result);
 
-  int accepted = 0;
-  bool last_rejected = false;
+  // An adaptive trial step whose correction failed (J D J^T singular at a
+  // stage, a projection that did not converge): reject it and retry smaller.
+  // Returns false when the step would fall below min_step (then the failure
+  // stands).
+  auto retry_smaller = [&](double h_try, IntegratorStatus failure) {
+    if (!adaptive || failure != IntegratorStatus::kConstraintFailure)
+      return false;
+    const double h_new = h_try * settings.stage_failure_shrink;
+    if (h_new < options.min_step) {
+      std::ostringstream os;
+      os << result->message
+         << " (step rejected and shrunk below min_step = " << options.min_step
+         << " at t = " << t << ")";
+      result->message = os.str();
+      return false;
+    }
+    ++result->rejected_steps;
+    h = h_new;
+    last_rejected = true;
+    return true;
+  };
+
   while (true) {
     double t_new = 0.0, h_try = 0.0;
     if (!adaptive) {
@@ -276,6 +397,13 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
         result->message = os.str();
         return finish(IntegratorStatus::kStepSizeTooSmall);
       }
+      if (h < options.min_step && h < t1 - t) {
+        std::ostringstream os;
+        os << "step size " << h << " < min_step = " << options.min_step
+           << " at t = " << t;
+        result->message = os.str();
+        return finish(IntegratorStatus::kStepSizeTooSmall);
+      }
       if (h >= t1 - t) {
         h_try = t1 - t;
         t_new = t1;
@@ -286,7 +414,10 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
     }
 
     status = Step(system, tab, t, h_try, result);
-    if (status != IntegratorStatus::kSuccess) return finish(status);
+    if (status != IntegratorStatus::kSuccess) {
+      if (retry_smaller(h_try, status)) continue;
+      return finish(status);
+    }
 
     if (adaptive) {
       double sum = 0.0;
@@ -300,9 +431,11 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
       const double err = std::sqrt(sum / n);
       if (!(err <= 1.0)) {
         ++result->rejected_steps;
-        const double factor = std::isfinite(err)
-                                  ? std::max(0.2, 0.9 * std::pow(err, exponent))
-                                  : 0.2;
+        const double factor =
+            std::isfinite(err)
+                ? std::max(settings.max_shrink,
+                           settings.safety * std::pow(err, exponent))
+                : settings.max_shrink;
         h = h_try * factor;
         last_rejected = true;
         if (h < options.min_step) {
@@ -315,7 +448,9 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
         continue;
       }
       double factor =
-          err > 0.0 ? std::clamp(0.9 * std::pow(err, exponent), 0.2, 5.0) : 5.0;
+          err > 0.0 ? std::clamp(settings.safety * std::pow(err, exponent),
+                                 settings.max_shrink, settings.max_growth)
+                    : settings.max_growth;
       if (last_rejected) factor = std::min(1.0, factor);
       last_rejected = false;
       if (t_new != t1) h = h_try * factor;
@@ -323,7 +458,10 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
 
     bool moved = false;
     status = system.PostStep(t_new, y_new_, result, &moved);
-    if (status != IntegratorStatus::kSuccess) return finish(status);
+    if (status != IntegratorStatus::kSuccess) {
+      if (retry_smaller(h_try, status)) continue;
+      return finish(status);
+    }
 
     if (nr > 0) {
       ode.Roots(t_new, y_new_, g_new_);

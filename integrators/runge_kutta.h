@@ -9,8 +9,22 @@
 //   * Dormand-Prince 5(4) and Bogacki-Shampine 3(2): embedded pairs, FSAL,
 //     local extrapolation (the higher order solution is propagated). Error
 //     norm  ||e_i / (atol + rtol * max(|y_i|, |y_new,i|))||_rms <= 1; the step
-//     controller is h_new = h * min(5, max(0.2, 0.9 * err^(-1/(q+1)))) with q
-//     the embedded (lower) order, and no growth right after a rejection.
+//     controller is h_new = h * min(max_growth, max(max_shrink,
+//     safety * err^(-1/(q+1)))) with q the embedded (lower) order (defaults
+//     5, 0.2, 0.9), and no growth right after a rejection.
+//     First step: options.step if > 0, else the starting-step heuristic of
+//     Hairer, Norsett & Wanner, "Solving ODEs I", II.4 (algorithm on p. 169):
+//       d0 = ||y0||, d1 = ||f(t0, y0)||  (the error norm's weights),
+//       h0 = 0.01 d0 / d1 (1e-6 if either is < 1e-5),
+//       d2 = ||f(t0 + h0, y0 + h0 f0) - f0|| / h0,
+//       h1 = (0.01 / max(d1, d2))^(1/(p+1)) (max(1e-6, 1e-3 h0) if both
+//            are <= 1e-15),  h = min(100 h0, h1, t1 - t0).
+//     A trial step whose stage field or post-step correction fails with
+//     kConstraintFailure (J D J^T singular at a stage state far off the
+//     manifold, a projection that does not converge from a long step) is
+//     rejected like an error-test failure and retried with the step times
+//     stage_failure_shrink; only below min_step does the failure stop the
+//     integration. (A failure at an accepted state cannot be retried.)
 //   * Events: after each accepted step the sign of ode.Roots is compared with
 //     the previous one; on a change the root is located by re-stepping from
 //     the last accepted state with a shortened step (Illinois regula falsi on
@@ -22,10 +36,30 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <string>
 
 #include "core/dae.h"
 
 namespace quasiroll::integrators_internal {
+
+enum class RkMethod { kRk4, kDormandPrince54, kBogackiShampine32 };
+const char* ToString(RkMethod method);  // "rk4", "dp54", "bs32"
+// Throws std::invalid_argument naming the value on an unknown name.
+RkMethod RkMethodFromString(const std::string& name);
+
+// Settings of the Runge-Kutta driver (backend options of rk-baumgarte and
+// rk-projection; RkOptionTable() documents them).
+struct RkSettings {
+  RkMethod method = RkMethod::kRk4;
+  double safety = 0.9;
+  double max_growth = 5.0;
+  double max_shrink = 0.2;
+  double stage_failure_shrink = 0.25;
+};
+// The options shared by the RK backends: rk_method, safety, max_growth,
+// max_shrink, stage_failure_shrink.
+OptionTable RkOptionTable();
+RkSettings RkSettingsFrom(const OptionValues& values);
 
 // Butcher tableau, explicit (a strictly lower triangular).
 struct ButcherTableau {
@@ -72,7 +106,7 @@ class RungeKuttaDriver {
   // the last accepted state.
   void Run(RkSystem& system, ConstrainedOde& ode, double t0, double t1,
            Eigen::Ref<Eigen::VectorXd> y, const IntegratorOptions& options,
-           IntegratorResult* result);
+           const RkSettings& settings, IntegratorResult* result);
 
  private:
   // One RK step of size h from (t, y_) into y_new_ (and err_ if embedded).
@@ -90,6 +124,15 @@ class RungeKuttaDriver {
                               int* index);
 
   void Resize(int n, int stages, int roots);
+  // Error norm ||v_i / (atol + rtol |y_i|)||_rms with the weights of y.
+  double WeightedNorm(const Eigen::Ref<const Eigen::VectorXd>& v,
+                      const Eigen::Ref<const Eigen::VectorXd>& y,
+                      const IntegratorOptions& options) const;
+  // Starting step (Hairer-Norsett-Wanner II.4), k_.col(0) = f(t0, y_). Uses
+  // y_stage_ and k_.col(1) as scratch.
+  double InitialStep(RkSystem& system, const ButcherTableau& tab, double t0,
+                     double span, const IntegratorOptions& options,
+                     IntegratorResult* result);
 
   Eigen::MatrixXd k_;  // n x stages
   Eigen::VectorXd y_, y_stage_, y_new_, err_;

@@ -13,6 +13,17 @@
 namespace quasiroll {
 
 struct CeresNlpSolver::Impl {
+  struct Settings {
+    double rho_init = 10.0, rho_growth = 10.0, rho_max = 1e8;
+    double rho_grow_unless = 0.25;
+    double polish_threshold = 1e-7;
+    double infeasible_threshold = 1e-6;
+    int polish_max_iterations = 20;
+    ceres::TrustRegionStrategyType trust_region = ceres::LEVENBERG_MARQUARDT;
+    ceres::LinearSolverType linear_solver = ceres::DENSE_QR;
+    ceres::LineSearchDirectionType direction = ceres::BFGS;
+  } settings;
+
   // ---- problem classification (refreshed every solve, no allocation when
   // sizes repeat) -----------------------------------------------------------
   const NlpProblem* problem = nullptr;
@@ -242,6 +253,66 @@ struct CeresNlpSolver::Impl {
 CeresNlpSolver::CeresNlpSolver() : impl_(std::make_unique<Impl>()) {}
 CeresNlpSolver::~CeresNlpSolver() = default;
 
+OptionTable CeresNlpSolver::option_table() const {
+  return {
+      OptionSpec::Double("rho_init", 10.0,
+                         "initial augmented-Lagrangian penalty rho")
+          .GreaterThan(0),
+      OptionSpec::Double("rho_growth", 10.0,
+                         "rho <- rho_growth * rho when V did not drop enough")
+          .GreaterThan(1),
+      OptionSpec::Double("rho_max", 1e8, "largest penalty rho").GreaterThan(0),
+      OptionSpec::Double("rho_grow_unless", 0.25,
+                         "rho grows unless V <= rho_grow_unless * V_previous")
+          .GreaterThan(0)
+          .LessThan(1),
+      OptionSpec::Double("polish_threshold", 1e-7,
+                         "V below which the AL loop hands over to the "
+                         "active-set Newton polish (or feasibility_tolerance "
+                         "if larger); also the polish's active-row tolerance")
+          .GreaterThan(0),
+      OptionSpec::Double("infeasible_threshold", 1e-6,
+                         "phase 1: violation at Ceres CONVERGENCE from which "
+                         "the problem counts as infeasible")
+          .GreaterThan(0),
+      OptionSpec::Int("polish_max_iterations", 20,
+                      "Gauss-Newton steps of the feasibility polish")
+          .AtLeast(0),
+      OptionSpec::Choice("trust_region_strategy", "levenberg_marquardt",
+                         {"levenberg_marquardt", "dogleg"},
+                         "phase 1 trust-region strategy "
+                         "(Solver::Options::trust_region_strategy_type)"),
+      OptionSpec::Choice("linear_solver", "dense_qr",
+                         {"dense_qr", "dense_normal_cholesky"},
+                         "phase 1 linear solver "
+                         "(Solver::Options::linear_solver_type)"),
+      OptionSpec::Choice("line_search_direction", "bfgs", {"bfgs", "lbfgs"},
+                         "phase 2 inner solves' direction "
+                         "(GradientProblemSolver line_search_direction_type)"),
+  };
+}
+
+void CeresNlpSolver::ApplyBackendOptions(const OptionValues& values) {
+  Impl::Settings& s = impl_->settings;
+  s.rho_init = values.GetDouble("rho_init");
+  s.rho_growth = values.GetDouble("rho_growth");
+  s.rho_max = values.GetDouble("rho_max");
+  s.rho_grow_unless = values.GetDouble("rho_grow_unless");
+  s.polish_threshold = values.GetDouble("polish_threshold");
+  s.infeasible_threshold = values.GetDouble("infeasible_threshold");
+  s.polish_max_iterations =
+      static_cast<int>(values.GetInt("polish_max_iterations"));
+  s.trust_region = values.GetString("trust_region_strategy") == "dogleg"
+                       ? ceres::DOGLEG
+                       : ceres::LEVENBERG_MARQUARDT;
+  s.linear_solver = values.GetString("linear_solver") == "dense_qr"
+                        ? ceres::DENSE_QR
+                        : ceres::DENSE_NORMAL_CHOLESKY;
+  s.direction = values.GetString("line_search_direction") == "lbfgs"
+                    ? ceres::LBFGS
+                    : ceres::BFGS;
+}
+
 namespace {
 const char* TerminationName(ceres::TerminationType t) {
   switch (t) {
@@ -291,8 +362,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
       s.ls->SetParameterUpperBound(s.xp.data(), j, s.b.x_ub(j));
     ceres::Solver::Options o;
     o.minimizer_type = ceres::TRUST_REGION;
-    o.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    o.linear_solver_type = ceres::DENSE_QR;
+    o.trust_region_strategy_type = s.settings.trust_region;
+    o.linear_solver_type = s.settings.linear_solver;
     o.max_num_iterations = options.max_iterations;
     // Round-off, not Ceres' tolerances, should end a zero-residual solve; the
     // callback stops as soon as every residual is below the tolerance.
@@ -329,7 +400,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
       return;
     }
     if (viol > feas_tol) {
-      if (summary.termination_type == ceres::CONVERGENCE && viol >= 1e-6) {
+      if (summary.termination_type == ceres::CONVERGENCE &&
+          viol >= s.settings.infeasible_threshold) {
         result->backend_status += " (minimum of the violation > 0)";
         finish(NlpStatus::kInfeasible);
         return;
@@ -339,10 +411,10 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
         // ~1e7-1e8); finish with affine-invariant Newton steps from nearby.
         // active_tol = 0: the root is isolated, so a variable merely close to
         // a bound must stay free (freezing it drops a column of a square J).
-        if (viol <= 1e-6) {
+        if (viol <= s.settings.infeasible_threshold) {
           const internal::PolishStats ps = internal::PolishActiveConstraints(
               problem, s.b, /*active_tol=*/0.0, feas_tol,
-              /*max_iterations=*/20, &x);
+              s.settings.polish_max_iterations, &x);
           s.g_evals += ps.constraint_evaluations;
           s.j_evals += ps.jacobian_evaluations;
           std::snprintf(msg, sizeof msg, "; polish -> violation %.2e",
@@ -393,7 +465,7 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
         s.mu_ub(k) = std::max(0.0, -s.gx(s.ub_vars[k]));
     }
   }
-  s.rho = 10.0;
+  s.rho = s.settings.rho_init;
 
   if (!s.gp || s.gp_n != n) {
     s.gp =
@@ -407,7 +479,7 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
                          : 1.0;
 
   ceres::GradientProblemSolver::Options go;
-  go.line_search_direction_type = ceres::BFGS;
+  go.line_search_direction_type = s.settings.direction;
   go.line_search_type = ceres::WOLFE;
   go.max_num_iterations = options.max_iterations;
   go.function_tolerance = 1e-16;
@@ -426,7 +498,7 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
   // V below which the answer is finished by an active-set Newton polish: the
   // AL error bound |x - x*| <= C |lambda - lambda*| / rho ~ C V makes further
   // outer iterations pointless once V is this small.
-  const double polish_v = std::max(feas_tol, 1e-7);
+  const double polish_v = std::max(feas_tol, s.settings.polish_threshold);
   bool polished = false;
   double v_prev = std::numeric_limits<double>::infinity();
   double viol = std::numeric_limits<double>::infinity();
@@ -489,8 +561,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
       // a Newton polish instead of driving rho up against round-off.
       s.xa = x;
       const internal::PolishStats ps = internal::PolishActiveConstraints(
-          problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/20,
-          &s.xa);
+          problem, s.b, /*active_tol=*/s.settings.polish_threshold, feas_tol,
+          s.settings.polish_max_iterations, &s.xa);
       s.g_evals += ps.constraint_evaluations;
       s.j_evals += ps.jacobian_evaluations;
       if (ps.success) {
@@ -509,7 +581,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
           outer, TerminationName(gs.termination_type),
           gs.iterations.empty() ? size_t{0} : gs.iterations.size() - 1,
           inner_grad, viol, v, s.rho);
-    if (v > 0.25 * v_prev) s.rho = std::min(10.0 * s.rho, 1e8);
+    if (v > s.settings.rho_grow_unless * v_prev)
+      s.rho = std::min(s.settings.rho_growth * s.rho, s.settings.rho_max);
     v_prev = v;
   }
 
@@ -521,9 +594,11 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
   result->backend_status += msg;
   NlpStatus status =
       converged ? NlpStatus::kConverged : NlpStatus::kIterationLimit;
-  if (!converged && viol > feas_tol && viol <= 1e-6) {
+  if (!converged && viol > feas_tol &&
+      viol <= s.settings.infeasible_threshold) {
     const internal::PolishStats ps = internal::PolishActiveConstraints(
-        problem, s.b, /*active_tol=*/1e-7, feas_tol, /*max_iterations=*/20, &x);
+        problem, s.b, /*active_tol=*/s.settings.polish_threshold, feas_tol,
+        s.settings.polish_max_iterations, &x);
     s.g_evals += ps.constraint_evaluations;
     s.j_evals += ps.jacobian_evaluations;
     std::snprintf(msg, sizeof msg, "; polish -> violation %.2e",

@@ -48,6 +48,13 @@
 // Ipopt's convention lambda = mu_upper - mu_lower): seeds lam / mu; box
 // multipliers from the reduced gradient grad f + J^T lambda.
 //
+// Backend options (option_table()): the penalty schedule rho_init,
+// rho_growth, rho_max, rho_grow_unless (rho grows unless V fell below this
+// fraction of the previous V), polish_threshold (the 1e-7 above),
+// infeasible_threshold (1e-6: violation of a Ceres CONVERGENCE that counts as
+// infeasible), polish_max_iterations, and Ceres' trust_region_strategy,
+// linear_solver, line_search_direction. Defaults: the values above.
+//
 // Inputs are validated and x0 clamped into the box before Ceres is called,
 // so Ceres never reaches a CHECK failure (which would abort the process).
 #pragma once
@@ -66,8 +73,10 @@ class CeresNlpSolver final : public NlpSolver {
   std::string name() const override { return "ceres"; }
   // Ceres keeps all solver state in its Problem/Solver objects.
   bool SupportsConcurrentInstances() const override { return true; }
+  OptionTable option_table() const override;
 
  private:
+  void ApplyBackendOptions(const OptionValues& values) override;
   void DoSolve(const NlpProblem& problem,
                const Eigen::Ref<const Eigen::VectorXd>& x0,
                const NlpOptions& options, NlpResult* result) override;

@@ -428,6 +428,13 @@ bool AlgorithmUsable(Ipopt::ApplicationReturnStatus s) {
 
 struct IpoptSolver::Impl {
   IpoptLinearSolver linear_solver = IpoptLinearSolver::kDenseLdlt;
+  // Backend options set per solve (the others go to Ipopt's option list in
+  // ApplyBackendOptions).
+  double mu_init = 0.1;
+  double warm_start_mu_init = 1e-6;
+  double warm_start_push = 1e-9;
+  double bound_relax_factor = 0.0;
+  std::string hessian_approximation = "auto";
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app;
   Ipopt::SmartPtr<Adapter> adapter;
   Eigen::VectorXd x0;
@@ -457,13 +464,93 @@ IpoptSolver::IpoptSolver(IpoptLinearSolver linear_solver)
   } else {
     opts->SetStringValue("linear_solver", "mumps");
   }
-  // Ipopt picks the adaptive barrier update when the Hessian is L-BFGS; its
-  // quality-function oracle solves the KKT system for extra right-hand sides
-  // every iteration (~40 % of a warm paper-scene solve, perf) without saving
-  // iterations on these problems (6 either way). Fiacco-McCormick monotone.
-  opts->SetStringValue("mu_strategy", "monotone");
+  // mu_strategy and the other backend options: ApplyBackendOptions().
   // "" = do not read an ipopt.opt file from the working directory.
   s.initialized = s.app->Initialize("") == Ipopt::Solve_Succeeded;
+}
+
+OptionTable IpoptSolver::option_table() const {
+  OptionTable table = {
+      // Ipopt picks the adaptive barrier update when the Hessian is L-BFGS;
+      // its quality-function oracle solves the KKT system for extra
+      // right-hand sides every iteration (~40 % of a warm paper-scene solve)
+      // without saving iterations on these problems (6 either way).
+      OptionSpec::Choice("mu_strategy", "monotone", {"monotone", "adaptive"},
+                         "barrier update: Fiacco-McCormick monotone or "
+                         "adaptive (Ipopt's mu_strategy)"),
+      OptionSpec::Double("mu_init", 0.1,
+                         "initial barrier parameter of a cold start")
+          .GreaterThan(0),
+      OptionSpec::Double("warm_start_mu_init", 1e-6,
+                         "initial barrier parameter of a multiplier warm "
+                         "start (near the previous final one)")
+          .GreaterThan(0),
+      OptionSpec::Double("warm_start_push", 1e-9,
+                         "warm_start_{bound,slack_bound,mult_bound}_push and "
+                         "_frac: how far a warm point is pushed inside")
+          .GreaterThan(0)
+          .LessThan(0.5),
+      OptionSpec::Double("bound_relax_factor", 0.0,
+                         "Ipopt's bound relaxation (its default 1e-8 lets "
+                         "answers violate bounds beyond the tolerance)")
+          .AtLeast(0),
+      OptionSpec::Choice("hessian_approximation", "auto",
+                         {"auto", "limited-memory"},
+                         "auto: exact when the problem has a Lagrangian "
+                         "Hessian, else L-BFGS; limited-memory: always L-BFGS"),
+      OptionSpec::Int("limited_memory_max_history", 6,
+                      "L-BFGS memory (Ipopt's limited_memory_max_history)")
+          .AtLeast(0),
+      OptionSpec::Choice("nlp_scaling_method", "gradient-based",
+                         {"gradient-based", "none"},
+                         "Ipopt's problem scaling (nlp_scaling_method)"),
+      OptionSpec::Double("acceptable_tol", 1e-6,
+                         "Ipopt's acceptable_tol (an 'acceptable' stop must "
+                         "still be feasible to the feasibility tolerance)")
+          .GreaterThan(0),
+      OptionSpec::Int("acceptable_iter", 15,
+                      "Ipopt's acceptable_iter (0 = never stop at an "
+                      "acceptable point)")
+          .AtLeast(0),
+  };
+  if (impl_->linear_solver == IpoptLinearSolver::kMumps) {
+    table.push_back(OptionSpec::Double("mumps_pivtol", 1e-6,
+                                       "MUMPS pivot tolerance (mumps_pivtol)")
+                        .AtLeast(0)
+                        .AtMost(1));
+    table.push_back(OptionSpec::Int("mumps_mem_percent", 1000,
+                                    "MUMPS workspace increase in percent "
+                                    "(mumps_mem_percent)")
+                        .AtLeast(0));
+  }
+  return table;
+}
+
+void IpoptSolver::ApplyBackendOptions(const OptionValues& values) {
+  Impl& s = *impl_;
+  auto opts = s.app->Options();
+  opts->SetStringValue("mu_strategy", values.GetString("mu_strategy"));
+  opts->SetIntegerValue(
+      "limited_memory_max_history",
+      static_cast<int>(values.GetInt("limited_memory_max_history")));
+  opts->SetStringValue("nlp_scaling_method",
+                       values.GetString("nlp_scaling_method"));
+  opts->SetNumericValue("acceptable_tol", values.GetDouble("acceptable_tol"));
+  opts->SetIntegerValue("acceptable_iter",
+                        static_cast<int>(values.GetInt("acceptable_iter")));
+  if (s.linear_solver == IpoptLinearSolver::kMumps) {
+    opts->SetNumericValue("mumps_pivtol", values.GetDouble("mumps_pivtol"));
+    opts->SetIntegerValue("mumps_mem_percent",
+                          static_cast<int>(values.GetInt("mumps_mem_percent")));
+  }
+  s.mu_init = values.GetDouble("mu_init");
+  s.warm_start_mu_init = values.GetDouble("warm_start_mu_init");
+  s.warm_start_push = values.GetDouble("warm_start_push");
+  s.bound_relax_factor = values.GetDouble("bound_relax_factor");
+  s.hessian_approximation = values.GetString("hessian_approximation");
+  // The barrier update strategy is built into Ipopt's algorithm objects:
+  // rebuild them on the next solve instead of re-optimizing.
+  s.can_reoptimize = false;
 }
 
 bool IpoptSolver::SupportsConcurrentInstances() const {
@@ -513,8 +600,9 @@ void IpoptSolver::DoSolve(const NlpProblem& problem,
   opts->SetIntegerValue("max_iter", options.max_iterations);
   // Ipopt relaxes bounds by 1e-8 by default, which would let the answer
   // violate bounds/inequality rows beyond feasibility_tolerance.
-  opts->SetNumericValue("bound_relax_factor", 0.0);
+  opts->SetNumericValue("bound_relax_factor", s.bound_relax_factor);
   // Exact second derivatives when the problem has them, else L-BFGS.
+  if (s.hessian_approximation == "limited-memory") a.exact_hessian = false;
   opts->SetStringValue("hessian_approximation",
                        a.exact_hessian ? "exact" : "limited-memory");
   if (a.warm) {
@@ -522,18 +610,18 @@ void IpoptSolver::DoSolve(const NlpProblem& problem,
     opts->SetStringValue("warm_start_init_point", "yes");
     // Keep the warm point (almost) where it is instead of pushing it 1e-2
     // into the interior.
-    opts->SetNumericValue("warm_start_bound_push", 1e-9);
-    opts->SetNumericValue("warm_start_bound_frac", 1e-9);
-    opts->SetNumericValue("warm_start_slack_bound_push", 1e-9);
-    opts->SetNumericValue("warm_start_slack_bound_frac", 1e-9);
-    opts->SetNumericValue("warm_start_mult_bound_push", 1e-9);
+    opts->SetNumericValue("warm_start_bound_push", s.warm_start_push);
+    opts->SetNumericValue("warm_start_bound_frac", s.warm_start_push);
+    opts->SetNumericValue("warm_start_slack_bound_push", s.warm_start_push);
+    opts->SetNumericValue("warm_start_slack_bound_frac", s.warm_start_push);
+    opts->SetNumericValue("warm_start_mult_bound_push", s.warm_start_push);
     // A barrier parameter near the previous final one, so the solution is not
     // pulled back to the central path of mu = 0.1.
-    opts->SetNumericValue("mu_init", 1e-6);
+    opts->SetNumericValue("mu_init", s.warm_start_mu_init);
   } else {
     // Cold start: Ipopt's defaults (options persist in the application).
     opts->SetStringValue("warm_start_init_point", "no");
-    opts->SetNumericValue("mu_init", 0.1);
+    opts->SetNumericValue("mu_init", s.mu_init);
   }
 
   Signature(a, &s.signature);

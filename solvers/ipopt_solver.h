@@ -35,6 +35,12 @@
 // mu_strategy monotone (Ipopt switches to the adaptive strategy with L-BFGS;
 // its quality-function oracle cost ~40 % of a warm solve in extra
 // backsolves), bound_relax_factor 0, tol / constr_viol_tol from NlpOptions.
+// Backend options (option_table(), docs/plugins.md): mu_strategy, mu_init,
+// warm_start_mu_init, warm_start_push, bound_relax_factor,
+// hessian_approximation (auto = exact when the problem has a Hessian),
+// limited_memory_max_history, nlp_scaling_method, acceptable_tol,
+// acceptable_iter; ipopt-mumps also mumps_pivtol, mumps_mem_percent. The
+// defaults are the values above and otherwise Ipopt's own.
 #pragma once
 
 #include <memory>
@@ -58,8 +64,10 @@ class IpoptSolver final : public NlpSolver {
   // True for the dense LDL^T (no global state; Ipopt's tags are
   // thread-local), false for MUMPS.
   bool SupportsConcurrentInstances() const override;
+  OptionTable option_table() const override;
 
  private:
+  void ApplyBackendOptions(const OptionValues& values) override;
   void DoSolve(const NlpProblem& problem,
                const Eigen::Ref<const Eigen::VectorXd>& x0,
                const NlpOptions& options, NlpResult* result) override;

@@ -45,6 +45,42 @@ struct NewtonSolver::Workspace {
 NewtonSolver::NewtonSolver() : ws_(std::make_unique<Workspace>()) {}
 NewtonSolver::~NewtonSolver() = default;
 
+OptionTable NewtonSolver::option_table() const {
+  return {
+      OptionSpec::Double("armijo", 2e-4,
+                         "sufficient decrease: |r(x + a dx)|^2 <= (1 - armijo "
+                         "a) |r(x)|^2")
+          .GreaterThan(0)
+          .LessThan(1),
+      OptionSpec::Double("min_damping", 1e-10,
+                         "smallest step fraction a before the "
+                         "Levenberg-Marquardt fallback")
+          .GreaterThan(0)
+          .LessThan(1),
+      OptionSpec::Double("rank_pivot_ratio", 1e-13,
+                         "LU pivot ratio min/max below which the Jacobian "
+                         "counts as rank deficient")
+          .GreaterThan(0)
+          .LessThan(1),
+      OptionSpec::Double("lm_lambda_init", 1e-3,
+                         "initial Levenberg-Marquardt damping of the "
+                         "fallback step (per solve)")
+          .GreaterThan(0),
+      OptionSpec::Double("polish_floor", 1e-14,
+                         "tightest residual target of the polish before "
+                         "bounds are judged")
+          .GreaterThan(0),
+  };
+}
+
+void NewtonSolver::ApplyBackendOptions(const OptionValues& values) {
+  settings_.armijo = values.GetDouble("armijo");
+  settings_.min_damping = values.GetDouble("min_damping");
+  settings_.rank_pivot_ratio = values.GetDouble("rank_pivot_ratio");
+  settings_.lm_lambda_init = values.GetDouble("lm_lambda_init");
+  settings_.polish_floor = values.GetDouble("polish_floor");
+}
+
 namespace {
 // r = g(rows) - g_lb(rows); false if any entry is non-finite.
 bool Residual(const Eigen::VectorXd& g, const Eigen::VectorXd& g_lb,
@@ -104,7 +140,7 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
     if (w.g_lb(i) == w.g_ub(i)) w.eq_rows.push_back(i);  // n rows (validated)
 
   const double tol = options.feasibility_tolerance;
-  lm_lambda_ = 1e-3;
+  lm_lambda_ = settings_.lm_lambda_init;
   char msg[160];
   Eigen::VectorXd& x = result->x;
   x = x0;
@@ -121,18 +157,18 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
   // the root of a sliding contact). Before calling such a point infeasible,
   // polish: tighten the residual target and keep iterating, and judge the
   // bounds at the polished point. A polish that stalls keeps the last point.
-  constexpr double kPolishFloor = 1e-14;
+  const double polish_floor = settings_.polish_floor;
   double target = tol;
   bool polishing = false;
   int iter = 0;
   for (;; ++iter) {
     const double r_max = w.r.lpNorm<Eigen::Infinity>();
     if (r_max <= target) {
-      if (target <= kPolishFloor) break;
+      if (target <= polish_floor) break;
       if (MaxConstraintViolation(x, w.g, w.x_lb, w.x_ub, w.g_lb, w.g_ub) <= tol)
         break;
       polishing = true;
-      target = std::max(kPolishFloor, 1e-4 * r_max);
+      target = std::max(polish_floor, 1e-4 * r_max);
       if (r_max <= target) break;
     }
     if (polishing && iter >= options.max_iterations) break;
@@ -160,7 +196,7 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
     // to the largest one means a (numerically) rank-deficient Jacobian.
     const auto u_diag = w.lu.matrixLU().diagonal().cwiseAbs();
     const double pivot_max = u_diag.maxCoeff(), pivot_min = u_diag.minCoeff();
-    if (!(pivot_min > 1e-13 * pivot_max)) {
+    if (!(pivot_min > settings_.rank_pivot_ratio * pivot_max)) {
       if (polishing) break;
       result->status = NlpStatus::kNumericalFailure;
       std::snprintf(
@@ -186,13 +222,13 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
     const double dx_norm = w.dx.norm();
     double alpha = 1.0;
     bool accepted = false;
-    while (alpha >= 1e-10) {
+    while (alpha >= settings_.min_damping) {
       w.x_trial = x + alpha * w.dx;
       problem.Constraints(w.x_trial, w.g_trial);
       ++result->constraint_evaluations;
       if (Residual(w.g_trial, w.g_lb, w.eq_rows, &w.r_trial)) {
         const double phi_trial = w.r_trial.squaredNorm();
-        if (phi_trial <= (1.0 - 2e-4 * alpha) * phi ||
+        if (phi_trial <= (1.0 - settings_.armijo * alpha) * phi ||
             w.r_trial.lpNorm<Eigen::Infinity>() <= target) {
           accepted = true;
           break;

@@ -18,6 +18,8 @@
 // A (numerically) rank-deficient Jacobian, a failed LM step or a
 // non-finite residual give kNumericalFailure. Multipliers are left at zero.
 // After the first call with given sizes DoSolve() does not allocate.
+// Backend options (option_table()): armijo, min_damping, rank_pivot_ratio,
+// lm_lambda_init, polish_floor (the constants above; defaults as stated).
 #pragma once
 
 #include <memory>
@@ -34,8 +36,10 @@ class NewtonSolver final : public NlpSolver {
   std::string name() const override { return "newton"; }
   bool RequiresSquareSystem() const override { return true; }
   bool SupportsConcurrentInstances() const override { return true; }
+  OptionTable option_table() const override;
 
  private:
+  void ApplyBackendOptions(const OptionValues& values) override;
   void DoSolve(const NlpProblem& problem,
                const Eigen::Ref<const Eigen::VectorXd>& x0,
                const NlpOptions& options, NlpResult* result) override;
@@ -46,6 +50,13 @@ class NewtonSolver final : public NlpSolver {
 
   std::unique_ptr<Workspace> ws_;
   double lm_lambda_ = 1e-3;  // Levenberg-Marquardt damping, reset per solve
+  struct Settings {
+    double armijo = 2e-4;
+    double min_damping = 1e-10;
+    double rank_pivot_ratio = 1e-13;
+    double lm_lambda_init = 1e-3;
+    double polish_floor = 1e-14;
+  } settings_;
 };
 
 }  // namespace quasiroll

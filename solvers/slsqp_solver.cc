@@ -14,6 +14,12 @@
 namespace quasiroll {
 
 struct SlsqpSolver::Impl {
+  struct Settings {
+    double ftol_rel = 0.0, xtol_rel = 0.0, ftol_abs = 0.0;
+    int maxeval_per_iteration = 3;
+    double polish_active_tol = 1e-7;
+    int polish_max_iterations = 20;
+  } settings;
   std::unique_ptr<nlopt::opt> opt;
   // Structure the nlopt::opt was built for.
   int n = -1, n_eq = -1, n_ineq = -1;
@@ -129,6 +135,45 @@ struct SlsqpSolver::Impl {
 SlsqpSolver::SlsqpSolver() : impl_(std::make_unique<Impl>()) {}
 SlsqpSolver::~SlsqpSolver() = default;
 
+OptionTable SlsqpSolver::option_table() const {
+  return {
+      OptionSpec::Double("ftol_rel", 0.0,
+                         "NLopt relative objective tolerance (0 = NlpOptions "
+                         "optimality_tolerance)")
+          .AtLeast(0),
+      OptionSpec::Double("xtol_rel", 0.0,
+                         "NLopt relative step tolerance (0 = NlpOptions "
+                         "optimality_tolerance)")
+          .AtLeast(0),
+      OptionSpec::Double("ftol_abs", 0.0,
+                         "NLopt absolute objective tolerance (0 = off)")
+          .AtLeast(0),
+      OptionSpec::Int("maxeval_per_iteration", 3,
+                      "NLopt maxeval = this * max_iterations (NLopt counts "
+                      "evaluations, not SLSQP iterations)")
+          .AtLeast(1),
+      OptionSpec::Double("polish_active_tol", 1e-7,
+                         "rows within this of their bound join the "
+                         "active-set Newton polish")
+          .AtLeast(0),
+      OptionSpec::Int("polish_max_iterations", 20,
+                      "Gauss-Newton steps of the feasibility polish")
+          .AtLeast(0),
+  };
+}
+
+void SlsqpSolver::ApplyBackendOptions(const OptionValues& values) {
+  Impl::Settings& s = impl_->settings;
+  s.ftol_rel = values.GetDouble("ftol_rel");
+  s.xtol_rel = values.GetDouble("xtol_rel");
+  s.ftol_abs = values.GetDouble("ftol_abs");
+  s.maxeval_per_iteration =
+      static_cast<int>(values.GetInt("maxeval_per_iteration"));
+  s.polish_active_tol = values.GetDouble("polish_active_tol");
+  s.polish_max_iterations =
+      static_cast<int>(values.GetInt("polish_max_iterations"));
+}
+
 namespace {
 const char* NloptResultName(nlopt::result r) {
   switch (r) {
@@ -211,9 +256,13 @@ void SlsqpSolver::DoSolve(const NlpProblem& problem,
   nlopt::opt& opt = *s.opt;
   opt.set_lower_bounds(s.lb);
   opt.set_upper_bounds(s.ub);
-  opt.set_ftol_rel(options.optimality_tolerance);
-  opt.set_xtol_rel(options.optimality_tolerance);
-  opt.set_maxeval(3 * options.max_iterations);
+  const Impl::Settings& set = s.settings;
+  opt.set_ftol_rel(set.ftol_rel > 0 ? set.ftol_rel
+                                    : options.optimality_tolerance);
+  opt.set_xtol_rel(set.xtol_rel > 0 ? set.xtol_rel
+                                    : options.optimality_tolerance);
+  opt.set_ftol_abs(set.ftol_abs);
+  opt.set_maxeval(set.maxeval_per_iteration * options.max_iterations);
 
   enum class Outcome { kSuccess, kMaxEval, kRoundoff, kFailure, kNonFinite };
   Outcome outcome = Outcome::kFailure;
@@ -258,8 +307,8 @@ void SlsqpSolver::DoSolve(const NlpProblem& problem,
 
   // Independent feasibility check (+ active-set Newton polish if needed).
   const internal::PolishStats ps = internal::PolishActiveConstraints(
-      problem, b, /*active_tol=*/1e-7, options.feasibility_tolerance,
-      /*max_iterations=*/20, &result->x);
+      problem, b, set.polish_active_tol, options.feasibility_tolerance,
+      set.polish_max_iterations, &result->x);
   result->constraint_evaluations += ps.constraint_evaluations;
   result->jacobian_evaluations += ps.jacobian_evaluations;
   char msg[128];

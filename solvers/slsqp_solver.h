@@ -23,6 +23,10 @@
 // forced_stop, bad_alloc, invalid_argument, runtime_error) map to statuses;
 // non-finite function values force a stop -> kNumericalFailure.
 //
+// Backend options (option_table()): ftol_rel, xtol_rel (0 = NlpOptions'
+// optimality_tolerance), ftol_abs (0 = off), maxeval_per_iteration (the 3
+// above), polish_active_tol, polish_max_iterations (the polish below).
+//
 // The nlopt::opt object and all callback workspaces persist across solves with
 // the same structure; NLopt's SLSQP itself allocates its work arrays on each
 // optimize() call (library limitation).
@@ -43,8 +47,10 @@ class SlsqpSolver final : public NlpSolver {
   // NLopt's SLSQP keeps its iteration state in a per-call struct
   // (slsqpb_state) and each object owns its nlopt_opt.
   bool SupportsConcurrentInstances() const override { return true; }
+  OptionTable option_table() const override;
 
  private:
+  void ApplyBackendOptions(const OptionValues& values) override;
   void DoSolve(const NlpProblem& problem,
                const Eigen::Ref<const Eigen::VectorXd>& x0,
                const NlpOptions& options, NlpResult* result) override;

@@ -5,6 +5,10 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "bench/command_json.h"
 #include "bench/harness.h"
@@ -73,6 +77,9 @@ void Commands::Register(CLI::App& app) {
       ->capture_default_str();
   AddSceneOverrides(solve, &solve_.overrides);
   AddNlpTol(solve, &solve_.nlp_tol);
+  solve->add_option("--nlp-opt", solve_.nlp_opts,
+                    "NLP backend option key=value (repeatable; see 'quasiroll "
+                    "list --options')");
   solve->add_flag("--json", solve_.json, "Print JSON instead of text");
   solve->callback([this] { selected_ = [this] { return RunSolve(solve_); }; });
 
@@ -99,7 +106,7 @@ void Commands::Register(CLI::App& app) {
   AddSceneOverrides(run, &run_.overrides);
   const std::string rk_help =
       "RK scheme of rk-baumgarte / rk-projection: rk4 | dp54 | bs32 "
-      "(default: rk4)";
+      "(default: rk4; shorthand of --dae-opt rk_method=...)";
   CLI::Option* rk_method =
       run->add_option("--rk-method", run_.rk_method, rk_help);
   rk_method->check(OneOf(kRkMethods));
@@ -111,8 +118,7 @@ void Commands::Register(CLI::App& app) {
        "--rk", "--rk-method"});
   run->add_option("--sigma", run_.sigma,
                   "Baumgarte gain [1/s] (rk-baumgarte; ida with --dae-index 1; "
-                  "default: " +
-                      bench::Num(integrator_defaults.baumgarte_sigma) + ")")
+                  "default: 5; shorthand of --dae-opt baumgarte_sigma=...)")
       ->check(NonNegativeNumber());
   CLI::Option* tol =
       run->add_option("--tol", run_.tol,
@@ -131,8 +137,8 @@ void Commands::Register(CLI::App& app) {
       ->check(PositiveNumber());
   AddNlpTol(run, &run_.nlp_tol);
   run->add_option("--dae-index", run_.dae_index,
-                  "IDA formulation: 2 (GGL) or 1 (Baumgarte) (default: " +
-                      std::to_string(integrator_defaults.dae_index) + ")")
+                  "IDA formulation: 2 (GGL) or 1 (Baumgarte) (default: 2; "
+                  "shorthand of --dae-opt dae_index=...)")
       ->check(IntegerIn(1, 2));
   run->add_option("--substeps", run_.substeps,
                   "Integrator steps per dt (RK4 step = dt / substeps; initial "
@@ -142,6 +148,12 @@ void Commands::Register(CLI::App& app) {
                   "Sampled second-contact check every N samples (default: "
                   "never)")
       ->check(IntegerIn(1, 1000000000));
+  run->add_option("--nlp-opt", run_.nlp_opts,
+                  "NLP backend option key=value (repeatable; see 'quasiroll "
+                  "list --options')");
+  run->add_option("--dae-opt", run_.dae_opts,
+                  "Integrator option key=value (repeatable; see 'quasiroll "
+                  "list --options')");
   run->add_option("--out", run_.out, "Output directory")->capture_default_str();
   run->add_option("--progress", run_.progress,
                   "auto (a line updated in place when stderr is a TTY) | bar "
@@ -152,7 +164,11 @@ void Commands::Register(CLI::App& app) {
 
   CLI::App* list = app.add_subcommand(
       "list", "List the registered NLP backends and integrators");
-  list->callback([this] { selected_ = [] { return RunList(); }; });
+  list->add_flag("--options", list_.options,
+                 "Also print each backend's options (name, type, default, "
+                 "range, doc)");
+  list->add_flag("--json", list_.json, "Print JSON instead of text");
+  list->callback([this] { selected_ = [this] { return RunList(list_); }; });
 
   bench_.Register(app, &selected_);
   for (CLI::App* command : app.get_subcommands({})) command->allow_extras();
@@ -224,17 +240,87 @@ int RunPose(const PoseArgs& args) {
   return 0;
 }
 
-int RunList() {
+namespace {
+
+void PrintTable(const OptionTable& table) {
+  for (const OptionSpec& o : table)
+    std::printf("      %-28s %-6s %-14s %-22s %s\n", o.name.c_str(),
+                ToString(o.type), OptionValueText(o.default_value).c_str(),
+                o.RangeText().c_str(), o.doc.c_str());
+}
+
+std::string JsonText(const std::string& s) {
+  JsonWriter w;
+  w.Value(s);
+  return w.str();
+}
+
+// --nlp-opt / --dae-opt values -> name -> text; a key given twice is an error.
+GivenOptions ParseOptionFlags(const std::vector<std::string>& flags,
+                              const std::string& flag) {
+  GivenOptions given;
+  for (const std::string& f : flags) {
+    const auto [key, value] = SplitKeyValue(f, flag);
+    if (!given.emplace(key, value).second)
+      throw UsageError(flag,
+                       "option '" + key + "' given twice, got \"" + f + "\"");
+  }
+  return given;
+}
+
+}  // namespace
+
+int RunList(const ListArgs& args) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
+  if (args.json) {
+    // {"nlp": [{"name", "description"[, "options": [...]]}], "dae": [...]}
+    std::string out = "{\"nlp\":[";
+    bool first = true;
+    for (const std::string& name : NlpSolverRegistry::Names()) {
+      out +=
+          std::string(first ? "" : ",") + "{\"name\":" + JsonText(name) +
+          ",\"description\":" + JsonText(NlpSolverRegistry::Description(name));
+      if (args.options)
+        out += ",\"options\":" +
+               OptionTableJson(NlpSolverRegistry::Create(name)->option_table());
+      out += "}";
+      first = false;
+    }
+    out += "],\"dae\":[";
+    first = true;
+    for (const std::string& name : IntegratorRegistry::Names()) {
+      out +=
+          std::string(first ? "" : ",") + "{\"name\":" + JsonText(name) +
+          ",\"description\":" + JsonText(IntegratorRegistry::Description(name));
+      if (args.options)
+        out +=
+            ",\"options\":" +
+            OptionTableJson(IntegratorRegistry::Create(name)->option_table());
+      out += "}";
+      first = false;
+    }
+    std::cout << out << "]}\n";
+    return 0;
+  }
   std::printf("NLP backends (--nlp):\n");
-  for (const std::string& name : NlpSolverRegistry::Names())
+  for (const std::string& name : NlpSolverRegistry::Names()) {
     std::printf("  %-14s %s\n", name.c_str(),
                 NlpSolverRegistry::Description(name).c_str());
+    if (args.options)
+      PrintTable(NlpSolverRegistry::Create(name)->option_table());
+  }
   std::printf("DAE integrators (--dae):\n");
-  for (const std::string& name : IntegratorRegistry::Names())
+  for (const std::string& name : IntegratorRegistry::Names()) {
     std::printf("  %-14s %s\n", name.c_str(),
                 IntegratorRegistry::Description(name).c_str());
+    if (args.options)
+      PrintTable(IntegratorRegistry::Create(name)->option_table());
+  }
+  if (args.options)
+    std::printf(
+        "Options: --nlp-opt / --dae-opt key=value, suite keys nlp_options / "
+        "dae_options (columns: name, type, default, range, doc).\n");
   return 0;
 }
 
@@ -258,8 +344,10 @@ int RunSolve(const SolveArgs& args) {
   QuasiStaticOptions options;
   options.diagnostics = true;
   if (args.nlp_tol) options.residual_tolerance = *args.nlp_tol;
+  std::unique_ptr<NlpSolver> nlp = NlpSolverRegistry::Create(args.nlp);
+  nlp->SetBackendOptions(ParseOptionFlags(args.nlp_opts, "--nlp-opt"));
   QuasiStaticSolver solver(model, QuasiStaticParameters::FromScene(scene),
-                           NlpSolverRegistry::Create(args.nlp), options);
+                           std::move(nlp), options);
   QuasiStaticSolution sol;
   const QuasiStaticStatus status = solver.Solve(theta, &sol);
   const bool ok = status == QuasiStaticStatus::kOk;
@@ -368,12 +456,43 @@ int RunRun(const RunArgs& args) {
   options.coupling = CouplingFromString(args.coupling);
   options.dt = dt;
   options.t_end = t_end;
-  if (args.rk_method)
-    options.integrator.rk_method = RkMethodFromString(*args.rk_method);
-  if (args.sigma) options.integrator.baumgarte_sigma = *args.sigma;
   if (args.tol) options.integrator.rtol = *args.tol;
   if (args.atol) options.integrator.atol = *args.atol;
-  if (args.dae_index) options.integrator.dae_index = *args.dae_index;
+  options.nlp_options = ParseOptionFlags(args.nlp_opts, "--nlp-opt");
+  options.dae_options = ParseOptionFlags(args.dae_opts, "--dae-opt");
+  // Shorthand flags: the integrator option of the same meaning, when the
+  // integrator has it. For an integrator without it: a one-line note
+  // (nothing changes); given together with --dae-opt for it: an error.
+  {
+    const OptionTable table =
+        IntegratorRegistry::Create(args.dae)->option_table();
+    struct Shorthand {
+      const char* flag;
+      const char* option;
+      std::optional<std::string> value;
+    };
+    const Shorthand shorthands[] = {
+        {"--rk-method", "rk_method", args.rk_method},
+        {"--sigma", "baumgarte_sigma",
+         args.sigma ? std::optional<std::string>(bench::Num(*args.sigma))
+                    : std::nullopt},
+        {"--dae-index", "dae_index",
+         args.dae_index
+             ? std::optional<std::string>(std::to_string(*args.dae_index))
+             : std::nullopt}};
+    for (const Shorthand& sh : shorthands) {
+      if (!sh.value) continue;
+      if (FindOption(table, sh.option) == nullptr) {
+        std::fprintf(stderr, "note: %s does not apply to %s (ignored)\n",
+                     sh.flag, args.dae.c_str());
+        continue;
+      }
+      if (options.dae_options.count(sh.option))
+        throw UsageError(sh.flag,
+                         std::string("also given as --dae-opt ") + sh.option);
+      options.dae_options[sh.option] = *sh.value;
+    }
+  }
   if (args.substeps) options.integrator.step = dt / *args.substeps;
   if (args.nlp_tol) options.quasi_static.residual_tolerance = *args.nlp_tol;
   if (args.contact_check)

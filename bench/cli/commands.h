@@ -32,6 +32,7 @@ struct SolveArgs {
   std::string nlp = "newton";
   SceneOverrides overrides;
   std::optional<double> nlp_tol;
+  std::vector<std::string> nlp_opts;  // --nlp-opt key=value
   bool json = false;
 };
 
@@ -47,6 +48,12 @@ struct RunArgs {
   std::optional<int> dae_index, substeps, contact_check;
   std::string out = "out/run";
   std::string progress = "auto";
+  std::vector<std::string> nlp_opts, dae_opts;  // --nlp-opt / --dae-opt
+};
+
+struct ListArgs {
+  bool options = false;  // --options: the backends' option tables
+  bool json = false;
 };
 
 class Commands {
@@ -63,12 +70,13 @@ class Commands {
   PoseArgs pose_;
   SolveArgs solve_;
   RunArgs run_;
+  ListArgs list_;
   BenchCommands bench_;
   std::vector<DeprecatedSpelling> deprecated_;
 };
 
 int RunPose(const PoseArgs& args);
-int RunList();
+int RunList(const ListArgs& args);
 int RunSolve(const SolveArgs& args);
 int RunRun(const RunArgs& args);
 // `quasiroll --version`: version, commit, build type, compiled-in backends.

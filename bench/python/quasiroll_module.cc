@@ -151,11 +151,25 @@ std::pair<std::string, std::string> RunText(
     throw std::invalid_argument("dt: must be <= the end time " +
                                 bench::Num(options.t_end) + " s, got " +
                                 bench::Num(options.dt));
-  if (rk_method) options.integrator.rk_method = RkMethodFromString(*rk_method);
-  if (sigma) options.integrator.baumgarte_sigma = *sigma;
   if (tol) options.integrator.rtol = *tol;
   if (atol) options.integrator.atol = *atol;
-  if (dae_index) options.integrator.dae_index = *dae_index;
+  // rk_method, sigma, dae_index: shorthands of the integrator options of
+  // that meaning (docs/plugins.md), for integrators that have them.
+  {
+    const OptionTable table = IntegratorRegistry::Create(dae)->option_table();
+    auto shorthand = [&](const char* option,
+                         const std::optional<std::string>& value) {
+      if (value && FindOption(table, option) != nullptr)
+        options.dae_options[option] = *value;
+    };
+    shorthand("rk_method", rk_method);
+    shorthand(
+        "baumgarte_sigma",
+        sigma ? std::optional<std::string>(bench::Num(*sigma)) : std::nullopt);
+    shorthand("dae_index",
+              dae_index ? std::optional<std::string>(std::to_string(*dae_index))
+                        : std::nullopt);
+  }
   if (substeps) options.integrator.step = options.dt / *substeps;
   if (nlp_tol) options.quasi_static.residual_tolerance = *nlp_tol;
   if (contact_check) options.second_contact_check_every = *contact_check;

@@ -44,6 +44,18 @@ bool Residual(const Eigen::VectorXd& g, const Eigen::VectorXd& g_lb,
 }
 }  // namespace
 
+quasiroll::OptionTable LevenbergMarquardtSolver::option_table() const {
+  return {quasiroll::OptionSpec::Double(
+              "lambda_init_scale", 1e-6,
+              "initial damping lambda_0 = scale * max_j |J e_j|^2")
+              .GreaterThan(0)};
+}
+
+void LevenbergMarquardtSolver::ApplyBackendOptions(
+    const quasiroll::OptionValues& values) {
+  lambda_init_scale_ = values.GetDouble("lambda_init_scale");
+}
+
 void LevenbergMarquardtSolver::DoSolve(
     const quasiroll::NlpProblem& problem,
     const Eigen::Ref<const Eigen::VectorXd>& x0,
@@ -99,7 +111,7 @@ void LevenbergMarquardtSolver::DoSolve(
       if (!(smax > 0))
         return fail(NlpStatus::kNumericalFailure, "zero Jacobian", iter);
       w.scale = w.scale.cwiseMax(1e-10 * smax);
-      if (lambda < 0) lambda = 1e-6 * smax * smax;
+      if (lambda < 0) lambda = lambda_init_scale_ * smax * smax;
       need_jacobian = false;
     }
 

@@ -16,6 +16,8 @@
 // unique); kIterationLimit after max_iterations step attempts;
 // kNumericalFailure for a non-finite residual or Jacobian, or stagnation.
 // Never throws for numerical trouble. The objective is ignored.
+// Backend options (option_table(), the plugin's own): lambda_init_scale,
+// the initial damping lambda_0 = lambda_init_scale * max_j |J e_j|^2.
 #pragma once
 
 #include <memory>
@@ -32,8 +34,12 @@ class LevenbergMarquardtSolver final : public quasiroll::NlpSolver {
   std::string name() const override { return "levenberg-marquardt"; }
   // Solve() then rejects non-square problems with std::invalid_argument.
   bool RequiresSquareSystem() const override { return true; }
+  quasiroll::OptionTable option_table() const override;
 
  private:
+  void ApplyBackendOptions(const quasiroll::OptionValues& values) override;
+  double lambda_init_scale_ = 1e-6;
+
   void DoSolve(const quasiroll::NlpProblem& problem,
                const Eigen::Ref<const Eigen::VectorXd>& x0,
                const quasiroll::NlpOptions& options,

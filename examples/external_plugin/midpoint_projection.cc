@@ -12,16 +12,39 @@ using quasiroll::IntegratorOptions;
 using quasiroll::IntegratorResult;
 using quasiroll::IntegratorStatus;
 
+quasiroll::OptionTable MidpointProjectionIntegrator::option_table() const {
+  using quasiroll::OptionSpec;
+  return {
+      OptionSpec::Double("projection_tolerance", 1e-12,
+                         "projection stops when ||H||_inf <= this")
+          .GreaterThan(0),
+      OptionSpec::Int("max_projection_iterations", 10,
+                      "Newton corrections per projection")
+          .AtLeast(1),
+      OptionSpec::Int("substeps", 1,
+                      "midpoint steps per IntegratorOptions::step")
+          .AtLeast(1)
+          .AtMost(1000),
+  };
+}
+
+void MidpointProjectionIntegrator::ApplyBackendOptions(
+    const quasiroll::OptionValues& values) {
+  projection_tolerance_ = values.GetDouble("projection_tolerance");
+  max_projection_iterations_ =
+      static_cast<int>(values.GetInt("max_projection_iterations"));
+  substeps_ = static_cast<int>(values.GetInt("substeps"));
+}
+
 IntegratorStatus MidpointProjectionIntegrator::Project(
-    ConstrainedOde& ode, Eigen::VectorXd& y, const IntegratorOptions& options,
-    IntegratorResult* result) {
+    ConstrainedOde& ode, Eigen::VectorXd& y,
+    const IntegratorOptions& /*options*/, IntegratorResult* result) {
   if (ode.num_constraints() == 0) return IntegratorStatus::kSuccess;
   for (int it = 0;; ++it) {
     ode.Constraints(y, h_);
     const double violation = h_.lpNorm<Eigen::Infinity>();
-    if (violation <= options.projection_tolerance)
-      return IntegratorStatus::kSuccess;
-    if (!std::isfinite(violation) || it == options.max_projection_iterations) {
+    if (violation <= projection_tolerance_) return IntegratorStatus::kSuccess;
+    if (!std::isfinite(violation) || it == max_projection_iterations_) {
       std::ostringstream os;
       os << "projection: ||H||_inf = " << violation << " after " << it
          << " iterations";
@@ -111,7 +134,8 @@ void MidpointProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
     return finish(status, t0);
   }
 
-  const double h_nominal = options.step > 0 ? options.step : t1 - t0;
+  const double h_nominal =
+      (options.step > 0 ? options.step : t1 - t0) / substeps_;
   const double ratio = (t1 - t0) / h_nominal;
   if (!(ratio < static_cast<double>(options.max_steps))) {
     result->message =

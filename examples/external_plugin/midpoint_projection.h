@@ -6,8 +6,10 @@
 // (at most max_projection_iterations corrections, else kConstraintFailure),
 // using only the public ConstrainedOde interface (core/dae.h).
 //
-// Step: options.step (0 = one step over [t0, t1]); the last step ends exactly
-// on t1; more than max_steps steps -> kStepSizeTooSmall. Events: after each
+// Step: options.step / substeps (step 0 = one step over [t0, t1]); the last
+// step ends exactly on t1; more than max_steps steps -> kStepSizeTooSmall.
+// Backend options (option_table(), the plugin's own): projection_tolerance,
+// max_projection_iterations, substeps. Events: after each
 // step the signs of ode.Roots() are compared with the previous ones; on a
 // change the root is bracketed by bisection on the step fraction (re-stepping
 // from the last accepted state) and y is the (projected) state at the root.
@@ -24,8 +26,11 @@ namespace example {
 class MidpointProjectionIntegrator final : public quasiroll::Integrator {
  public:
   std::string name() const override { return "midpoint-projection"; }
+  quasiroll::OptionTable option_table() const override;
 
  private:
+  void ApplyBackendOptions(const quasiroll::OptionValues& values) override;
+
   void DoIntegrate(quasiroll::ConstrainedOde& ode, double t0, double t1,
                    Eigen::Ref<Eigen::VectorXd> y,
                    const quasiroll::IntegratorOptions& options,
@@ -45,6 +50,9 @@ class MidpointProjectionIntegrator final : public quasiroll::Integrator {
   // -1 if none (a component exactly 0 at the start does not fire).
   int Fired(const Eigen::VectorXd& g) const;
 
+  double projection_tolerance_ = 1e-12;
+  int max_projection_iterations_ = 10;
+  int substeps_ = 1;
   Eigen::VectorXd d_, y0_, y1_, y_mid_, y_hi_, k_, h_, lambda_;
   Eigen::VectorXd g_old_, g_new_;
   Eigen::MatrixXd jac_, jd_, a_;

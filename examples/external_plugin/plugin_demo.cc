@@ -17,10 +17,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "core/dae.h"
 #include "core/nlp.h"
@@ -211,9 +213,11 @@ void CheckIntegrator(const std::string& backend) {
                   "h = %.2f: %s, %d steps, error %.2e, |H| %.1e", options.step,
                   ToString(status), r.steps, errors[k],
                   std::abs(y.squaredNorm() - 1.0));
-    Check(status == IntegratorStatus::kSuccess && errors[k] < 1e-3 &&
-              std::abs(y.squaredNorm() - 1.0) <= options.projection_tolerance,
-          line);
+    Check(
+        status == IntegratorStatus::kSuccess && errors[k] < 1e-3 &&
+            std::abs(y.squaredNorm() - 1.0) <=
+                integrator->backend_options().GetDouble("projection_tolerance"),
+        line);
   }
   Check(errors[0] / errors[1] > 3.0 && errors[0] / errors[1] < 5.0,
         "second order: error ratio for h/2 = " +
@@ -317,6 +321,76 @@ void CheckSimulation(const std::string& data_dir, double t_end) {
 // ------------------------------------------------------ 4. harness -----
 
 #ifdef EXAMPLE_HAVE_HARNESS
+// Splits one runs.csv line (fields with , or " are quoted, "" escapes ").
+std::vector<std::string> CsvFields(const std::string& line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        out.back() += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        out.back() += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      out.emplace_back();
+    } else {
+      out.back() += c;
+    }
+  }
+  return out;
+}
+
+// The plugin_options group swept the plugins' own options: runs.csv records
+// them (nlp_options / dae_options, the options used) and they took effect
+// (substeps 2 takes twice the midpoint steps of substeps 1).
+void CheckOptionSweep(const std::filesystem::path& runs_csv) {
+  std::ifstream in(runs_csv);
+  std::string line;
+  std::getline(in, line);
+  const std::vector<std::string> header = CsvFields(line);
+  auto col = [&](const std::string& name) {
+    return static_cast<std::size_t>(
+        std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(in, line)) {
+    std::vector<std::string> f = CsvFields(line);
+    if (f.size() == header.size() && f[col("suite_group")] == "plugin_options")
+      rows.push_back(std::move(f));
+  }
+  Check(rows.size() == 4, "plugin_options group: " +
+                              std::to_string(rows.size()) + " rows (want 4)");
+  if (rows.size() != 4) return;
+  // Grid order: lambda_init_scale, then substeps (innermost).
+  for (std::size_t i = 0; i < 4; ++i) {
+    const std::string& dae = rows[i][col("dae_options")];
+    const std::string& nlp = rows[i][col("nlp_options")];
+    const std::string want_sub =
+        i % 2 == 0 ? "\"substeps\":1" : "\"substeps\":2";
+    const std::string want_lambda =
+        i < 2 ? "\"lambda_init_scale\":1e-06" : "\"lambda_init_scale\":0.001";
+    Check(dae.find(want_sub) != std::string::npos &&
+              nlp.find(want_lambda) != std::string::npos &&
+              rows[i][col("status")] == "success",
+          "row " + std::to_string(i) + ": nlp_options " + nlp +
+              ", dae_options " + dae + ", " + rows[i][col("status")]);
+  }
+  for (std::size_t i : {0, 2}) {
+    const long steps1 = std::stol(rows[i][col("steps")]);
+    const long steps2 = std::stol(rows[i + 1][col("steps")]);
+    Check(steps2 == 2 * steps1,
+          "substeps 2 doubles the midpoint steps: " + std::to_string(steps1) +
+              " -> " + std::to_string(steps2));
+  }
+}
+
 void CheckSuite(const std::string& data_dir, int jobs) {
   // The shipped smoke suite's shape, with the plugins added to its grid.
   const std::string text = std::string(R"(
@@ -334,6 +408,14 @@ groups:
                            R"(, rk-projection]
     coupling: [zoh, coupled]
     dt: [0.05]
+  plugin_options:           # a sweep over the plugins' own options
+    nlp: [)" + example::kNlpName +
+                           R"(]
+    dae: [)" + example::kDaeName +
+                           R"(]
+    dt: [0.05]
+    nlp_options: {lambda_init_scale: [1.0e-6, 1.0e-3]}
+    dae_options: {substeps: [1, 2]}
 )";
   const std::string suites = data_dir + "/bench/suites";
   const bench::Suite suite =
@@ -353,6 +435,21 @@ groups:
             std::to_string(summary.failures) + " failures, " +
             std::to_string(summary.wall_seconds) + " s (runs.csv in " +
             options.out_dir + ")");
+  CheckOptionSweep(out / "runs.csv");
+  // An option the plugin does not have is refused before anything runs,
+  // naming it and the known ones.
+  try {
+    bench::LoadSuiteFromString(text + "  bad:\n    dae: [" + example::kDaeName +
+                                   "]\n    dae_options: {no_such_option: 1}\n",
+                               "<bad>", suites);
+    Check(false, "unknown plugin option accepted");
+  } catch (const SceneError& e) {
+    const std::string msg = e.what();
+    Check(msg.find("no_such_option") != std::string::npos &&
+              msg.find("known: ") != std::string::npos &&
+              msg.find("substeps") != std::string::npos,
+          "unknown plugin option refused: " + msg);
+  }
   if (g_failures == 0) std::filesystem::remove_all(out);
 }
 #endif

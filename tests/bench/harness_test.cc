@@ -229,6 +229,22 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
           std::stod(r.at("err_pos_max")) >= std::stod(r.at("err_pos_rms")),
           true);
       EXPECT_GT(std::stoi(r.at("nlp_solves")), 0);
+      // The options the backends used: every option of their tables, as
+      // compact JSON (the rk-projection / newton defaults here).
+      if (r.at("dae") == "rk-projection") {
+        EXPECT_NE(r.at("dae_options").find("\"projection_tolerance\":1e-12"),
+                  std::string::npos)
+            << r.at("dae_options");
+        EXPECT_NE(r.at("dae_options").find("\"rk_method\":\"rk4\""),
+                  std::string::npos)
+            << r.at("dae_options");
+      }
+      if (r.at("nlp") == "newton") {
+        EXPECT_NE(r.at("nlp_options").find("\"armijo\":2e-04"),
+                  std::string::npos)
+            << r.at("nlp_options");
+      }
+      EXPECT_EQ(r.at("scene_fields"), "");
       EXPECT_EQ(r.at("ref_kind"),
                 r.at("scene") == "flat" ? "analytic:flat" : "numerical");
       EXPECT_EQ(r.at("ref_status"), "success");

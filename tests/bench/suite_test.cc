@@ -154,6 +154,109 @@ TEST(BenchSuite, RejectsBadSceneFieldAxes) {
                  {"groups.g.scene_fields", "non-empty mapping"});
 }
 
+TEST(BenchSuite, BackendOptionsAreAxes) {
+  const Suite s = Load(std::string(kBase) + R"(
+groups:
+  g:
+    scenes: [paper]
+    nlp: [ipopt, ipopt-mumps]
+    dae: [rk-projection]
+    rk_method: dp54
+    nlp_options: {mu_strategy: [monotone, adaptive], acceptable_iter: 5}
+    dae_options: {projection_tolerance: [1.0e-12, 1.0e-10]}
+)");
+  // nlp x mu_strategy x acceptable_iter x projection_tolerance.
+  ASSERT_EQ(s.runs.size(), 2u * 2u * 1u * 2u);
+  const RunSpec& r = s.runs[3];
+  EXPECT_EQ(r.nlp, "ipopt");
+  EXPECT_EQ(r.nlp_options.at("mu_strategy"), "adaptive");
+  EXPECT_EQ(r.nlp_options.at("acceptable_iter"), "5");
+  EXPECT_EQ(r.dae_options.at("projection_tolerance"), "1.0e-10");
+  // The shorthand group key reaches the integrator option of that name.
+  EXPECT_EQ(r.dae_options.at("rk_method"), "dp54");
+  // sigma / dae_index are not rk-projection options: not passed.
+  EXPECT_EQ(r.dae_options.count("baumgarte_sigma"), 0u);
+  EXPECT_EQ(r.dae_options.count("dae_index"), 0u);
+  const SimulationOptions o = r.Options();
+  EXPECT_EQ(o.nlp_options, r.nlp_options);
+  EXPECT_EQ(o.dae_options, r.dae_options);
+  // Explicit options are appended to the key (names in order).
+  EXPECT_NE(r.key.find(";nlp_options.acceptable_iter=5;nlp_options.mu_"
+                       "strategy=adaptive;dae_options.projection_tolerance="
+                       "1.0e-10"),
+            std::string::npos)
+      << r.key;
+  std::set<std::string> ids;
+  for (const RunSpec& run : s.runs) EXPECT_TRUE(ids.insert(run.run_id).second);
+}
+
+TEST(BenchSuite, ShorthandsReachOnlyIntegratorsThatHaveTheOption) {
+  const Suite s = Load(std::string(kBase) + R"(
+groups:
+  g:
+    scenes: [paper]
+    dae: [rk-baumgarte, rk-projection, ida]
+    sigma: 20
+    dae_index: 1
+)");
+  ASSERT_EQ(s.runs.size(), 3u);
+  EXPECT_EQ(s.runs[0].dae_options.at("baumgarte_sigma"), "20");
+  EXPECT_EQ(s.runs[0].dae_options.at("rk_method"), "rk4");
+  EXPECT_EQ(s.runs[0].dae_options.count("dae_index"), 0u);
+  EXPECT_EQ(s.runs[1].dae_options.count("baumgarte_sigma"), 0u);
+  if (IntegratorRegistry::Has("ida")) {
+    EXPECT_EQ(s.runs[2].dae_options.at("dae_index"), "1");
+    EXPECT_EQ(s.runs[2].dae_options.at("baumgarte_sigma"), "20");
+    EXPECT_EQ(s.runs[2].dae_options.count("rk_method"), 0u);
+  }
+  // An explicit integrator option with a shorthand sets its column too.
+  const Suite e = Load(std::string(kBase) + R"(
+groups:
+  g:
+    scenes: [paper]
+    dae: [rk-baumgarte]
+    dae_options: {baumgarte_sigma: [10, 40]}
+)");
+  ASSERT_EQ(e.runs.size(), 2u);
+  EXPECT_EQ(e.runs[1].sigma, 40.0);
+  EXPECT_EQ(e.runs[1].dae_options.at("baumgarte_sigma"), "40");
+}
+
+TEST(BenchSuite, RejectsUnknownAndIllTypedBackendOptions) {
+  const std::string base = std::string(kBase) + "groups:\n  g:\n";
+  ExpectRejected(base +
+                     "    nlp: [newton]\n    nlp_options: {mu_strategy: "
+                     "adaptive}\n",
+                 {"groups.g.nlp_options.mu_strategy", "NLP backend 'newton'",
+                  "known: ", "rank_pivot_ratio"});
+  // Known to one backend of the group but not to the other.
+  ExpectRejected(
+      base +
+          "    dae: [rk-projection, rk-baumgarte]\n"
+          "    dae_options: {baumgarte_sigma: 5}\n",
+      {"groups.g.dae_options.baumgarte_sigma", "integrator 'rk-projection'"});
+  ExpectRejected(
+      base +
+          "    dae: [rk-projection]\n"
+          "    dae_options: {rk_method: [rk4, euler]}\n",
+      {"groups.g.dae_options.rk_method[1]", "rk4|dp54|bs32", "\"euler\""});
+  ExpectRejected(base +
+                     "    dae: [rk-projection]\n"
+                     "    dae_options: {max_projection_iterations: 2.5}\n",
+                 {"groups.g.dae_options.max_projection_iterations",
+                  "expected an integer", "\"2.5\""});
+  ExpectRejected(base +
+                     "    dae: [rk-projection]\n"
+                     "    dae_options: {projection_tolerance: -1}\n",
+                 {"groups.g.dae_options.projection_tolerance", "(0, inf)"});
+  ExpectRejected(base +
+                     "    dae: [rk-projection]\n    rk_method: dp54\n"
+                     "    dae_options: {rk_method: bs32}\n",
+                 {"groups.g.dae_options.rk_method", "given twice"});
+  ExpectRejected(base + "    nlp_options: []\n",
+                 {"groups.g.nlp_options", "non-empty mapping"});
+}
+
 TEST(BenchSuite, ToleranceLadderSetsRtolAtolAndNlpTolerance) {
   const Suite s = Load(std::string(kBase) + R"(
 groups:

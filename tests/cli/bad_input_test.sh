@@ -47,5 +47,15 @@ check "bad coupling" "coupling" "$bin" run --scene bench/scenes/flat.yaml --coup
 check "bad rk" "rk" "$bin" run --scene bench/scenes/flat.yaml --rk rk9 --out /tmp/quasiroll-bad-run
 check "negative sigma" "sigma" "$bin" run --scene bench/scenes/flat.yaml --dae rk-baumgarte --sigma -1 --out /tmp/quasiroll-bad-run
 check "dt > t_end" "dt" "$bin" run --scene bench/scenes/flat.yaml --dt 5 --t-end 1 --out /tmp/quasiroll-bad-run
+# Backend options (--nlp-opt / --dae-opt): unknown or ill-typed -> exit 2
+# naming the option and the known ones.
+check "unknown dae option" "'no_such'" "$bin" run --scene bench/scenes/flat.yaml --dae-opt no_such=1 --out /tmp/quasiroll-bad-run
+check "unknown dae option lists known" "known: projection_tolerance" "$bin" run --scene bench/scenes/flat.yaml --dae-opt no_such=1 --out /tmp/quasiroll-bad-run
+check "dae option of another integrator" "'dae_index'" "$bin" run --scene bench/scenes/flat.yaml --dae rk-projection --dae-opt dae_index=1 --out /tmp/quasiroll-bad-run
+check "ill-typed dae option" "max_projection_iterations" "$bin" run --scene bench/scenes/flat.yaml --dae-opt max_projection_iterations=two --out /tmp/quasiroll-bad-run
+check "out-of-range nlp option" "armijo" "$bin" run --scene bench/scenes/flat.yaml --nlp-opt armijo=2 --out /tmp/quasiroll-bad-run
+check "solve unknown nlp option" "'nope'" "$bin" solve --scene bench/scenes/flat.yaml --nlp-opt nope=1
+check "option without =" "--dae-opt" "$bin" run --scene bench/scenes/flat.yaml --dae-opt rk_method --out /tmp/quasiroll-bad-run
+check "option given twice" "given twice" "$bin" run --scene bench/scenes/flat.yaml --dae-opt rk_method=rk4 --dae-opt rk_method=dp54 --out /tmp/quasiroll-bad-run
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -84,8 +84,11 @@ err=$("$bin" run --scene "$flat" --t-end 1 --dae rk-projection --rk dp54 --rtol 
 case "$err" in *"note: --rk is deprecated, use --rk-method"*) ok ;; *) bad "no --rk note: $err" ;; esac
 case "$err" in *"note: --rtol is deprecated, use --tol"*) ok ;; *) bad "no --rtol note: $err" ;; esac
 [ "$(json "$tmp/old/run.json" 'd["options"]["rk_method"], d["options"]["rtol"]')" = "('dp54', 1e-06)" ] && ok || bad "old spellings not applied"
-"$bin" run --scene "$flat" --t-end 1 --rk-method dp54 --tol 1e-6 --sigma 2 --dae-index 1 --nlp-tol 1e-11 --eps 1e-7 --substeps 2 --out "$tmp/new" > /dev/null 2>&1
-[ "$(json "$tmp/new/run.json" 'd["options"]["rk_method"], d["options"]["rtol"], d["options"]["sigma"], d["options"]["dae_index"], d["options"]["nlp_residual_tolerance"], d["scene"]["epsilon"], d["options"]["step"]')" = "('dp54', 1e-06, 2, 1, 1e-11, 1e-07, 0.025)" ] && ok || bad "new names not applied: $(json "$tmp/new/run.json" 'd["options"]')"
+"$bin" run --scene "$flat" --t-end 1 --rk-method dp54 --tol 1e-6 --nlp-tol 1e-11 --eps 1e-7 --substeps 2 --out "$tmp/new" > /dev/null 2>&1
+[ "$(json "$tmp/new/run.json" 'd["options"]["rk_method"], d["options"]["rtol"], d["options"]["nlp_residual_tolerance"], d["scene"]["epsilon"], d["options"]["step"]')" = "('dp54', 1e-06, 1e-11, 1e-07, 0.025)" ] && ok || bad "new names not applied: $(json "$tmp/new/run.json" 'd["options"]')"
+# --sigma / --dae-index are integrator options of ida (shorthands of --dae-opt).
+"$bin" run --scene "$flat" --t-end 1 --dae ida --sigma 2 --dae-index 1 --out "$tmp/new_ida" > /dev/null 2>&1
+[ "$(json "$tmp/new_ida/run.json" 'd["options"]["sigma"], d["options"]["dae_index"], d["options"]["dae_options"]["used"]["baumgarte_sigma"]')" = "(2, 1, 2)" ] && ok || bad "--sigma/--dae-index not applied: $(json "$tmp/new_ida/run.json" 'd["options"]')"
 expect_error "both spellings" 2 "excludes" "$bin" run --scene "$flat" --rk dp54 --rk-method rk4
 # Every concept flag of `run` is a suite group key with '_' -> '-'.
 for key in rk_method tol sigma dae_index nlp_tol eps mu dt t_end substeps contact_check; do

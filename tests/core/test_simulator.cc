@@ -147,7 +147,7 @@ TEST(Simulation, O8BaumgarteDecay) {
   const Scene scene = LoadWithEnd("flat", 1.0);
   SimulationOptions options;
   options.dae = "rk-baumgarte";
-  options.integrator.baumgarte_sigma = 5.0;
+  options.dae_options = {{"baumgarte_sigma", "5"}};
   Simulator sim(scene, options);
   Configuration theta0 = sim.initial_configuration();
   theta0(ConfigIndex::Xg(1)) += 1e-3;  // moves chain 2's platform by 1 mm
@@ -179,7 +179,7 @@ TEST(Simulation, PaperSceneDrift) {
     SimulationOptions options;
     options.dae = dae;
     options.coupling = coupling;
-    if (!stabilised) options.integrator.projection_tolerance = 1.0;
+    if (!stabilised) options.dae_options = {{"projection_tolerance", "1"}};
     return Simulator(s, options).Run();
   };
   for (const std::string dae : {"rk-projection", "ida"}) {

@@ -94,7 +94,8 @@ def test_run_equals_cli_run(tmp_path):
                                 t_end=2, sigma=2.0, rk_method="rk4")
     subprocess.run([BIN, "run", "--scene", os.path.join(SCENES, "paper.yaml"),
                     "--dae", "rk-baumgarte", "--t-end", "2", "--sigma", "2",
-                    "--out", str(tmp_path)], check=True, capture_output=True)
+                    "--rk-method", "rk4", "--out", str(tmp_path)],
+                   check=True, capture_output=True)
     with open(tmp_path / "trajectory.csv") as f:
         rows = list(csv.reader(f))
     assert list(traj.columns) == rows[0]

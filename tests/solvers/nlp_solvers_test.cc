@@ -6,12 +6,14 @@
 #include <link.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <map>
 #include <memory>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -314,6 +316,49 @@ TEST_P(BackendTest, IterationLimitIsReported) {
   const NlpStatus status = solver_->Solve(*p, p->starting_point(), options, &r);
   EXPECT_NE(status, NlpStatus::kConverged) << r.backend_status;
   EXPECT_EQ(status, NlpStatus::kIterationLimit) << r.backend_status;
+}
+
+// Every backend's option table is well formed (defaults inside their own
+// ranges, unique [a-z0-9_] names, a doc line); an unknown or out-of-range
+// option is std::invalid_argument naming it and the known ones, and leaves
+// the settings as they were; setting every option to its default changes no
+// answer (the table's defaults are the backend's behaviour).
+TEST_P(BackendTest, OptionTableIsWellFormedAndEnforced) {
+  const OptionTable table = solver_->option_table();
+  std::set<std::string> names;
+  GivenOptions defaults;
+  for (const OptionSpec& spec : table) {
+    std::string why;
+    EXPECT_TRUE(spec.Accepts(spec.default_value, &why))
+        << spec.name << ": " << why;
+    EXPECT_TRUE(names.insert(spec.name).second) << spec.name;
+    EXPECT_FALSE(spec.doc.empty()) << spec.name;
+    for (char c : spec.name)
+      EXPECT_TRUE(std::islower(static_cast<unsigned char>(c)) ||
+                  std::isdigit(static_cast<unsigned char>(c)) || c == '_')
+          << spec.name;
+    defaults[spec.name] = OptionValueText(spec.default_value);
+  }
+  EXPECT_EQ(solver_->backend_options().values().size(), table.size());
+  try {
+    solver_->SetBackendOptions({{"no_such_option", "1"}});
+    ADD_FAILURE() << "unknown option accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("'no_such_option'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("known: "), std::string::npos) << msg;
+    if (!table.empty()) {
+      EXPECT_NE(msg.find(table.front().name), std::string::npos) << msg;
+    }
+  }
+  auto p = MakeReferenceProblem("contact_like_18");
+  NlpResult a, b;
+  solver_->Solve(*p, p->starting_point(), NlpOptions(), &a);
+  solver_->SetBackendOptions(defaults);
+  solver_->Solve(*p, p->starting_point(), NlpOptions(), &b);
+  EXPECT_EQ(a.status, b.status);
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ((a.x - b.x).lpNorm<Eigen::Infinity>(), 0.0);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllBackends, BackendTest,
