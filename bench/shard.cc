@@ -81,7 +81,8 @@ double SecondsPerHold(const std::string& nlp, const std::string& dae,
 
 double EstimatedRunCost(const RunSpec& run) {
   const double holds = run.t_end / run.dt * run.substeps;
-  const bool adaptive = run.dae == "ida" || run.rk_method != "rk4";
+  const bool adaptive = run.dae == "ida" || run.dae == "cvode-projection" ||
+                        run.rk_method != "rk4";
   const double f_tol = adaptive ? std::pow(1e-8 / run.tol, kTolExponent) : 1.0;
   return run.repeats *
          (kOverheadSeconds +

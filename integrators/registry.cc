@@ -5,6 +5,7 @@
 #include "integrators/rk_baumgarte.h"
 #include "integrators/rk_projection.h"
 #ifdef QUASIROLL_HAVE_SUNDIALS
+#include "integrators/cvode_projection.h"
 #include "integrators/ida_integrator.h"
 #endif
 
@@ -28,6 +29,10 @@ void RegisterBuiltinIntegrators() {
         "SUNDIALS IDA on the index-2 GGL / index-1 Baumgarte DAE (model.md "
         "§8.5)",
         [] { return std::make_unique<IdaIntegrator>(); });
+    IntegratorRegistry::Register(
+        "cvode-projection",
+        "SUNDIALS CVODE BDF with its projection onto H = 0 (CVodeSetProjFn)",
+        [] { return std::make_unique<CvodeProjectionIntegrator>(); });
 #endif
   });
 }

@@ -379,6 +379,7 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
       return false;
     }
     ++result->rejected_steps;
+    result->message.clear();  // handled: the step is retried
     h = h_new;
     last_rejected = true;
     return true;

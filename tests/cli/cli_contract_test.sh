@@ -142,7 +142,7 @@ rc=$?
 grep -q -- "--resume" "$tmp/b.err" && ok || bad "interrupt message lacks --resume: $(tail -3 "$tmp/b.err")"
 resume=$(grep -o 'quasiroll bench .*--resume.*' "$tmp/b.err" | head -n 1)
 "$bin" ${resume#quasiroll } --progress none > /dev/null 2> "$tmp/b2.err"
-grep -Eq '30 runs \(30 selected, [0-9]+ executed, [1-9][0-9]* resumed\)' "$tmp/b2.err" && ok || bad "resume after interrupt: $(cat "$tmp/b2.err")"
+grep -Eq '40 runs \(40 selected, [0-9]+ executed, [1-9][0-9]* resumed\)' "$tmp/b2.err" && ok || bad "resume after interrupt: $(cat "$tmp/b2.err")"
 
 # --- bench: a filter that matches nothing is bad input -------------------------
 expect_error "empty filter" 2 "--filter: matches none of the 2 run ids" "$bin" bench --suite "$src/tests/data/suites/cli_contract.yaml" --out "$tmp/f" --filter nomatch

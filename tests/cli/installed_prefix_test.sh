@@ -77,7 +77,7 @@ check() { if eval "$2"; then echo "ok: $1"; else echo "FAIL: $1"; fail=1; fi; }
 check "pose --json" "grep -q '\"H_norm\"' '$work/pose.json'"
 check "solve --json" "grep -q '\"status\":\"OK\"' '$work/solve.json'"
 check "run" "[ \$(wc -l < '$work/run/trajectory.csv') -eq 22 ] && grep -q '\"status\":\"success\"' '$work/run/run.json'"
-check "bench" "grep -q '30 runs (6 selected' '$work/bench.log' && [ -f '$work/bench/runs.csv' ]"
+check "bench" "grep -q '40 runs (8 selected' '$work/bench.log' && [ -f '$work/bench/runs.csv' ]"
 check "report" "[ -f '$work/bench/report/index.html' ] && [ \"\$(tail -n 1 '$work/report.log')\" = '$work/bench/report/index.html' ]"
 check "report --out passed through" "[ -f '$work/custom_report/index.html' ] && [ ! -e '$work/custom_report/report' ]"
 # A newton-only smoke suite leaves some figures without data: a placeholder

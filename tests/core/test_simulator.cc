@@ -162,7 +162,8 @@ TEST(Simulation, O8BaumgarteDecay) {
   }
 }
 
-// Drift on the paper scene: projection and IDA hold ||H|| <= 1e-10 over 20 s;
+// Drift on the paper scene: projection, IDA and CVODE + projection hold
+// ||H|| <= 1e-10 over 20 s;
 // Baumgarte (sigma = 5) keeps it bounded. Without any stabilisation (plain
 // RK4: rk-projection whose tolerance, 1, is never exceeded, so it never
 // projects) the zoh drift grows, because the held twist satisfies E1 only at
@@ -182,7 +183,7 @@ TEST(Simulation, PaperSceneDrift) {
     if (!stabilised) options.dae_options = {{"projection_tolerance", "1"}};
     return Simulator(s, options).Run();
   };
-  for (const std::string dae : {"rk-projection", "ida"}) {
+  for (const std::string dae : {"rk-projection", "ida", "cvode-projection"}) {
     const SimulationResult r = run(dae, Coupling::kZoh, 20.0);
     ASSERT_TRUE(r.success()) << dae << ": " << r.stop_reason;
     EXPECT_LE(MaxDrift(r), 1e-10) << dae;
@@ -277,6 +278,16 @@ TEST(Simulation, AllPairsAgreeOnPaperScene) {
       SimulationOptions options;
       options.nlp = nlp;
       options.dae = dae;
+      if (dae == "cvode-projection") {
+        // CVODE's BDF restarts at order 1 in every hold interval; at the
+        // default rtol 1e-8 / atol 1e-10 its global error over the 20 s is
+        // 8.8e-7 m against a converged reference (measured; IDA 5.9e-8,
+        // rk-projection RK4 1.6e-8) and 2.5e-6 m against this test's
+        // reference. The pair solves the same problem: at rtol 1e-10 it
+        // agrees like the others.
+        options.integrator.rtol = 1e-10;
+        options.integrator.atol = 1e-12;
+      }
       const SimulationResult r = Simulator(scene, options).Run();
       ASSERT_TRUE(r.success()) << nlp << "/" << dae << ": " << r.stop_reason;
       ASSERT_EQ(r.samples.size(), ref.samples.size());
@@ -331,7 +342,7 @@ TEST(Simulation, TrajectoryIsBitIdenticalAcrossRuns) {
       "[-0.02, 0.02],"
       " sigma: [0.2, 0.4], x: [-0.5, 2], y: [-1, 1]}}\n");
   for (const Scene& scene : {LoadWithEnd("paper", 3.0), seeded}) {
-    for (const std::string dae : {"rk-projection", "ida"}) {
+    for (const std::string dae : {"rk-projection", "ida", "cvode-projection"}) {
       SimulationOptions options;
       options.dae = dae;
       Simulator first(scene, options), second(scene, options);

@@ -252,7 +252,17 @@ INSTANTIATE_TEST_SUITE_P(
         PendulumCase{
             "ida", {{"dae_index", "2"}}, 0.0, 1e-8, 3e-6, 1e-10, "ida_index2"},
         PendulumCase{
-            "ida", {{"dae_index", "1"}}, 0.0, 1e-8, 3e-6, 1e-7, "ida_index1"}),
+            "ida", {{"dae_index", "1"}}, 0.0, 1e-8, 3e-6, 1e-7, "ida_index1"},
+        // CVODE BDF + projection, rtol 1e-8: error measured 7.0e-7
+        // (variable-order BDF, global error ~ tens of rtol like IDA); the
+        // projection holds H to projection_tolerance = 1e-12.
+        PendulumCase{"cvode-projection",
+                     {},
+                     0.0,
+                     1e-8,
+                     3e-6,
+                     1e-12,
+                     "cvode_projection"}),
     [](const ::testing::TestParamInfo<PendulumCase>& info) {
       return info.param.label;
     });
@@ -411,6 +421,44 @@ TEST(RkBaumgarteTest, ConstraintDecaysAtTheBaumgarteRate) {
   // y2 has weight 0: the correction never moves it beyond F's own change.
 }
 
+// The BDF backends have no fixed order; what they promise is an error that
+// falls with the tolerance. Pendulum, 2 s as 40 hold intervals: 1000x
+// tighter rtol must give >= 10x smaller error (as for the RK pairs above),
+// and every end state lies on H = 0 to the projection tolerance.
+class BdfBackendTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(BdfBackendTest, ErrorFallsWithTheTolerance) {
+  RegisterBuiltinIntegrators();
+  if (!IntegratorRegistry::Has(GetParam()))
+    GTEST_SKIP() << GetParam() << " not built";
+  PendulumOde ode;
+  const double theta0 = 0.5, hold = 0.05;
+  const Eigen::Vector4d ref = ode.Reference(theta0, 40 * hold);
+  double errors[2];
+  const double rtols[2] = {1e-6, 1e-9};
+  for (int k = 0; k < 2; ++k) {
+    auto integrator = IntegratorRegistry::Create(GetParam());
+    Eigen::VectorXd y = ode.AtAngle(theta0);
+    IntegratorOptions o;
+    o.rtol = rtols[k];
+    o.atol = rtols[k] * 1e-2;
+    IntegratorResult r;
+    for (int i = 0; i < 40; ++i)
+      ASSERT_EQ(integrator->Integrate(ode, i * hold, (i + 1) * hold, y, o, &r),
+                IntegratorStatus::kSuccess)
+          << r.message;
+    errors[k] = (y - ref).lpNorm<Eigen::Infinity>();
+    EXPECT_LE(ConstraintNorm(ode, y), 1e-10);
+    std::printf("[ measured ] %s rtol %.0e: error %.3e, %d steps\n",
+                GetParam().c_str(), rtols[k], errors[k], r.steps);
+  }
+  EXPECT_GE(errors[0] / errors[1], 10.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Bdf, BdfBackendTest,
+                         ::testing::Values("ida", "cvode-projection"),
+                         ParamName);
+
 // ---------------------------------------------------------------- events
 
 class AllBackendsTest : public ::testing::TestWithParam<std::string> {};
@@ -423,9 +471,10 @@ TEST_P(AllBackendsTest, FallingBodyStopsAtGroundContact) {
   auto integrator = IntegratorRegistry::Create(GetParam());
   FallingBodyOde ode;
   const double t_star = std::sqrt(2.0 * 1.0 / ode.gravity());
-  const double tolerance = GetParam() == "ida" ? 1e-6 : 1e-12;
+  const bool bdf = GetParam() == "ida" || GetParam() == "cvode-projection";
+  const double tolerance = bdf ? 1e-6 : 1e-12;
   for (const char* method : {"rk4", "dp54"}) {
-    if (GetParam() != "ida")  // rk_method does not apply to IDA
+    if (!bdf)  // rk_method is an option of the RK backends only
       integrator->SetBackendOptions({{"rk_method", method}});
     Eigen::VectorXd y = Eigen::Vector2d(1.0, 0.0);
     IntegratorOptions o;
