@@ -85,7 +85,19 @@ const std::vector<std::string>& RunsCsvColumns() {
                                                    "cpu_model",
                                                    "nlp_options",
                                                    "dae_options",
-                                                   "scene_fields"};
+                                                   "scene_fields",
+                                                   "kkt_residual",
+                                                   "cause",
+                                                   "cause_detail",
+                                                   "t_reached_frac",
+                                                   "wall_s_median",
+                                                   "wall_s_min",
+                                                   "wall_s_max",
+                                                   "wall_s_all",
+                                                   "wall_per_sim_s",
+                                                   "qs_inertia_ratio",
+                                                   "ref_mu_min",
+                                                   "ref_err_est"};
   return columns;
 }
 
@@ -193,6 +205,8 @@ void SetReference(const Reference* ref, const std::string& error,
     b->Set("ref_kind", ref->kind);
     b->Set("ref_status", ref->status);
     b->Set("ref_hash", ref->hash);
+    if (!std::isnan(ref->mu_min_max)) b->Set("ref_mu_min", ref->mu_min_max);
+    if (!std::isnan(ref->err_est)) b->Set("ref_err_est", ref->err_est);
   } else {
     b->Set("ref_kind", "none");
     b->Set("ref_status", error.empty() ? "none" : "error");
@@ -208,18 +222,55 @@ void SetNanMetrics(RowBuilder* b) {
   b->SetInt("common_samples", 0);
 }
 
+FailureEvidence Evidence(const RunSpec& run, const std::string& status,
+                         double t_reached, const Reference* reference) {
+  FailureEvidence e;
+  e.status = status;
+  e.t_reached = t_reached;
+  e.dae = run.dae;
+  e.rk_method = run.rk_method;
+  e.dt = run.dt;
+  e.step = run.dt / run.substeps;
+  e.sigma = run.sigma;
+  e.contact_check = run.contact_check;
+  e.drift_bound = run.bounds.drift;
+  e.gap_bound = run.bounds.gap;
+  if (reference && !reference->samples.empty()) {
+    e.has_reference = true;
+    e.ref_status = reference->status;
+    e.ref_t_reached = reference->samples.back().t;
+    if (reference->samples.size() >= 2)
+      e.ref_dt = reference->samples[1].t - reference->samples[0].t;
+  }
+  return e;
+}
+
 }  // namespace
 
 std::vector<std::string> MakeRow(const RunSpec& run,
                                  const std::string& terrain_id,
                                  const SimulationResult& result,
-                                 double min_wall_seconds,
-                                 const Reference* reference,
+                                 const std::vector<double>& wall_seconds,
+                                 const Scene& scene, const Reference* reference,
                                  const std::string& reference_error) {
   RowBuilder b;
   SetParameters(run, terrain_id, &b);
-  b.Set("status", result.status);
-  b.Set("stop_reason", OneLine(result.stop_reason));
+  // The harness's verdict: a run that reached t_end is a success only with
+  // its constraint drift and geometric gap within the suite's bounds.
+  const DriftMetrics d = ComputeDrift(result.samples);
+  std::string status = result.status;
+  std::string stop_reason = result.stop_reason;
+  if (result.success() && d.drift_max > run.bounds.drift) {
+    status = "drift_exceeded";
+    stop_reason = "drift_max " + Num(d.drift_max) + " > bounds.drift " +
+                  Num(run.bounds.drift);
+  } else if (result.success() && d.gap_max > run.bounds.gap) {
+    status = "gap_exceeded";
+    stop_reason = "gap_max " + Num(d.gap_max) + " m > bounds.gap " +
+                  Num(run.bounds.gap) + " m";
+  }
+  b.Set("status", status);
+  b.Set("stop_reason", OneLine(stop_reason));
   b.Set("t_reached", result.t_reached);
   b.Set("mu_min", result.status == "INFEASIBLE_FRICTION"
                       ? Num(result.mu_min_at_stop)
@@ -227,7 +278,8 @@ std::vector<std::string> MakeRow(const RunSpec& run,
   b.Set("critical_wheel", result.critical_contact > 0
                               ? std::to_string(result.critical_contact)
                               : "");
-  b.Set("wall_s", min_wall_seconds);
+  const TimingStats timing = ComputeTimingStats(wall_seconds);
+  b.Set("wall_s", timing.min);
   b.SetInt("nlp_solves", result.nlp_solves);
   b.SetInt("nlp_iters", result.nlp_iterations);
   b.SetInt("rhs_evals", result.rhs_evaluations);
@@ -254,10 +306,27 @@ std::vector<std::string> MakeRow(const RunSpec& run,
     b.Set("err_force_rms", a.force_rms);
     b.Set("err_slip", a.slip_rms);
   }
-  const DriftMetrics d = ComputeDrift(result.samples);
   b.Set("drift_max", d.drift_max);
   b.Set("drift_final", d.drift_final);
   b.Set("gap_max", d.gap_max);
+  b.Set("kkt_residual", result.kkt_residual);
+  FailureEvidence e = Evidence(run, status, result.t_reached, reference);
+  e.drift_max = d.drift_max;
+  e.gap_max = d.gap_max;
+  const FailureCause cause = ClassifyFailure(e);
+  b.Set("cause", cause.cause);
+  b.Set("cause_detail", cause.detail);
+  b.Set("t_reached_frac", result.t_reached / run.t_end);
+  b.Set("wall_s_median", timing.median);
+  b.Set("wall_s_min", timing.min);
+  b.Set("wall_s_max", timing.max);
+  std::string all;
+  for (double w : wall_seconds) all += (all.empty() ? "" : ";") + Num(w);
+  b.Set("wall_s_all", all);
+  b.Set("wall_per_sim_s", result.t_reached > 0
+                              ? timing.median / result.t_reached
+                              : std::numeric_limits<double>::quiet_NaN());
+  b.Set("qs_inertia_ratio", QuasiStaticInertiaRatio(result.samples, scene));
   return b.values();
 }
 
@@ -277,6 +346,15 @@ std::vector<std::string> ErrorRow(const RunSpec& run,
     b.SetInt(c, 0);
   SetReference(reference, reference_error, &b);
   SetNanMetrics(&b);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const char* c :
+       {"kkt_residual", "t_reached_frac", "wall_s_median", "wall_s_min",
+        "wall_s_max", "wall_per_sim_s", "qs_inertia_ratio"})
+    b.Set(c, nan);
+  const FailureCause cause =
+      ClassifyFailure(Evidence(run, "error", nan, reference));
+  b.Set("cause", cause.cause);
+  b.Set("cause_detail", cause.detail);
   return b.values();
 }
 
@@ -462,6 +540,31 @@ class Scheduler {
   std::condition_variable cv_;
 };
 
+// The reference configurations in words (meta.json `reference_method`); the
+// per-reference method, ref_mu_min and ref_err_est are in
+// references/<hash>.json (not here: a merged directory's meta.json must not
+// depend on which process computed which reference).
+void WriteReferenceMethod(const Suite& suite, JsonWriter* w) {
+  const ReferenceSettings& r = suite.reference;
+  const int per_output = r.dt_divisor * r.substeps;
+  w->Key("reference_method").BeginObject();
+  w->Key("primary").Value("coupled rk-projection rk4, step = scene dt / " +
+                          std::to_string(per_output) +
+                          ", output every scene dt / " +
+                          std::to_string(r.dt_divisor) + ", " + r.nlp +
+                          " at residual " + Num(r.residual_tolerance));
+  w->Key("fallback")
+      .Value(
+          "coupled rk-projection dp54 rtol 1e-10 atol 1e-12 (kind "
+          "numerical:dp54), when the primary breaks down numerically");
+  w->Key("check").Value(
+      "coupled rk-projection dp54 rtol 1e-10 atol 1e-12 for an rk4 "
+      "reference, coupled ida (index 2) rtol 1e-10 atol 1e-12 for a dp54 "
+      "one; ref_err_est = max |p_ref - p_check| over common times");
+  w->Key("analytic").Value(r.analytic);
+  w->EndObject();
+}
+
 void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
                const std::string& start, const std::string& end,
                const HarnessSummary* summary) {
@@ -481,6 +584,7 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
   w.EndObject();
   w.Key("suite_hash").Value(Hex64(suite.text_hash));
   w.Key("reference").Value(suite.reference.Canonical());
+  WriteReferenceMethod(suite, &w);
   w.Key("commit").Value(GitCommit());
   w.Key("library_versions");
   WriteLibraryVersions(&w);
@@ -707,10 +811,10 @@ RunOutcome ExecuteRun(const Suite& suite, const RunSpec& run,
     const Scene scene = RunScene(suite, run);
     Simulator sim(scene, run.Options());
     result = sim.Run();
-    double wall = result.wall_seconds;
+    std::vector<double> walls = {result.wall_seconds};
     for (int rep = 1; rep < run.repeats; ++rep)
-      wall = std::min(wall, sim.Run().wall_seconds);
-    row = MakeRow(run, terrain_id, result, wall, ref, reference.error);
+      walls.push_back(sim.Run().wall_seconds);
+    row = MakeRow(run, terrain_id, result, walls, scene, ref, reference.error);
   } catch (const std::exception& e) {
     result = SimulationResult{};
     result.status = "error";

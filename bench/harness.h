@@ -52,14 +52,18 @@ const std::vector<std::string>& RunsCsvColumns();
 // A CSV field: quoted (with doubled quotes) if it contains , " CR or LF.
 std::string CsvField(const std::string& value);
 
-// One runs.csv row (values in RunsCsvColumns() order) for a run whose
-// simulation produced `result` (wall_s = the minimum over repeats), compared
-// with `reference` (null if unavailable; `reference_error` then says why).
+// One runs.csv row (values in RunsCsvColumns() order) for a run of `scene`
+// whose simulation produced `result` (the first repeat; `wall_seconds` has
+// every repeat's wall time, in order: wall_s = their minimum), compared with
+// `reference` (null if unavailable; `reference_error` then says why). The
+// row's status is the harness's verdict: result.status, except that a run
+// that reached t_end beyond run.bounds is drift_exceeded / gap_exceeded;
+// cause / cause_detail from ClassifyFailure (bench/metrics.h).
 std::vector<std::string> MakeRow(const RunSpec& run,
                                  const std::string& terrain_id,
                                  const SimulationResult& result,
-                                 double min_wall_seconds,
-                                 const Reference* reference,
+                                 const std::vector<double>& wall_seconds,
+                                 const Scene& scene, const Reference* reference,
                                  const std::string& reference_error);
 // Row of a run that threw (status "error", the message as stop_reason).
 std::vector<std::string> ErrorRow(const RunSpec& run,

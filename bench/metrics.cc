@@ -134,4 +134,129 @@ DriftMetrics ComputeDrift(const std::vector<TrajectorySample>& run) {
   return d;
 }
 
+TimingStats ComputeTimingStats(std::vector<double> wall_seconds) {
+  TimingStats t;
+  if (wall_seconds.empty()) return t;
+  std::sort(wall_seconds.begin(), wall_seconds.end());
+  const std::size_t n = wall_seconds.size();
+  t.min = wall_seconds.front();
+  t.max = wall_seconds.back();
+  t.median = n % 2 ? wall_seconds[n / 2]
+                   : 0.5 * (wall_seconds[n / 2 - 1] + wall_seconds[n / 2]);
+  return t;
+}
+
+Vec3 EstimatedInertia(const Scene& scene) {
+  const RobotGeometry& g = scene.geometry;
+  const double l = g.wheelbase(), w = g.track, h = g.z_h + g.rho();
+  const double k = scene.mass / 12.0;
+  return Vec3(k * (w * w + h * h), k * (l * l + h * h), k * (l * l + w * w));
+}
+
+double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
+                               const Scene& scene) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto usable = [](const TrajectorySample& s) {
+    if (!s.velocity.allFinite() || !s.angular_velocity.allFinite())
+      return false;
+    for (const ContactSample& c : s.contacts)
+      if (!std::isfinite(c.normal_force) || !std::isfinite(c.traction_lon) ||
+          !std::isfinite(c.traction_lat))
+        return false;
+    return true;
+  };
+  std::vector<std::size_t> ok;
+  for (std::size_t k = 0; k < run.size(); ++k)
+    if (usable(run[k])) ok.push_back(k);
+  if (ok.size() < 2) return nan;
+  const Vec3 inertia = EstimatedInertia(scene);
+  const double l0 = scene.geometry.wheelbase();
+  double worst = 0.0;
+  for (std::size_t j = 0; j < ok.size(); ++j) {
+    const TrajectorySample& s = run[ok[j]];
+    // Central difference over the usable neighbours (one-sided at the ends).
+    const TrajectorySample& lo = run[ok[j == 0 ? 0 : j - 1]];
+    const TrajectorySample& hi = run[ok[j + 1 == ok.size() ? j : j + 1]];
+    const double span = hi.t - lo.t;
+    if (!(span > 0)) continue;
+    const Vec3 a = (hi.velocity - lo.velocity) / span;
+    const Vec3 alpha = (hi.angular_velocity - lo.angular_velocity) / span;
+    const Mat3 r = RotationFromRpy(s.rpy(0), s.rpy(1), s.rpy(2));
+    const Mat3 iw = r * inertia.asDiagonal() * r.transpose();
+    const Vec3 w = s.angular_velocity;
+    const Vec3 torque = iw * alpha + w.cross(iw * w);
+    double load = 0.0;
+    for (const ContactSample& c : s.contacts)
+      load += Vec3(c.normal_force, c.traction_lon, c.traction_lat).norm();
+    if (!(load > 0)) continue;
+    worst =
+        std::max(worst, (scene.mass * a.norm() + torque.norm() / l0) / load);
+  }
+  return worst;
+}
+
+namespace {
+bool IsPhysicalStatus(const std::string& s) {
+  return s == "INFEASIBLE_FRICTION" || s == "LIFT_OFF" ||
+         s == "DEGENERATE_CONTACT";
+}
+std::string PhysicalDetail(const std::string& s) {
+  if (s == "INFEASIBLE_FRICTION") return "friction_limit";
+  if (s == "LIFT_OFF") return "lift_off";
+  return "degenerate_contact";
+}
+// Why a run that left the reference's path did so, from the evidence.
+std::string DivergenceDetail(const FailureEvidence& e) {
+  if (e.dae == "rk-baumgarte" && e.rk_method == "rk4" &&
+      e.sigma * e.step > kRk4RealStabilityBound)
+    return "baumgarte_instability";
+  if (e.drift_max > e.drift_bound) return "drift_blowup";
+  if (e.gap_max > e.gap_bound) return "gap_blowup";
+  return "step_too_large";
+}
+}  // namespace
+
+FailureCause ClassifyFailure(const FailureEvidence& e) {
+  const std::string& st = e.status;
+  if (st == "success") return {"", ""};
+  if (st == "error") return {"numerical", "error"};
+  if (st == "drift_exceeded") return {"numerical", "drift_blowup"};
+  if (st == "gap_exceeded") return {"numerical", "gap_blowup"};
+  // Stops are detected on the output grid (dt), the sampled second-contact
+  // check only every contact_check samples: two detection intervals.
+  const double tol_t =
+      2.0 * std::max(e.dt * std::max(1, e.contact_check), e.ref_dt);
+  const bool ref_stopped = e.has_reference && e.ref_status != "success";
+  const bool same_place =
+      ref_stopped && std::abs(e.t_reached - e.ref_t_reached) <= tol_t + 1e-9;
+  if (IsPhysicalStatus(st)) {
+    // The reference stops there too (also where its own solver gave up
+    // just short of the limit): the limit is the problem's.
+    if (same_place) return {"physical", PhysicalDetail(st)};
+    if (!e.has_reference) {
+      // Nothing to compare with: only the method's own evidence can
+      // overrule the solver's verdict.
+      const std::string d = DivergenceDetail(e);
+      if (d != "step_too_large") return {"numerical", d};
+      return {"physical", PhysicalDetail(st)};
+    }
+    return {"numerical", DivergenceDetail(e)};
+  }
+  if (st == "SINGULAR" && same_place && e.ref_status == "SINGULAR")
+    // Rank-deficient statics at the same place on the reference's path: a
+    // property of the configuration, not of the method.
+    return {"physical", "singular_point"};
+  if (st == "SOLVER_FAILURE" || st == "SINGULAR") {
+    // SOLVER_FAILURE means mu > mu_min and regular statics at that state
+    // (model.md §7): a solution exists and the NLP did not find it. That the
+    // reference (newton by default) fails there too does not make it
+    // physical (another backend may pass); only a physical stop of the
+    // reference at the same place does.
+    if (same_place && IsPhysicalStatus(e.ref_status))
+      return {"physical", PhysicalDetail(e.ref_status)};
+    return {"numerical", "solver_failure"};
+  }
+  return {"numerical", "integrator_failure"};
+}
+
 }  // namespace quasiroll::bench

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "core/simulator.h"
@@ -53,5 +54,73 @@ AccuracyMetrics CompareTrajectories(const std::vector<TrajectorySample>& run,
                                     bool completed);
 
 DriftMetrics ComputeDrift(const std::vector<TrajectorySample>& run);
+
+// ------------------------------------------------- timing statistics ----
+
+struct TimingStats {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  double min = kNaN, median = kNaN, max = kNaN;  // over the repeats [s]
+};
+// Median = middle value, or the mean of the two middle values.
+TimingStats ComputeTimingStats(std::vector<double> wall_seconds);
+
+// ------------------------------------------ quasi-static validity ----
+
+// Principal moments of inertia [kg m^2] the validity metric assumes: scenes
+// carry only the mass, so the robot is taken as a uniform solid box spanning
+// its wheel footprint — length a + b (wheelbase), width `track`, height
+// z_h + rho (platform above the ground) — I = m/12 (W^2 + H^2, L^2 + H^2,
+// L^2 + W^2) about the platform axes (x forward, y left, z up).
+Vec3 EstimatedInertia(const Scene& scene);
+
+// Quasi-static validity (docs/model.md §8.7): the max
+// over the samples of
+//   (m |a_com| + |I_w alpha + omega x I_w omega| / L0) / sum_i |F_i|
+// with a_com, alpha from central differences of the recorded COM and angular
+// velocities (one-sided at the ends and next to samples without velocities,
+// e.g. a failed solve), I_w = R diag(EstimatedInertia) R^T, L0 = a + b (the
+// quasi-static problem's moment scale) and |F_i| = |(n_i, t_lon_i, t_lat_i)|.
+// NaN with fewer than two samples with finite velocities and forces.
+double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
+                               const Scene& scene);
+
+// ------------------------------------------------- failure causes ----
+
+// Everything ClassifyFailure() looks at (docs/harness.md, Failure causes).
+struct FailureEvidence {
+  std::string status;  // runs.csv status (after the suite's bounds)
+  double t_reached = 0;
+  // Method.
+  std::string dae;
+  std::string rk_method = "rk4";  // RK scheme ("rk4", "dp54", ...)
+  double dt = 0;                  // hold / output interval
+  double step = 0;                // integrator step (dt / substeps)
+  double sigma = 0;
+  int contact_check = 0;  // sampled second-contact check every N samples
+  // Constraint health over the samples, and the suite's bounds.
+  double drift_max = 0, gap_max = 0, drift_bound = 0, gap_bound = 0;
+  // Reference: has_reference false when none could be computed.
+  bool has_reference = false;
+  std::string ref_status;
+  double ref_t_reached = 0;
+  double ref_dt = 0;  // spacing of the reference's samples
+};
+
+struct FailureCause {
+  std::string cause;   // "", "physical" or "numerical"
+  std::string detail;  // "", friction_limit, ... (docs/harness.md)
+};
+
+// RK4's stability interval on the negative real axis is (-2.785, 0): a
+// Baumgarte term -sigma H integrated by fixed-step RK4 grows for
+// sigma h > 2.785.
+constexpr double kRk4RealStabilityBound = 2.785;
+
+// Classifies a non-success row (rules in docs/harness.md, Failure causes):
+// physical when the reference stops at the same place
+// (|t_reached - t_ref| <= 2 max(dt max(1, contact_check), ref_dt)) with a
+// physical status, numerical when the method stops where the reference goes
+// on, breaks the bounds, or its NLP fails (SOLVER_FAILURE).
+FailureCause ClassifyFailure(const FailureEvidence& e);
 
 }  // namespace quasiroll::bench

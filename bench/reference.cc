@@ -1,16 +1,20 @@
 #include "bench/reference.h"
 
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
 
 #include "bench/json_writer.h"
+#include "bench/metrics.h"
 #include "bench/run_output.h"
+#include "core/quasi_static.h"
 #include "core/so3.h"
 
 namespace quasiroll::bench {
@@ -298,6 +302,78 @@ SimulationResult ComputeNumericalReference(const Scene& scene,
   return result;
 }
 
+SimulationOptions CheckReferenceOptions(const Scene& scene,
+                                        const ReferenceSettings& settings,
+                                        const std::string& primary_method) {
+  SimulationOptions o;
+  o.nlp = settings.nlp;
+  o.coupling = Coupling::kCoupled;
+  o.dt = scene.dt / settings.dt_divisor;
+  o.t_end = scene.t_end;
+  o.integrator.max_steps = 100000000;
+  o.integrator.rtol = 1e-10;
+  o.integrator.atol = 1e-12;
+  o.quasi_static.residual_tolerance = settings.residual_tolerance;
+  if (primary_method == "rk4") {
+    o.dae = "rk-projection";
+    o.dae_options = {{"rk_method", "dp54"}};
+    o.integrator.step = o.dt;  // initial step; DP5(4) controls it
+  } else {
+    o.dae = "ida";  // index 2 + final projection (model.md §8)
+    o.integrator.step = o.dt;
+  }
+  return o;
+}
+
+std::string DescribeReferenceMethod(const SimulationOptions& o) {
+  std::ostringstream os;
+  os << ToString(o.coupling) << " " << o.dae;
+  const auto rk = o.dae_options.find("rk_method");
+  const std::string scheme = rk == o.dae_options.end() ? "rk4" : rk->second;
+  if (o.dae != "ida") os << " " << scheme;
+  if (o.dae != "ida" && scheme == "rk4")
+    os << " step " << Num(o.integrator.step) << " s";
+  else
+    os << " rtol " << Num(o.integrator.rtol) << " atol "
+       << Num(o.integrator.atol);
+  os << ", output every " << Num(o.dt) << " s, " << o.nlp << " at residual "
+     << Num(o.quasi_static.residual_tolerance);
+  return os.str();
+}
+
+double PathMinimumFriction(const Scene& scene,
+                           const std::vector<TrajectorySample>& samples,
+                           int stride) {
+  const KinematicModel model(scene.geometry, scene.terrain);
+  QuasiStaticProblem problem(model, QuasiStaticParameters::FromScene(scene));
+  auto at = [&](std::size_t k) {
+    const TrajectorySample& s = samples[k];
+    if (!s.theta.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+    problem.SetConfiguration(s.theta);
+    return problem.MinimumFriction(nullptr, nullptr, kPathMuMinTolerance);
+  };
+  const std::size_t n = samples.size();
+  if (n == 0) return std::numeric_limits<double>::quiet_NaN();
+  const std::size_t step = static_cast<std::size_t>(std::max(1, stride));
+  double worst = std::numeric_limits<double>::quiet_NaN();
+  std::size_t arg = 0;
+  auto consider = [&](std::size_t k) {
+    const double v = at(k);
+    if (!std::isnan(v) && !(v <= worst)) {
+      worst = v;
+      arg = k;
+    }
+  };
+  for (std::size_t k = 0; k < n; k += step) consider(k);
+  if (n > 1 && (n - 1) % step != 0) consider(n - 1);  // the last sample
+  // Refine around the coarse maximum on the full grid.
+  const std::size_t lo = arg >= step ? arg - step + 1 : 0;
+  const std::size_t hi = std::min(n - 1, arg + step - 1);
+  for (std::size_t k = lo; k <= hi; ++k)
+    if (k % step != 0) consider(k);
+  return worst;
+}
+
 // ------------------------------------------------------------- parsing ----
 
 namespace {
@@ -363,6 +439,20 @@ std::string JsonStringField(const std::string& json, const std::string& name) {
     }
   }
   return "";
+}
+
+// Value of a top-level number field "name" (JsonWriter: a number or null);
+// NaN if absent or null, `*present` says whether the key exists.
+double JsonNumberField(const std::string& json, const std::string& name,
+                       bool* present) {
+  const std::string pat = "\"" + name + "\":";
+  const auto pos = json.find(pat);
+  *present = pos != std::string::npos;
+  if (!*present) return std::numeric_limits<double>::quiet_NaN();
+  const char* start = json.c_str() + pos + pat.size();
+  char* end = nullptr;
+  const double v = std::strtod(start, &end);
+  return end == start ? std::numeric_limits<double>::quiet_NaN() : v;
 }
 
 std::string ReadFile(const std::string& path, bool* ok) {
@@ -458,9 +548,16 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
           ref.kind = JsonStringField(json, "kind");
           ref.status = JsonStringField(json, "status");
           ref.stop_reason = JsonStringField(json, "stop_reason");
+          ref.method = JsonStringField(json, "method");
+          ref.check_method = JsonStringField(json, "check_method");
+          bool has_mu = false, has_err = false;
+          ref.mu_min_max = JsonNumberField(json, "ref_mu_min", &has_mu);
+          ref.err_est = JsonNumberField(json, "ref_err_est", &has_err);
           if (ac != AnalyticCase::kNone)
             ref.analytic.emplace(scene, terrain, ac);
-          return ref;
+          // A cache written before these fields existed is recomputed.
+          if (has_mu && has_err) return ref;
+          ref.samples.clear();
         } catch (const std::runtime_error&) {
           ref.samples.clear();  // corrupt cache: recompute
         }
@@ -469,6 +566,10 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
   }
 
   SimulationResult result;
+  std::string check_status;
+  double check_t_reached = std::numeric_limits<double>::quiet_NaN();
+  double check_wall = std::numeric_limits<double>::quiet_NaN();
+  double mu_min_wall = std::numeric_limits<double>::quiet_NaN();
   if (ac != AnalyticCase::kNone) {
     ref.analytic.emplace(scene, terrain, ac);
     ref.kind = std::string("analytic:") + ToString(ac);
@@ -478,10 +579,52 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
       result.samples.push_back(ref.analytic->Sample(k * dt));
     result.status = "success";
     result.t_reached = n * dt;
+    ref.method = std::string("closed form (") + ToString(ac) + ")";
   } else {
     std::string method;
     result = ComputeNumericalReference(scene, settings, &method);
     ref.kind = method == "rk4" ? "numerical" : "numerical:" + method;
+    SimulationOptions used;
+    used.nlp = settings.nlp;
+    used.dae = "rk-projection";
+    used.coupling = Coupling::kCoupled;
+    used.dt = scene.dt / settings.dt_divisor;
+    used.dae_options = {{"rk_method", method}};
+    used.integrator.step = used.dt / settings.substeps;
+    used.integrator.rtol = 1e-10;
+    used.integrator.atol = 1e-12;
+    used.quasi_static.residual_tolerance = settings.residual_tolerance;
+    ref.method = DescribeReferenceMethod(used);
+    // mu_min along the path (every 2nd scene-dt sample, refined around the
+    // maximum) and, for a reference that stopped, at the state where it
+    // stopped (in coupled mode a stage state between samples), so that a
+    // reference stopped by friction has ref_mu_min >= mu.
+    const auto mu_start = std::chrono::steady_clock::now();
+    ref.mu_min_max =
+        PathMinimumFriction(scene, result.samples, 2 * settings.dt_divisor);
+    if (!result.success() && result.stop_configuration.allFinite()) {
+      std::vector<TrajectorySample> stop(1);
+      stop[0].theta = result.stop_configuration;
+      ref.mu_min_max =
+          std::fmax(ref.mu_min_max, PathMinimumFriction(scene, stop));
+    }
+    mu_min_wall = std::chrono::duration<double>(
+                      std::chrono::steady_clock::now() - mu_start)
+                      .count();
+    // The check reference: another method family on the same output grid;
+    // the estimate is their largest position difference over common times.
+    const SimulationOptions co = CheckReferenceOptions(scene, settings, method);
+    ref.check_method = DescribeReferenceMethod(co);
+    try {
+      const SimulationResult check = Simulator(scene, co).Run();
+      check_status = check.status;
+      check_t_reached = check.t_reached;
+      check_wall = check.wall_seconds;
+      ref.err_est =
+          CompareTrajectories(result.samples, check.samples, false).pos_max;
+    } catch (const std::exception& e) {
+      check_status = std::string("error: ") + e.what();
+    }
   }
   ref.status = result.status;
   ref.stop_reason = result.stop_reason;
@@ -500,6 +643,14 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
     w.Key("t_reached").Value(result.t_reached);
     w.Key("samples").Value(static_cast<int>(result.samples.size()));
     w.Key("wall_s").Value(result.wall_seconds);
+    w.Key("method").Value(ref.method);
+    w.Key("ref_mu_min").Value(ref.mu_min_max);
+    w.Key("ref_mu_min_wall_s").Value(mu_min_wall);
+    w.Key("ref_err_est").Value(ref.err_est);
+    w.Key("check_method").Value(ref.check_method);
+    w.Key("check_status").Value(check_status);
+    w.Key("check_t_reached").Value(check_t_reached);
+    w.Key("check_wall_s").Value(check_wall);
     w.Key("key").Value(ref.key);
     w.EndObject();
     AtomicWriteFile(csv_path, csv);

@@ -5,6 +5,7 @@
 // of the scene's effective parameters and the reference settings.
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -78,7 +79,15 @@ struct Reference {
   std::string kind;    // "analytic:flat" ..., "numerical", "numerical:dp54"
   std::string status;  // "success" or the numerical run's status
   std::string stop_reason;
-  std::string scene;                      // suite scene name (informational)
+  std::string scene;  // suite scene name (informational)
+  // Max over the reference samples of the quasi-static solver's mu_min
+  // (runs.csv ref_mu_min); NaN when not computed (analytic references).
+  double mu_min_max = std::numeric_limits<double>::quiet_NaN();
+  // Estimated position error [m]: max |p_ref - p_check| against a check
+  // reference of another method family (runs.csv ref_err_est); NaN if none.
+  double err_est = std::numeric_limits<double>::quiet_NaN();
+  std::string method;        // how it was computed (method, step/tolerance)
+  std::string check_method;  // the check reference's ("" if none)
   std::vector<TrajectorySample> samples;  // on the reference output grid
   std::optional<AnalyticSolution> analytic;
 
@@ -103,6 +112,32 @@ std::string ReferenceKey(const Scene& scene, const TerrainSpec& terrain,
 SimulationResult ComputeNumericalReference(const Scene& scene,
                                            const ReferenceSettings& settings,
                                            std::string* method = nullptr);
+
+// The check reference of a numerical reference computed with
+// `primary_method` ("rk4" or "dp54"): coupled, on the same output grid,
+// another method family — DP5(4) (adaptive, error-controlled) at rtol 1e-10,
+// atol 1e-12 for an RK4 reference; IDA (BDF, index 2) at the same
+// tolerances for a DP5(4) one.
+SimulationOptions CheckReferenceOptions(const Scene& scene,
+                                        const ReferenceSettings& settings,
+                                        const std::string& primary_method);
+// "coupled rk-projection rk4 step 0.003125 s, output every 0.0125 s, newton
+// at residual 1e-12" (references/<hash>.json `method`, meta.json).
+std::string DescribeReferenceMethod(const SimulationOptions& options);
+// Relative precision of ref_mu_min (MinimumFriction's bisection width):
+// plenty for a friction threshold, ~40 % of the cost of the solver's 1e-11.
+constexpr double kPathMuMinTolerance = 1e-6;
+// Max over the samples (their configurations `theta`) of the quasi-static
+// solver's mu_min (QuasiStaticProblem::MinimumFriction, to relative
+// kPathMuMinTolerance): evaluated on every `stride`-th sample and the last,
+// then on every sample within `stride` of the coarse maximum (paper mode
+// costs ~10 ms per evaluation; mu_min varies on the bump scale, ~1 s of
+// travel, so a coarse grid of 0.1 s plus refinement finds the grid maximum).
+// +inf if a sample admits no contact forces (lift-off), NaN if none was
+// computed.
+double PathMinimumFriction(const Scene& scene,
+                           const std::vector<TrajectorySample>& samples,
+                           int stride = 1);
 
 // Returns the reference of a scene, from DIR/references/<hash>.{csv,json}
 // if present with the same key, else computed (analytic if allowed and

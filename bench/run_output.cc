@@ -15,6 +15,7 @@
 #include <thread>
 #include <variant>
 
+#include "bench/metrics.h"
 #include "quasiroll_git_commit.h"
 
 namespace quasiroll {
@@ -225,6 +226,8 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.EndObject();
   j.Key("wall_s").Value(r.wall_seconds);
   j.Key("kkt_residual").Value(r.kkt_residual);
+  j.Key("qs_inertia_ratio")
+      .Value(bench::QuasiStaticInertiaRatio(r.samples, scene));
   j.Key("scene").BeginObject();
   j.Key("name").Value(scene.name);
   j.Key("file").Value(scene.source_path);

@@ -254,6 +254,18 @@ ReferenceSettings ReadReference(const YAML::Node& node,
   return r;
 }
 
+RunBounds ReadBounds(const YAML::Node& node, const std::string& path,
+                     RunBounds bounds) {
+  if (!node.IsMap())
+    Fail(path, "expected a mapping {drift: ..., gap: ...}, got " +
+                   yaml::DescribeNode(node));
+  yaml::CheckKeys(node, path, {"drift", "gap"});
+  yaml::ReadOptionalDouble(node, path, "drift", &bounds.drift,
+                           Bounds::Positive());
+  yaml::ReadOptionalDouble(node, path, "gap", &bounds.gap, Bounds::Positive());
+  return bounds;
+}
+
 std::string CanonicalRunKey(const RunSpec& r) {
   std::ostringstream os;
   os << "group=" << r.group << ";scene=" << r.scene << ";nlp=" << r.nlp
@@ -274,6 +286,9 @@ std::string CanonicalRunKey(const RunSpec& r) {
     os << ";nlp_options." << name << "=" << value;
   for (const auto& [name, value] : r.dae_options_explicit)
     os << ";dae_options." << name << "=" << value;
+  // Likewise non-default verdict bounds (they change the row, not the run).
+  if (!(r.bounds == RunBounds{}))
+    os << ";bounds=" << Num(r.bounds.drift) << "," << Num(r.bounds.gap);
   return os.str();
 }
 
@@ -538,12 +553,12 @@ void ResolveRunOptions(const YAML::Node& group_node, const std::string& path,
 void ExpandGroup(const YAML::Node& node, const std::string& path,
                  const std::string& group, Suite* suite, OptionTables* tables) {
   yaml::CheckKeys(node, path,
-                  {"description",  "scenes",        "nlp",        "dae",
-                   "coupling",     "rk_method",     "dt",         "tol",
-                   "atol_ratio",   "nlp_tol",       "sigma",      "eps",
-                   "mu",           "seed",          "roughness",  "dae_index",
-                   "substeps",     "contact_check", "t_end",      "repeats",
-                   "scene_fields", "nlp_options",   "dae_options"});
+                  {"description",  "scenes",        "nlp",         "dae",
+                   "coupling",     "rk_method",     "dt",          "tol",
+                   "atol_ratio",   "nlp_tol",       "sigma",       "eps",
+                   "mu",           "seed",          "roughness",   "dae_index",
+                   "substeps",     "contact_check", "t_end",       "repeats",
+                   "scene_fields", "nlp_options",   "dae_options", "bounds"});
   if (auto n = Child(node, "description"))
     yaml::ReadString(*n, JoinKey(path, "description"));
 
@@ -628,6 +643,9 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
            },
            "integrator"))
     generic_axes.push_back(std::move(a));
+  RunBounds bounds = suite->bounds;
+  if (auto n = Child(node, "bounds"))
+    bounds = ReadBounds(*n, JoinKey(path, "bounds"), bounds);
 
   for (int si : scene_idx) {
     const SuiteScene& sc = suite->scenes[si];
@@ -718,6 +736,7 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
     base.scene = sc.name;
     base.t_end = t_end;
     base.repeats = repeats;
+    base.bounds = bounds;
     std::vector<std::size_t> at(axes.size(), 0);
     for (bool more = true; more;) {
       RunSpec r = base;
@@ -757,14 +776,17 @@ Suite LoadSuiteFromString(const std::string& text, const std::string& origin,
   suite.path = origin;
   suite.text_hash = Fnv1a64(text);
   const YAML::Node root = yaml::ParseYaml(text, origin);
-  yaml::CheckKeys(root, "",
-                  {"name", "description", "reference", "scenes", "groups"});
+  yaml::CheckKeys(
+      root, "",
+      {"name", "description", "reference", "bounds", "scenes", "groups"});
   suite.name = origin.empty() ? "suite" : fs::path(origin).stem().string();
   if (auto n = Child(root, "name")) suite.name = yaml::ReadString(*n, "name");
   if (auto n = Child(root, "description"))
     suite.description = yaml::ReadString(*n, "description");
   if (auto n = Child(root, "reference"))
     suite.reference = ReadReference(*n, "reference");
+  if (auto n = Child(root, "bounds"))
+    suite.bounds = ReadBounds(*n, "bounds", suite.bounds);
 
   const YAML::Node scenes = yaml::Require(root, "", "scenes");
   if (!scenes.IsSequence() || scenes.size() == 0)

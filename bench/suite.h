@@ -65,6 +65,20 @@ struct ReferenceSettings {
   std::string Canonical() const;
 };
 
+// A run's verdict bounds (suite/group key `bounds`): a run that reaches
+// t_end with drift_max > drift or gap_max > gap is drift_exceeded /
+// gap_exceeded instead of success. Defaults (docs/harness.md): the largest
+// values of any successful default-suite run were drift 1.57e-4 and gap
+// 4.7e-5 m (Baumgarte RK4 at dt 0.4 s), the smallest of a run that blew up
+// 2.4e-2 and 1.3e-2 m; 1e-3 lies between, a decade from each.
+struct RunBounds {
+  double drift = 1e-3;  // max ||H||_inf over the samples
+  double gap = 1e-3;    // max geometric gap over the samples [m]
+  bool operator==(const RunBounds& o) const {
+    return drift == o.drift && gap == o.gap;
+  }
+};
+
 // One grid point: everything needed to run it, in physical units.
 struct RunSpec {
   int index = 0;  // position in grid order
@@ -92,6 +106,7 @@ struct RunSpec {
   double roughness = 1.0;             // gaussian amplitude scale factor
   double t_end = 0;
   int repeats = 1;
+  RunBounds bounds;  // group's, else suite's, else the defaults
   // Generic axes: swept scene fields (suite key `scene_fields`), dotted path
   // -> the value as YAML flow text, in file order; applied to the scene with
   // the scene loader's rules.
@@ -116,6 +131,7 @@ struct Suite {
   std::string description;
   std::uint64_t text_hash = 0;  // FNV-1a of the suite file's text
   ReferenceSettings reference;
+  RunBounds bounds;  // suite-level `bounds` (groups may override)
   std::vector<SuiteScene> scenes;
   std::vector<std::string> groups;  // in file order
   std::vector<RunSpec> runs;        // grid order

@@ -355,7 +355,8 @@ bool ConesFeasible(const Eigen::Matrix<double, 9, 1>& fp,
 }  // namespace
 
 double QuasiStaticProblem::MinimumFriction(int* critical,
-                                           double* min_normal_force) const {
+                                           double* min_normal_force,
+                                           double relative_tolerance) const {
   auto ratio_of = [&](const Eigen::Matrix<double, 9, 1>& f, int* arg) {
     double worst = 0.0;
     for (int i = 0; i < 3; ++i) {
@@ -416,7 +417,7 @@ double QuasiStaticProblem::MinimumFriction(int* critical,
   Eigen::Matrix<double, 9, 1> best = fp + null * y;
   double hi = ratio_of(best, &arg), lo = 0.0;
   Eigen::Vector3d y_try = y;
-  while (hi - lo > 1e-11 * std::max(1.0, hi)) {
+  while (hi - lo > relative_tolerance * std::max(1.0, hi)) {
     const double mid = 0.5 * (lo + hi);
     y_try = y;
     if (ConesFeasible(fp, null, mid, &y_try)) {

@@ -99,8 +99,11 @@ class QuasiStaticProblem final : public NlpProblem {
   // satisfying E2(, E3), f_n >= 0 of max_i |f_ti|/f_ni. +inf when no such
   // force exists (lift-off). `critical` receives the contact that attains it
   // (or the one that would have to pull). Paper mode: bisection on t with a
-  // smoothed convex feasibility test; pvc mode: explicit.
-  double MinimumFriction(int* critical, double* min_normal_force) const;
+  // smoothed convex feasibility test, to relative width
+  // `relative_tolerance` (the solver's classification uses 1e-11); pvc mode:
+  // explicit.
+  double MinimumFriction(int* critical, double* min_normal_force,
+                         double relative_tolerance = 1e-11) const;
 
   // True if the statics rows (E2, E3) have full row rank.
   bool StaticsFullRank() const;

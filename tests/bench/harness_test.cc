@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -89,16 +90,17 @@ Table ReadTable(const fs::path& p) {
   return t;
 }
 
-// runs.csv without the timing column.
+// runs.csv without the timing columns (wall_s, wall_s_median, ...,
+// wall_per_sim_s).
 std::string WithoutTiming(const fs::path& p) {
   const auto raw = ParseCsv(ReadAll(p));
-  std::size_t wall = 0;
+  std::vector<bool> timing(raw[0].size(), false);
   for (std::size_t k = 0; k < raw[0].size(); ++k)
-    if (raw[0][k] == "wall_s") wall = k;
+    timing[k] = raw[0][k].rfind("wall_", 0) == 0;
   std::string out;
   for (const auto& r : raw) {
     for (std::size_t k = 0; k < r.size(); ++k)
-      if (k != wall) out += r[k] + "\x1f";
+      if (!timing[k]) out += r[k] + "\x1f";
     out += "\n";
   }
   return out;
@@ -332,6 +334,125 @@ TEST_F(BenchHarness, FilterKeepsMatchingRunIds) {
     EXPECT_EQ(r.at("run_id").rfind("wp-flat-newton", 0), 0u);
   o.filter = "([";
   EXPECT_THROW(RunSuite(suite_, o), SceneError);
+}
+
+// The tiny suite's verdict columns: every row has them; the fixture's
+// successes carry the timing of each repeat and a verified KKT residual; the
+// blow-up (sigma h = 10) is numerical, the error row too.
+TEST_F(BenchHarness, VerdictColumns) {
+  const Table t = ReadTable(root_ / "j1" / "runs.csv");
+  for (const auto& r : t.rows) {
+    if (r.at("status") == "success") {
+      EXPECT_EQ(r.at("cause"), "");
+      EXPECT_EQ(r.at("cause_detail"), "");
+      EXPECT_EQ(r.at("t_reached_frac"), "1");
+      EXPECT_EQ(r.at("wall_s"), r.at("wall_s_min"));
+      EXPECT_EQ(r.at("wall_s_all"), r.at("wall_s_min"));  // repeats: 1
+      EXPECT_DOUBLE_EQ(std::stod(r.at("wall_per_sim_s")),
+                       std::stod(r.at("wall_s_median")) / 0.5);
+      EXPECT_LE(std::stod(r.at("kkt_residual")), 1e-9) << r.at("run_id");
+      // 0.06 m/s over R1's bumps: inertial loads ~1e-4 of the weight.
+      EXPECT_LT(std::stod(r.at("qs_inertia_ratio")), 1e-2) << r.at("run_id");
+      if (r.at("ref_kind") == "numerical") {
+        // A DP5(4) check reference agrees with the RK4 reference to its
+        // O(h^4) error on 0.5 s of R1 (h = 3.125 ms): far below 1e-9 m.
+        EXPECT_LT(std::stod(r.at("ref_err_est")), 1e-9) << r.at("run_id");
+        EXPECT_GT(std::stod(r.at("ref_mu_min")), 0.0);
+        EXPECT_LT(std::stod(r.at("ref_mu_min")), 0.5);  // mu = 0.5 suffices
+      } else {
+        EXPECT_EQ(r.at("ref_err_est"), "");  // closed form: no check
+      }
+    }
+  }
+  const auto& unstable = t.rows[20];
+  EXPECT_EQ(unstable.at("cause"), "numerical");
+  EXPECT_EQ(unstable.at("cause_detail"), "baumgarte_instability");
+  EXPECT_LT(std::stod(unstable.at("t_reached_frac")), 1.0);
+  const auto& rough = t.rows[21];
+  EXPECT_EQ(rough.at("cause"), "numerical");
+  EXPECT_EQ(rough.at("cause_detail"), "error");
+}
+
+// The fixtures: rk-baumgarte at dt = 3.2 s (sigma h = 16) stops at
+// 3.2 s with INFEASIBLE_FRICTION and mu_min ~4 although mu = 0.5 carries the
+// reference to the end: a blow-up, classed numerical. pvc on R1 at mu = 0.3
+// stops at ~14.3 s where the reference stops too: a friction limit, classed
+// physical. Tight bounds turn a finished Baumgarte run (drift ~1e-8) into
+// drift_exceeded.
+TEST(BenchVerdicts, BlowUpIsNumericalFrictionStopIsPhysical) {
+  const fs::path root =
+      fs::temp_directory_path() /
+      ("quasiroll_verdict_test_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root);
+  const std::string suite_path = (root / "verdicts.yaml").string();
+  std::ofstream(suite_path)
+      << "scenes:\n"
+         "  - {name: paper, file: "
+      << kScenes
+      << "paper.yaml, overrides: {time: {t_end: 6.4}}}\n"
+         "  - {name: paper_pvc, file: "
+      << kScenes
+      << "paper.yaml, overrides: {mode: pvc, mu: 0.3, time: {t_end: 15}}}\n"
+         "groups:\n"
+         "  blowup:\n"
+         "    scenes: [paper]\n"
+         "    dae: rk-baumgarte\n"
+         "    dt: 3.2\n"
+         "  friction:\n"
+         "    scenes: [paper_pvc]\n"
+         "  tight:\n"
+         "    scenes: [paper]\n"
+         "    dae: rk-baumgarte\n"
+         "    dt: 0.2\n"
+         "    t_end: 1\n"
+         "    repeats: 3\n"
+         "    bounds: {drift: 1.0e-12}\n";
+  const Suite suite = LoadSuite(suite_path);
+  HarnessOptions o;
+  o.out_dir = (root / "out").string();
+  o.jobs = 2;
+  o.progress = 0;
+  RunSuite(suite, o);
+  const Table t = ReadTable(root / "out" / "runs.csv");
+  ASSERT_EQ(t.rows.size(), 3u);
+  const auto& blowup = t.rows[0];
+  EXPECT_EQ(blowup.at("status"), "INFEASIBLE_FRICTION");  // kept as is
+  EXPECT_GT(std::stod(blowup.at("mu_min")), 1.0);
+  EXPECT_EQ(blowup.at("ref_status"), "success");
+  EXPECT_EQ(blowup.at("cause"), "numerical");
+  EXPECT_EQ(blowup.at("cause_detail"), "baumgarte_instability");
+  EXPECT_DOUBLE_EQ(std::stod(blowup.at("t_reached_frac")), 0.5);
+  // The path's friction requirement stays below mu = 0.5: the solver's
+  // mu_min ~4 at the stop belongs to a state off the path.
+  EXPECT_LT(std::stod(blowup.at("ref_mu_min")), 0.5);
+
+  const auto& friction = t.rows[1];
+  EXPECT_EQ(friction.at("status"), "INFEASIBLE_FRICTION");
+  EXPECT_EQ(friction.at("ref_status"), "INFEASIBLE_FRICTION");
+  EXPECT_EQ(friction.at("cause"), "physical");
+  EXPECT_EQ(friction.at("cause_detail"), "friction_limit");
+  EXPECT_GT(std::stod(friction.at("t_reached")), 14.0);
+  EXPECT_GE(std::stod(friction.at("ref_mu_min")), 0.3);  // reached mu
+
+  const auto& tight = t.rows[2];
+  EXPECT_EQ(tight.at("status"), "drift_exceeded");
+  EXPECT_EQ(tight.at("cause"), "numerical");
+  EXPECT_EQ(tight.at("cause_detail"), "drift_blowup");
+  EXPECT_EQ(tight.at("t_reached_frac"), "1");
+  EXPECT_NE(tight.at("stop_reason").find("bounds.drift"), std::string::npos);
+  // Three repeats: three timings, wall_s their minimum.
+  std::vector<double> walls;
+  std::stringstream all(tight.at("wall_s_all"));
+  for (std::string w; std::getline(all, w, ';');) walls.push_back(std::stod(w));
+  ASSERT_EQ(walls.size(), 3u);
+  EXPECT_EQ(std::stod(tight.at("wall_s")),
+            *std::min_element(walls.begin(), walls.end()));
+  EXPECT_EQ(std::stod(tight.at("wall_s_max")),
+            *std::max_element(walls.begin(), walls.end()));
+  EXPECT_LE(std::stod(tight.at("wall_s_min")),
+            std::stod(tight.at("wall_s_median")));
+  fs::remove_all(root);
 }
 
 int RunCli(const std::string& args) {

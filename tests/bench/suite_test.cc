@@ -326,6 +326,35 @@ TEST(BenchSuite, RejectsEmptyGrids) {
   ExpectRejected("scenes: []\ngroups:\n  g: {}\n", {"scenes", "non-empty"});
 }
 
+// Verdict bounds (docs/harness.md): defaults, suite level, group override;
+// the run key (and id) changes only for non-default bounds.
+TEST(BenchSuite, BoundsAtSuiteAndGroupLevel) {
+  const Suite plain =
+      Load(std::string(kBase) + "groups:\n  g: {scenes: [paper]}\n");
+  EXPECT_EQ(plain.runs[0].bounds.drift, 1e-3);
+  EXPECT_EQ(plain.runs[0].bounds.gap, 1e-3);
+  EXPECT_EQ(plain.runs[0].key.find("bounds"), std::string::npos);
+  const Suite s = Load(std::string(kBase) +
+                       "bounds: {drift: 1.0e-6}\n"
+                       "groups:\n"
+                       "  g: {scenes: [paper]}\n"
+                       "  h: {scenes: [paper], bounds: {gap: 2.0e-4}}\n");
+  EXPECT_EQ(s.runs[0].bounds.drift, 1e-6);
+  EXPECT_EQ(s.runs[0].bounds.gap, 1e-3);
+  EXPECT_EQ(s.runs[1].bounds.drift, 1e-6);  // suite's, group adds gap
+  EXPECT_EQ(s.runs[1].bounds.gap, 2e-4);
+  EXPECT_NE(s.runs[0].key.find("bounds=1e-06,0.001"), std::string::npos)
+      << s.runs[0].key;
+  EXPECT_NE(s.runs[0].run_id.substr(s.runs[0].run_id.size() - 8),
+            plain.runs[0].run_id.substr(plain.runs[0].run_id.size() - 8));
+  ExpectRejected(std::string(kBase) + "bounds: {drift: 0}\ngroups: {g: {}}\n",
+                 {"bounds.drift", "0"});
+  ExpectRejected(std::string(kBase) + "groups:\n  g: {bounds: {drift2: 1}}\n",
+                 {"groups.g.bounds.drift2", "unknown key"});
+  ExpectRejected(std::string(kBase) + "groups:\n  g: {bounds: 1}\n",
+                 {"groups.g.bounds", "mapping"});
+}
+
 TEST(BenchSuite, RejectsUnknownKeys) {
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dtt: [0.1]\n",
                  {"groups.g.dtt", "unknown key"});
@@ -386,8 +415,51 @@ groups: {g: {}}
                  {"scenes[0].overrides.mu", "-1"});
 }
 
+// bench/suites/stability.yaml (issue 14): one group per axis, named
+// stability_<axis>, each with every NLP x DAE x coupling and at least three
+// axis values; the default suite's stability groups use the same names.
+TEST(BenchSuite, StabilitySuiteCoversEveryMethodOnEveryAxis) {
+  const Suite s = LoadSuite(std::string(QUASIROLL_SOURCE_DIR) +
+                            "/bench/suites/stability.yaml");
+  const std::vector<std::string> axes = {"dt", "sigma_dt",  "tol",
+                                         "mu", "roughness", "seed"};
+  ASSERT_EQ(s.groups.size(), axes.size());
+  for (const std::string& axis : axes) {
+    const std::string group = "stability_" + axis;
+    std::set<std::string> methods, values;
+    for (const RunSpec& r : s.runs) {
+      if (r.group != group) continue;
+      methods.insert(r.nlp + "/" + r.dae + "/" + ToString(r.coupling));
+      const std::string v =
+          axis == "dt"         ? Num(r.dt)
+          : axis == "sigma_dt" ? Num(r.sigma * r.dt)
+          : axis == "tol"      ? Num(r.tol)
+          : axis == "mu"       ? Num(r.mu)
+          : axis == "roughness"
+              ? Num(r.roughness)
+              : (r.seed ? std::to_string(*r.seed) : std::string("-"));
+      values.insert(v);
+    }
+    for (const char* nlp : {"newton", "ipopt", "slsqp", "ceres"})
+      for (const char* dae : {"rk-baumgarte", "rk-projection", "ida"})
+        for (const char* coupling : {"zoh", "coupled"})
+          EXPECT_EQ(
+              methods.count(std::string(nlp) + "/" + dae + "/" + coupling), 1u)
+              << group << " lacks " << nlp << "/" << dae << "/" << coupling;
+    EXPECT_GE(values.size(), 3u) << group;
+  }
+  const Suite d = LoadSuite(std::string(QUASIROLL_SOURCE_DIR) +
+                            "/bench/suites/default.yaml");
+  for (const std::string& g : d.groups) {
+    if (g.rfind("stability", 0) != 0) continue;
+    bool named = false;
+    for (const std::string& axis : axes) named |= g == "stability_" + axis;
+    EXPECT_TRUE(named) << "default.yaml group " << g;
+  }
+}
+
 TEST(BenchSuite, ShippedSuitesLoad) {
-  for (const char* name : {"smoke", "default", "analytic"}) {
+  for (const char* name : {"smoke", "default", "analytic", "stability"}) {
     const std::string path =
         std::string(QUASIROLL_SOURCE_DIR) + "/bench/suites/" + name + ".yaml";
     EXPECT_NO_THROW({

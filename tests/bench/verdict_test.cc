@@ -1,0 +1,204 @@
+// The harness's verdict columns (docs/harness.md): timing statistics over
+// repeats, the quasi-static validity ratio on a trajectory with a known
+// acceleration, and the failure-cause classification on hand-made evidence.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "bench/metrics.h"
+#include "bench/reference.h"
+#include "core/yaml_util.h"
+
+namespace quasiroll::bench {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+const std::string kScenes =
+    std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/";
+
+TEST(TimingStats, MinMedianMaxOverRepeats) {
+  TimingStats t = ComputeTimingStats({0.3, 0.1, 0.2});
+  EXPECT_EQ(t.min, 0.1);
+  EXPECT_EQ(t.median, 0.2);
+  EXPECT_EQ(t.max, 0.3);
+  t = ComputeTimingStats({0.4, 0.1, 0.2, 0.3});  // even count: middle mean
+  EXPECT_DOUBLE_EQ(t.median, 0.25);
+  EXPECT_TRUE(std::isnan(ComputeTimingStats({}).median));
+}
+
+// Oracle O2 (the constant-steer circle, paper mode): the COM moves on a
+// circle at constant speed v with yaw rate Omega, contact forces are the
+// static load (sum |F_i| = m g, no traction). The only inertial load is the
+// centripetal m v Omega; the rotation is about the principal z axis at
+// constant rate (I alpha = 0, omega x I omega = 0). The one-sided difference
+// at the first sample gives |v(h) - v(0)| / h = v Omega sinc(Omega h / 2),
+// the largest estimate along the path (central ones give sinc(Omega h)).
+TEST(QuasiStaticValidity, CircleRatioIsCentripetalOverWeight) {
+  Scene scene = LoadScene(kScenes + "circle.yaml");
+  const YAML::Node root = yaml::LoadYamlFile(kScenes + "circle.yaml");
+  const TerrainSpec spec =
+      yaml::ReadTerrainSpec(root["terrain"], "terrain", kScenes);
+  ASSERT_EQ(DetectAnalyticCase(scene, spec), AnalyticCase::kCircle);
+  const AnalyticSolution circle(scene, spec, AnalyticCase::kCircle);
+  const double h = 0.05;
+  std::vector<TrajectorySample> run;
+  for (int k = 0; k <= 200; ++k) run.push_back(circle.Sample(k * h));
+  const double v = run[0].velocity.norm();
+  const double omega = run[0].angular_velocity.z();
+  ASSERT_GT(v, 0.06);  // 0.0622 m/s: Omega R_com, R_com = 0.9488 m
+  const double x = omega * h / 2;
+  const double expected =
+      scene.mass * v * omega * (std::sin(x) / x) / (scene.mass * 9.8);
+  // Round-off of differences of O(0.06) velocities over h: ~1e-15 / 0.05.
+  EXPECT_NEAR(QuasiStaticInertiaRatio(run, scene), expected, 1e-12);
+  EXPECT_NEAR(expected, 4.16e-4, 1e-6);  // v Omega / g
+}
+
+// A pure roll acceleration alpha about the platform's x axis (principal, so
+// omega x I omega = 0): the ratio is I_xx alpha / L0 / load, with I_xx of
+// the documented box estimate m/12 (track^2 + (z_h + rho)^2).
+TEST(QuasiStaticValidity, RotationalInertiaEntersThroughTheMomentScale) {
+  const Scene scene = LoadScene(kScenes + "flat.yaml");
+  const double alpha = 0.2, h = 0.05, load = 49.0;
+  std::vector<TrajectorySample> run;
+  for (int k = 0; k <= 10; ++k) {
+    TrajectorySample s;
+    s.t = k * h;
+    s.angular_velocity = Vec3(alpha * s.t, 0, 0);
+    for (ContactSample& c : s.contacts) c.normal_force = load / 3;
+    run.push_back(s);
+  }
+  const RobotGeometry& g = scene.geometry;
+  const double height = g.z_h + g.rho();
+  const double ixx = scene.mass / 12 * (g.track * g.track + height * height);
+  EXPECT_DOUBLE_EQ(EstimatedInertia(scene).x(), ixx);
+  EXPECT_NEAR(QuasiStaticInertiaRatio(run, scene),
+              ixx * alpha / g.wheelbase() / load, 1e-15);
+  // A failed last sample (NaN velocities) is skipped, not propagated.
+  run.back().velocity = Vec3::Constant(kNaN);
+  EXPECT_NEAR(QuasiStaticInertiaRatio(run, scene),
+              ixx * alpha / g.wheelbase() / load, 1e-15);
+  run.resize(1);
+  EXPECT_TRUE(std::isnan(QuasiStaticInertiaRatio(run, scene)));
+}
+
+// Evidence of a paper-scene run (dt 0.05, RK4) against a reference on the
+// dt/4 grid that reached `ref_t` with `ref_status`.
+FailureEvidence Evidence(const std::string& status, double t_reached,
+                         const std::string& ref_status, double ref_t) {
+  FailureEvidence e;
+  e.status = status;
+  e.t_reached = t_reached;
+  e.dae = "rk-projection";
+  e.dt = e.step = 0.05;
+  e.sigma = 5;
+  e.drift_max = 1e-12;
+  e.gap_max = 1e-13;
+  e.drift_bound = e.gap_bound = 1e-3;
+  e.has_reference = true;
+  e.ref_status = ref_status;
+  e.ref_t_reached = ref_t;
+  e.ref_dt = 0.0125;
+  return e;
+}
+
+TEST(FailureCauses, SuccessHasNoCause) {
+  const FailureCause c =
+      ClassifyFailure(Evidence("success", 20, "success", 20));
+  EXPECT_EQ(c.cause, "");
+  EXPECT_EQ(c.detail, "");
+}
+
+// A friction stop where the reference stops too (pvc at mu 0.3 on R1: the
+// run at 14.30 s, the reference at 14.2625 s) is physical.
+TEST(FailureCauses, FrictionStopShared) {
+  FailureCause c = ClassifyFailure(
+      Evidence("INFEASIBLE_FRICTION", 14.30, "INFEASIBLE_FRICTION", 14.2625));
+  EXPECT_EQ(c.cause, "physical");
+  EXPECT_EQ(c.detail, "friction_limit");
+  c = ClassifyFailure(Evidence("LIFT_OFF", 3.0, "LIFT_OFF", 3.0));
+  EXPECT_EQ(c.detail, "lift_off");
+  // The sampled second-contact check (every 5 samples) detects 0.25 s late
+  // at worst: still the same place.
+  FailureEvidence sampled =
+      Evidence("DEGENERATE_CONTACT", 17.35, "DEGENERATE_CONTACT", 17.146875);
+  EXPECT_EQ(ClassifyFailure(sampled).cause, "numerical");
+  sampled.contact_check = 5;
+  EXPECT_EQ(ClassifyFailure(sampled).cause, "physical");
+  // Same status, but 0.5 s (10 intervals) before the reference's stop: the
+  // run left the path; the cause is the method's.
+  c = ClassifyFailure(
+      Evidence("INFEASIBLE_FRICTION", 13.75, "INFEASIBLE_FRICTION", 14.2625));
+  EXPECT_EQ(c.cause, "numerical");
+}
+
+// The default suite's stability_dt blow-up: rk-baumgarte, zoh, dt 3.2 s,
+// sigma 5 (sigma h = 16 > 2.785) stops at 3.2 s with INFEASIBLE_FRICTION and
+// mu_min 4.1 while the reference drives on: never a friction limit.
+TEST(FailureCauses, BlowUpIsNeverAFrictionLimit) {
+  FailureEvidence e = Evidence("INFEASIBLE_FRICTION", 3.2, "success", 20.0);
+  e.dae = "rk-baumgarte";
+  e.dt = e.step = 3.2;
+  e.drift_max = 0.74;
+  e.gap_max = 0.37;
+  FailureCause c = ClassifyFailure(e);
+  EXPECT_EQ(c.cause, "numerical");
+  EXPECT_EQ(c.detail, "baumgarte_instability");
+  // Within RK4's bound the drift is the evidence ...
+  e.sigma = 0.5;  // sigma h = 1.6
+  EXPECT_EQ(ClassifyFailure(e).detail, "drift_blowup");
+  e.drift_max = 1e-6;
+  EXPECT_EQ(ClassifyFailure(e).detail, "gap_blowup");
+  // ... and without any, the hold interval that left the path.
+  e.gap_max = 1e-6;
+  EXPECT_EQ(ClassifyFailure(e).detail, "step_too_large");
+  // Projection has no Baumgarte term: sigma does not matter there.
+  e.dae = "rk-projection";
+  e.sigma = 200;
+  EXPECT_EQ(ClassifyFailure(e).detail, "step_too_large");
+  // No reference: the solver's verdict stands unless the method's own
+  // evidence contradicts it.
+  e.has_reference = false;
+  EXPECT_EQ(ClassifyFailure(e).cause, "physical");
+  e.drift_max = 0.74;
+  EXPECT_EQ(ClassifyFailure(e).cause, "numerical");
+}
+
+TEST(FailureCauses, SolverIntegratorBoundsAndErrors) {
+  EXPECT_EQ(
+      ClassifyFailure(Evidence("SOLVER_FAILURE", 2.6, "success", 20)).detail,
+      "solver_failure");
+  // A solver failure stays numerical even where the reference's solver
+  // fails too (a solution exists: mu > mu_min; in the default suite ceres
+  // passes where newton and the newton reference fail) ...
+  EXPECT_EQ(ClassifyFailure(
+                Evidence("SOLVER_FAILURE", 13.2, "SOLVER_FAILURE", 13.2125))
+                .cause,
+            "numerical");
+  // ... unless the reference meets a physical limit there.
+  EXPECT_EQ(ClassifyFailure(Evidence("SOLVER_FAILURE", 11.5,
+                                     "INFEASIBLE_FRICTION", 11.5125))
+                .detail,
+            "friction_limit");
+  // Rank-deficient statics on the reference's path at the same place.
+  const FailureCause c =
+      ClassifyFailure(Evidence("SINGULAR", 2.6, "SINGULAR", 2.6125));
+  EXPECT_EQ(c.cause, "physical");
+  EXPECT_EQ(c.detail, "singular_point");
+  EXPECT_EQ(
+      ClassifyFailure(Evidence("step_size_too_small", 1, "success", 20)).detail,
+      "integrator_failure");
+  EXPECT_EQ(
+      ClassifyFailure(Evidence("drift_exceeded", 20, "success", 20)).detail,
+      "drift_blowup");
+  EXPECT_EQ(ClassifyFailure(Evidence("gap_exceeded", 20, "success", 20)).detail,
+            "gap_blowup");
+  const FailureCause err =
+      ClassifyFailure(Evidence("error", kNaN, "success", 20));
+  EXPECT_EQ(err.cause, "numerical");
+  EXPECT_EQ(err.detail, "error");
+}
+
+}  // namespace
+}  // namespace quasiroll::bench
