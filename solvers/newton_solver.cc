@@ -37,7 +37,9 @@ struct NewtonSolver::Workspace {
     jtr.resize(n);
     jtj_diag.resize(n);
     if (lu.rows() != n) lu = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
-    if (llt.rows() != n) llt = Eigen::LLT<Eigen::MatrixXd>(n);
+    // Factor an identity once to allocate the factor's storage: assigning a
+    // size-constructed LLT would copy its uninitialised info() (UBSan).
+    if (llt.rows() != n) llt.compute(Eigen::MatrixXd::Identity(n, n));
     eq_rows.reserve(static_cast<size_t>(n));
   }
 };

@@ -152,6 +152,12 @@ def _reference_method(spec):
     kind = spec.get("kind", "")
     if kind.startswith("analytic"):
         return "closed form (" + kind.split(":", 1)[-1] + ")"
+    if isinstance(spec.get("method"), str) and spec["method"]:
+        # The harness states the method itself (and the check reference's).
+        text = spec["method"]
+        if isinstance(spec.get("check_method"), str) and spec["check_method"]:
+            text += "; checked against " + spec["check_method"]
+        return text
     fields = {name: reference_field(spec, name) for name in
               ("dt_divisor", "substeps", "nlp", "residual_tolerance", "coupling",
                "dae", "rk", "dt")}

@@ -86,18 +86,20 @@ def _short(value):
     return f"{value:g}" if is_finite(value) else ""
 
 
-def problem_label(run, references=None):
-    """Short human label: 'paper · pvc · μ=0.5 · 20 s' (+ seed, roughness)."""
+def problem_label(run, references=None, omit=()):
+    """Short human label: 'paper · pvc · μ=0.5 · 20 s' (+ seed, roughness).
+    `omit` names fields left out ("mu", "seed", "roughness"): the axis of a
+    chart whose columns vary it."""
     parts = [run["scene"]]
     mode = scene_mode(run, references or {})
     if mode:
         parts.append(f"{mode} mode")
-    if is_finite(run["mu"]):
+    if is_finite(run["mu"]) and "mu" not in omit:
         parts.append(f"μ={_short(run['mu'])}")
-    if run.get("seed"):
+    if run.get("seed") and "seed" not in omit:
         parts.append(f"seed {run['seed']}")
     rough = run.get("roughness", math.nan)
-    if is_finite(rough) and not math.isclose(rough, 1.0):
+    if is_finite(rough) and not math.isclose(rough, 1.0) and "roughness" not in omit:
         parts.append(f"roughness {_short(rough)}")
     t_end = run.get("t_end", math.nan)
     if is_finite(t_end):

@@ -502,8 +502,8 @@ def stability_charts(runs, references=None):
             if name == "mu":
                 mu_min = scene_mu_min(mine)
             panels.append({"scene": scene,
-                           "label": problem_label(mine[0], references).split(" · μ=")[0]
-                           if name == "mu" else problem_label(mine[0], references),
+                           # The axis varies across the columns: not in the label.
+                           "label": problem_label(mine[0], references, omit=(name,)),
                            "values": values, "rows": row_names, "cells": cells,
                            "mu_min": mu_min})
         charts.append({"group": group, "axis": name, "axis_label": label,

@@ -7,6 +7,7 @@
 #include <set>
 #include <string>
 
+#include "core/dae.h"
 #include "core/scene.h"
 
 namespace quasiroll::bench {
@@ -440,8 +441,9 @@ TEST(BenchSuite, StabilitySuiteCoversEveryMethodOnEveryAxis) {
               : (r.seed ? std::to_string(*r.seed) : std::string("-"));
       values.insert(v);
     }
+    // Every registered integrator: a new one must join the stability suite.
     for (const char* nlp : {"newton", "ipopt", "slsqp", "ceres"})
-      for (const char* dae : {"rk-baumgarte", "rk-projection", "ida"})
+      for (const std::string& dae : IntegratorRegistry::Names())
         for (const char* coupling : {"zoh", "coupled"})
           EXPECT_EQ(
               methods.count(std::string(nlp) + "/" + dae + "/" + coupling), 1u)
