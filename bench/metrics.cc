@@ -254,8 +254,17 @@ FailureCause ClassifyFailure(const FailureEvidence& e) {
     // reference at the same place does.
     if (same_place && IsPhysicalStatus(e.ref_status))
       return {"physical", PhysicalDetail(e.ref_status)};
+    // The reference's own solver gives up at the same place: a hard point
+    // of the quasi-static NLP (seen within 1 % of mu_min), not this
+    // method's weakness alone. Still numerical: a solution exists.
+    if (same_place && e.ref_status == "SOLVER_FAILURE")
+      return {"numerical", "shared_solver_failure"};
     return {"numerical", "solver_failure"};
   }
+  // An implicit integrator whose residual could not be evaluated because the
+  // NLP failed inside it, where the reference's solver fails too.
+  if (st == "rhs_failure" && same_place && e.ref_status == "SOLVER_FAILURE")
+    return {"numerical", "shared_solver_failure"};
   return {"numerical", "integrator_failure"};
 }
 

@@ -60,7 +60,8 @@ PHYSICAL_COLOURS = {"friction_limit": "#377eb8", "lift_off": "#80b1d3",
                     "degenerate_contact": "#984ea3"}
 PHYSICAL_OTHER = "#bebada"
 NUMERICAL_COLOURS = {"step_too_large": "#e41a1c", "baumgarte_instability": "#ff7f00",
-                     "solver_failure": "#f781bf", "integrator_failure": "#a65628",
+                     "solver_failure": "#f781bf", "shared_solver_failure": "#fccde5",
+                     "integrator_failure": "#a65628",
                      "drift_blowup": "#fdb462", "gap_blowup": "#b15928",
                      "error": "#333333"}
 NUMERICAL_OTHER = "#fb8072"
