@@ -73,7 +73,7 @@ TimingStats ComputeTimingStats(std::vector<double> wall_seconds);
 // L^2 + W^2) about the platform axes (x forward, y left, z up).
 Vec3 EstimatedInertia(const Scene& scene);
 
-// Quasi-static validity (docs/model.md §8.7): the max
+// Quasi-static validity (docs/model.md §8.8): the max
 // over the samples of
 //   (m |a_com| + |I_w alpha + omega x I_w omega| / L0) / sum_i |F_i|
 // with a_com, alpha from central differences of the recorded COM and angular

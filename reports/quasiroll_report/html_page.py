@@ -222,10 +222,12 @@ def qs_table(ctx):
     why = (f"<p>Quasi-static validity: <code>qs_inertia_ratio</code> is, over a run, the "
            "largest ratio of the inertial load the quasi-static model neglects "
            "(m|a_com| plus the rotational term) to the contact load it balances "
-           f"(docs/model.md). Threshold {fmt(threshold)} ({escape(source)}): the "
-           "neglected inertia perturbs the contact forces by about that fraction, "
-           "below the uncertainty of a Coulomb friction coefficient; above it the "
-           "scene needs dynamics.</p>")
+           f"(docs/model.md §8.8). Threshold {fmt(threshold)} ({escape(source)}): the "
+           "neglected inertia perturbs the contact forces, and so μ_min and the "
+           "friction-limit conclusions, by about that fraction — 1 % is an order of "
+           "magnitude below the friction margins this study resolves (pvc needs "
+           "μ ≳ 0.43 on R1 against μ = 0.5); above it the scene needs a dynamic "
+           "model.</p>")
     if not rows:
         return why + ('<p class="note">No <code>qs_inertia_ratio</code> column in these '
                       "results: validity not shown.</p>")
