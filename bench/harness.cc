@@ -97,7 +97,8 @@ const std::vector<std::string>& RunsCsvColumns() {
                                                    "wall_per_sim_s",
                                                    "qs_inertia_ratio",
                                                    "ref_mu_min",
-                                                   "ref_err_est"};
+                                                   "ref_err_est",
+                                                   "nlp_iters_native"};
   return columns;
 }
 
@@ -282,6 +283,7 @@ std::vector<std::string> MakeRow(const RunSpec& run,
   b.Set("wall_s", timing.min);
   b.SetInt("nlp_solves", result.nlp_solves);
   b.SetInt("nlp_iters", result.nlp_iterations);
+  b.SetInt("nlp_iters_native", result.nlp_iterations_native);
   b.SetInt("rhs_evals", result.rhs_evaluations);
   b.SetInt("jac_evals", result.jacobian_evaluations);
   b.SetInt("steps", result.steps);
@@ -341,8 +343,9 @@ std::vector<std::string> ErrorRow(const RunSpec& run,
   b.Set("stop_reason", OneLine(message));
   b.Set("t_reached", std::numeric_limits<double>::quiet_NaN());
   b.Set("wall_s", std::numeric_limits<double>::quiet_NaN());
-  for (const char* c : {"nlp_solves", "nlp_iters", "rhs_evals", "jac_evals",
-                        "steps", "rejected_steps", "samples"})
+  for (const char* c :
+       {"nlp_solves", "nlp_iters", "rhs_evals", "jac_evals", "steps",
+        "rejected_steps", "samples", "nlp_iters_native"})
     b.SetInt(c, 0);
   SetReference(reference, reference_error, &b);
   SetNanMetrics(&b);

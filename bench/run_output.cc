@@ -223,6 +223,7 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.Key("jacobian_evaluations").Value(r.jacobian_evaluations);
   j.Key("steps").Value(r.steps);
   j.Key("rejected_steps").Value(r.rejected_steps);
+  j.Key("nlp_iterations_native").Value(r.nlp_iterations_native);
   j.EndObject();
   j.Key("wall_s").Value(r.wall_seconds);
   j.Key("kkt_residual").Value(r.kkt_residual);

@@ -253,6 +253,7 @@ double KktVerifier::Verify(const NlpProblem& problem,
   if (equality_only < best) {
     best = equality_only;
     used_least_squares_ = true;
+    best_lambda_ = w.lambda;
   }
   if (best <= accept_below) return best;
 
@@ -312,6 +313,7 @@ double KktVerifier::Verify(const NlpProblem& problem,
       if (residual < best) {
         best = residual;
         used_least_squares_ = true;
+        best_lambda_ = w.lambda;
       }
       break;
     }
@@ -417,6 +419,8 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
   result->backend = name();
   result->backend_status.clear();
   result->has_multipliers = false;
+  result->multipliers_estimated = false;
+  result->native_iterations = -1;  // = iterations unless the backend sets it
   result->kkt_residual = std::numeric_limits<double>::quiet_NaN();
   result->iterations = result->objective_evaluations = 0;
   result->constraint_evaluations = result->jacobian_evaluations = 0;
@@ -436,6 +440,8 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
   result->wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();
+  if (result->native_iterations < 0)
+    result->native_iterations = result->iterations;
 
   // Independent acceptance check.
   bool finite = result->x.size() == n && result->x.allFinite();
@@ -467,6 +473,16 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
         kkt_.Verify(problem, result->x, g_, x_lb_, x_ub_, g_lb_, g_ub_,
                     result->has_multipliers ? &result->multipliers : nullptr,
                     std::max(options.feasibility_tolerance, tol), tol);
+    // Every converged result carries multipliers: the least-squares estimate
+    // that certified the point when the backend gave none, or when its own
+    // did not pass and the estimate did better (Verify() returns early when
+    // the backend's pass).
+    if (kkt_.used_least_squares() &&
+        kkt_.least_squares_multipliers().size() == m) {
+      result->multipliers = kkt_.least_squares_multipliers();
+      result->has_multipliers = false;
+      result->multipliers_estimated = true;
+    }
     if (!(result->kkt_residual <= tol)) {
       std::ostringstream os;
       os << " [claimed convergence rejected: KKT residual "

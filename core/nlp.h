@@ -157,7 +157,26 @@ struct NlpResult {
   // recomputed by Solve() whenever the backend claims convergence; NaN
   // otherwise.
   double kkt_residual = std::numeric_limits<double>::quiet_NaN();
+  // Comparable across backends (docs/harness.md, "Iterations"): accepted
+  // iterates, i.e. the number of times the backend moved x to a new point
+  // computed from a fresh linearisation -- a Newton / SQP / interior-point
+  // major iteration, an accepted trust-region or line-search step of an
+  // inner solver, a Gauss-Newton step of a feasibility polish. Rejected
+  // trial points (backtracking, unsuccessful trust-region steps) and extra
+  // function evaluations do not count.
   int iterations = 0;
+  // The backend's own count, as its library defines it, plus the steps of
+  // the backend's own post-processing (e.g. slsqp: NLopt's objective-gradient
+  // evaluations + polish steps; ceres: successful and unsuccessful LM steps +
+  // BFGS iterations + polish steps). Solve() sets it to `iterations` when a
+  // backend leaves it unset (-1), i.e. when the two counts agree.
+  int native_iterations = 0;
+  // True when Solve() replaced `multipliers` (and cleared has_multipliers)
+  // with the least-squares estimate that certified a claimed convergence,
+  // because the backend gave none (newton, slsqp, ceres on square systems)
+  // or its own did not pass the check. So every kConverged result carries
+  // multipliers (size m) with kkt_residual(x, multipliers) = kkt_residual.
+  bool multipliers_estimated = false;
   int objective_evaluations = 0;
   int constraint_evaluations = 0;
   int jacobian_evaluations = 0;
@@ -196,11 +215,16 @@ class KktVerifier {
                 double activity_tolerance, double accept_below);
   // True if the last Verify() result came from the least-squares multipliers.
   bool used_least_squares() const { return used_least_squares_; }
+  // Those multipliers (size m), valid when used_least_squares().
+  const Eigen::VectorXd& least_squares_multipliers() const {
+    return best_lambda_;
+  }
 
  private:
   struct Workspace;
   std::unique_ptr<Workspace> ws_;
   bool used_least_squares_ = false;
+  Eigen::VectorXd best_lambda_;
 };
 
 class NlpSolver {

@@ -463,6 +463,7 @@ bool QuasiStaticSolver::TrySolve(const Eigen::VectorXd& z0,
   const NlpStatus status = nlp_->Solve(problem_, z0, nlp_options_, &result_);
   out->nlp_status = status;
   out->nlp_iterations += result_.iterations;
+  out->nlp_iterations_native += result_.native_iterations;
   out->nlp_solves += 1;
   if (!result_.x.allFinite()) return false;
   out->residual = problem_.EqualityResidual(result_.x);
@@ -477,6 +478,7 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
                                            QuasiStaticSolution* out) {
   const auto start = std::chrono::steady_clock::now();
   out->nlp_iterations = 0;
+  out->nlp_iterations_native = 0;
   out->nlp_solves = 0;
   out->message.clear();
   out->mu_min = kNaN;

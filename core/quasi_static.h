@@ -176,7 +176,9 @@ struct QuasiStaticSolution {
   double kkt_residual = std::numeric_limits<double>::quiet_NaN();
   double condition_number = 0.0;  // NaN unless requested
   NlpStatus nlp_status = NlpStatus::kNotRun;
-  int nlp_iterations = 0;  // summed over homotopy stages
+  int nlp_iterations =
+      0;  // summed over homotopy stages (NlpResult::iterations)
+  int nlp_iterations_native = 0;  // NlpResult::native_iterations, summed
   int nlp_solves = 0;
   double wall_seconds = 0.0;
   std::string message;  // why, for non-OK statuses

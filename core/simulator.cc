@@ -59,6 +59,7 @@ class Simulator::RobotOde final : public ConstrainedOde {
   double kkt_residual() const { return kkt_residual_; }
   void ResetKkt() { kkt_residual_ = std::numeric_limits<double>::quiet_NaN(); }
   long long nlp_iterations() const { return nlp_iterations_; }
+  long long nlp_iterations_native() const { return nlp_iterations_native_; }
 
   int state_size() const override { return kConfigSize; }
   int num_constraints() const override { return kNumConstraints; }
@@ -75,6 +76,7 @@ class Simulator::RobotOde final : public ConstrainedOde {
       solver_->Solve(q, &sol_);
       nlp_solves_ += sol_.nlp_solves;
       nlp_iterations_ += sol_.nlp_iterations;
+      nlp_iterations_native_ += sol_.nlp_iterations_native;
       if (sol_.status != QuasiStaticStatus::kOk) {
         nlp_failed_ = true;
         return false;
@@ -116,6 +118,7 @@ class Simulator::RobotOde final : public ConstrainedOde {
   bool nlp_failed_ = false;
   int nlp_solves_ = 0;
   long long nlp_iterations_ = 0;
+  long long nlp_iterations_native_ = 0;
   double kkt_residual_ = std::numeric_limits<double>::quiet_NaN();
 };
 
@@ -304,6 +307,7 @@ struct Simulator::Session {
   int k = 0, n = 0;
   int ode_solves_seen = 0;
   long long ode_iterations_seen = 0;
+  long long ode_native_iterations_seen = 0;
   bool done = true;
 };
 
@@ -336,6 +340,7 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   s.n = static_cast<int>(std::ceil(t_end_ / dt_ - 1e-9));
   s.ode_solves_seen = s.ode.nlp_solves();
   s.ode_iterations_seen = s.ode.nlp_iterations();
+  s.ode_native_iterations_seen = s.ode.nlp_iterations_native();
   s.ode.ResetKkt();
   s.done = false;
   *result = SimulationResult{};
@@ -355,6 +360,9 @@ bool Simulator::Advance(SimulationResult* result) {
   // Counters cover everything since Begin().
   result->nlp_solves += s.ode.nlp_solves() - s.ode_solves_seen;
   result->nlp_iterations += s.ode.nlp_iterations() - s.ode_iterations_seen;
+  result->nlp_iterations_native +=
+      s.ode.nlp_iterations_native() - s.ode_native_iterations_seen;
+  s.ode_native_iterations_seen = s.ode.nlp_iterations_native();
   s.ode_solves_seen = s.ode.nlp_solves();
   s.ode_iterations_seen = s.ode.nlp_iterations();
   result->kkt_residual = std::fmax(result->kkt_residual, s.ode.kkt_residual());
@@ -378,6 +386,7 @@ bool Simulator::Interval(SimulationResult* result) {
   QuasiStaticSolution& sol = s.sol;
   result->nlp_solves += sol.nlp_solves;
   result->nlp_iterations += sol.nlp_iterations;
+  result->nlp_iterations_native += sol.nlp_iterations_native;
   if (options_.second_contact_check_every > 0 &&
       k % options_.second_contact_check_every == 0 &&
       sol.status == QuasiStaticStatus::kOk) {

@@ -86,7 +86,8 @@ struct SimulationResult {
   std::vector<TrajectorySample> samples;
   // Cost counters.
   int nlp_solves = 0;
-  long long nlp_iterations = 0;
+  long long nlp_iterations = 0;         // comparable count (core/nlp.h)
+  long long nlp_iterations_native = 0;  // the backends' own counts
   long long rhs_evaluations = 0;
   long long jacobian_evaluations = 0;
   int steps = 0;

@@ -48,6 +48,7 @@ PolishStats PolishPass(const NlpProblem& problem, const NlpBounds& b,
       MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
   double best_violation = stats.max_violation;
   Eigen::VectorXd x_best = x;
+  int accepted_at_best = 0;
 
   while (stats.max_violation > feasibility_tolerance &&
          stats.iterations < max_iterations && !free_vars.empty() &&
@@ -106,6 +107,7 @@ PolishStats PolishPass(const NlpProblem& problem, const NlpBounds& b,
         g.swap(g_trial);
         stats.max_violation = v;
         improved = true;
+        ++stats.accepted_steps;
         break;
       }
     }
@@ -113,6 +115,7 @@ PolishStats PolishPass(const NlpProblem& problem, const NlpBounds& b,
     if (stats.max_violation < best_violation) {
       best_violation = stats.max_violation;
       x_best = x;
+      accepted_at_best = stats.accepted_steps;
     }
     if (!improved) break;
   }
@@ -122,6 +125,7 @@ PolishStats PolishPass(const NlpProblem& problem, const NlpBounds& b,
   if (stats.max_violation > best_violation) {
     x = x_best;
     stats.max_violation = best_violation;
+    stats.accepted_steps = accepted_at_best;
   }
   stats.success = stats.max_violation <= feasibility_tolerance;
   return stats;
@@ -145,10 +149,12 @@ PolishStats PolishActiveConstraints(const NlpProblem& problem,
   *x_io = x0;
   PolishStats second = PolishPass(problem, b, active_tol, feasibility_tolerance,
                                   max_iterations, true, x_io);
+  second.iterations += first.iterations;
   second.constraint_evaluations += first.constraint_evaluations;
   second.jacobian_evaluations += first.jacobian_evaluations;
   if (!second.success && first.max_violation < second.max_violation) {
     *x_io = x_first;
+    first.iterations = second.iterations;
     first.constraint_evaluations = second.constraint_evaluations;
     first.jacobian_evaluations = second.jacobian_evaluations;
     return first;

@@ -31,7 +31,8 @@ struct NlpBounds {
 };
 
 struct PolishStats {
-  int iterations = 0;
+  int iterations = 0;      // Gauss-Newton steps computed (both passes)
+  int accepted_steps = 0;  // of those, steps that moved the returned x
   int constraint_evaluations = 0;
   int jacobian_evaluations = 0;
   double max_violation = 0.0;  // at the returned x

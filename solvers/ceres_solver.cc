@@ -343,10 +343,16 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
   Eigen::VectorXd& x = result->x;
   for (int j = 0; j < n; ++j)
     x(j) = std::clamp(x0(j), s.b.x_lb(j), s.b.x_ub(j));
+  // native: LM steps (both kinds) + BFGS iterations + polish steps;
+  // comparable (core/nlp.h): accepted iterates, i.e. successful LM steps,
+  // BFGS iterations (each ends with an accepted line-search point) and
+  // polish steps that moved x.
   int iterations = 0;
+  int accepted = 0;
   auto finish = [&](NlpStatus status) {
     result->status = status;
-    result->iterations = iterations;
+    result->iterations = accepted;
+    result->native_iterations = iterations;
     result->objective_evaluations = s.f_evals;
     result->constraint_evaluations = s.g_evals;
     result->jacobian_evaluations = s.j_evals;
@@ -384,7 +390,13 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
     }
     ceres::Solver::Summary summary;
     ceres::Solve(o, s.ls.get(), &summary);
-    iterations += summary.num_successful_steps + summary.num_unsuccessful_steps;
+    // Entry 0 of summary.iterations is the starting point; every later entry
+    // is one trust-region step, successful (accepted) or not.
+    for (const ceres::IterationSummary& it : summary.iterations) {
+      if (it.iteration == 0) continue;
+      ++iterations;
+      accepted += it.step_is_successful;
+    }
     x = s.xp;
     s.g.resize(m);
     problem.Constraints(x, s.g);
@@ -415,6 +427,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
           const internal::PolishStats ps = internal::PolishActiveConstraints(
               problem, s.b, /*active_tol=*/0.0, feas_tol,
               s.settings.polish_max_iterations, &x);
+          accepted += ps.accepted_steps;
+          iterations += ps.iterations;
           s.g_evals += ps.constraint_evaluations;
           s.j_evals += ps.jacobian_evaluations;
           std::snprintf(msg, sizeof msg, "; polish -> violation %.2e",
@@ -507,8 +521,10 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
   ceres::GradientProblemSolver::Summary gs;
   for (; outer < options.max_iterations && !converged; ++outer) {
     ceres::Solve(go, *s.gp, s.xa.data(), &gs);
-    if (!gs.iterations.empty())
+    if (!gs.iterations.empty()) {
       iterations += static_cast<int>(gs.iterations.size()) - 1;
+      accepted += static_cast<int>(gs.iterations.size()) - 1;
+    }
     if (gs.termination_type == ceres::FAILURE && gs.iterations.size() <= 1 &&
         !std::isfinite(gs.final_cost)) {
       std::snprintf(msg, sizeof msg, "; AL inner solve failed: ");
@@ -563,6 +579,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
       const internal::PolishStats ps = internal::PolishActiveConstraints(
           problem, s.b, /*active_tol=*/s.settings.polish_threshold, feas_tol,
           s.settings.polish_max_iterations, &s.xa);
+      accepted += ps.accepted_steps;
+      iterations += ps.iterations;
       s.g_evals += ps.constraint_evaluations;
       s.j_evals += ps.jacobian_evaluations;
       if (ps.success) {
@@ -599,6 +617,8 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
     const internal::PolishStats ps = internal::PolishActiveConstraints(
         problem, s.b, /*active_tol=*/s.settings.polish_threshold, feas_tol,
         s.settings.polish_max_iterations, &x);
+    accepted += ps.accepted_steps;
+    iterations += ps.iterations;
     s.g_evals += ps.constraint_evaluations;
     s.j_evals += ps.jacobian_evaluations;
     std::snprintf(msg, sizeof msg, "; polish -> violation %.2e",

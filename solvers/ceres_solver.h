@@ -42,8 +42,11 @@
 // moving x by O(V)). The answer is only kConverged if every constraint
 // residual is <= feasibility_tolerance.
 //
-// iterations = LM iterations + all inner BFGS iterations; max_iterations caps
-// the LM iterations, the number of AL outer iterations and each inner solve.
+// iterations (the comparable count, core/nlp.h) = successful LM steps + all
+// inner BFGS iterations + accepted polish steps; native_iterations = all LM
+// steps (successful and unsuccessful) + BFGS iterations + polish steps
+// computed. max_iterations caps the LM iterations, the number of AL outer
+// iterations and each inner solve.
 // Warm start (warm_start_multipliers and a multiplier vector of size m, in
 // Ipopt's convention lambda = mu_upper - mu_lower): seeds lam / mu; box
 // multipliers from the reduced gradient grad f + J^T lambda.

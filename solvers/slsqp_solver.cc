@@ -40,6 +40,37 @@ struct SlsqpSolver::Impl {
   int obj_evals = 0, grad_evals = 0, con_evals = 0, jac_evals = 0;
   bool nonfinite = false;
 
+  // Accepted iterates (the comparable iteration count, core/nlp.h). NLopt
+  // does not report SLSQP's major iterations, but its driver (nlopt_slsqp in
+  // NLopt's slsqp.c) tells them apart through the gradient argument: after
+  // x0, every line search starts with the full step x_k + d_k evaluated with
+  // the gradient (Kraft's mode -2, in case it is accepted); a backtrack
+  // (mode 1) is evaluated without it; when a backtrack is accepted the same
+  // point is evaluated again with the gradient (mode -1). So a call with a
+  // gradient ends the pending trial as accepted, a call without one rejects
+  // it, and the trial pending at the end counts if it is the point NLopt
+  // returns (its best point).
+  Eigen::VectorXd trial;
+  bool started = false, have_trial = false;
+  int accepted = 0;
+  void TrackPoint(const double* xp, bool with_gradient) {
+    Eigen::Map<const Eigen::VectorXd> e(xp, n);
+    if (!started) {  // x0
+      started = true;
+      return;
+    }
+    if (with_gradient && have_trial) ++accepted;
+    if (with_gradient && have_trial && e == trial) {
+      have_trial = false;  // re-evaluation of an accepted backtrack
+      return;
+    }
+    trial = e;
+    have_trial = true;
+  }
+  void FinishTracking(const Eigen::VectorXd& x) {
+    if (have_trial && x == trial) ++accepted;
+  }
+
   void Touch(const double* xp) {
     const size_t bytes = sizeof(double) * static_cast<size_t>(n);
     if (std::memcmp(cache_x.data(), xp, bytes) != 0) {
@@ -72,6 +103,7 @@ struct SlsqpSolver::Impl {
                             void* data) {
     auto* s = static_cast<Impl*>(data);
     Eigen::Map<const Eigen::VectorXd> xm(xp, n);
+    s->TrackPoint(xp, grad != nullptr);
     const double f = s->problem->Objective(xm);
     ++s->obj_evals;
     if (!std::isfinite(f)) s->Fail();
@@ -244,6 +276,9 @@ void SlsqpSolver::DoSolve(const NlpProblem& problem,
   s.cache_x.setConstant(std::numeric_limits<double>::quiet_NaN());
   s.obj_evals = s.grad_evals = s.con_evals = s.jac_evals = 0;
   s.nonfinite = false;
+  s.trial.resize(n);
+  s.started = s.have_trial = false;
+  s.accepted = 0;
 
   s.lb.resize(static_cast<size_t>(n));
   s.ub.resize(static_cast<size_t>(n));
@@ -290,7 +325,9 @@ void SlsqpSolver::DoSolve(const NlpProblem& problem,
     outcome = Outcome::kFailure;
   }
   for (int j = 0; j < n; ++j) result->x(j) = s.x[j];
-  result->iterations = s.grad_evals;
+  s.FinishTracking(result->x);
+  result->iterations = s.accepted;
+  result->native_iterations = s.grad_evals;
   result->objective_evaluations = s.obj_evals;
   result->constraint_evaluations = s.con_evals;
   result->jacobian_evaluations = s.jac_evals;
@@ -311,6 +348,8 @@ void SlsqpSolver::DoSolve(const NlpProblem& problem,
       set.polish_max_iterations, &result->x);
   result->constraint_evaluations += ps.constraint_evaluations;
   result->jacobian_evaluations += ps.jacobian_evaluations;
+  result->iterations += ps.accepted_steps;
+  result->native_iterations += ps.iterations;
   char msg[128];
   if (ps.iterations > 0) {
     std::snprintf(msg, sizeof msg, " + %d polish step(s) -> violation %.2e",

@@ -8,8 +8,11 @@
 //   ftol_rel = xtol_rel = options.optimality_tolerance,
 //   constraint tolerance = options.feasibility_tolerance,
 //   maxeval = 3 * options.max_iterations (SLSQP does ~1-3 evaluations per
-//   major iteration; NLopt does not expose the major iteration count, so
-//   `iterations` reports objective-gradient evaluations).
+//   major iteration). NLopt does not expose the major iteration count:
+//   `native_iterations` reports objective-gradient evaluations plus polish
+//   steps computed, and `iterations` (accepted iterates, core/nlp.h) is
+//   recovered from NLopt's calls (which points come with a gradient request,
+//   slsqp_solver.cc, TrackPoint) plus the polish steps that moved x.
 //
 // NLopt may report success (SUCCESS/FTOL/XTOL/STOPVAL, also ROUNDOFF_LIMITED
 // which "typically returns a useful result") with constraints violated beyond

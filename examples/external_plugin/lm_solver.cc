@@ -71,12 +71,16 @@ void LevenbergMarquardtSolver::DoSolve(
 
   const double tol = options.feasibility_tolerance;
   char msg[200];
+  // `iter` counts every LM step computed (the native count), `accepted` the
+  // steps that moved x: the comparable count of core/nlp.h.
+  int accepted = 0;
   auto fail = [&](NlpStatus status, const char* what, int iter) {
     result->status = status;
     std::snprintf(msg, sizeof msg, "%s at iteration %d, |r|_inf = %.3e", what,
                   iter, w.r.lpNorm<Eigen::Infinity>());
     result->backend_status = msg;
-    result->iterations = iter;
+    result->iterations = accepted;
+    result->native_iterations = iter;
   };
 
   Eigen::VectorXd& x = result->x;
@@ -147,6 +151,7 @@ void LevenbergMarquardtSolver::DoSolve(
       w.r.swap(w.r_trial);
       phi = phi_trial;
       need_jacobian = true;
+      ++accepted;
     } else {
       // Reject: shorter, more gradient-like step. A step below round-off
       // relative to x means no further progress is possible.
@@ -159,7 +164,8 @@ void LevenbergMarquardtSolver::DoSolve(
       nu *= 2.0;
     }
   }
-  result->iterations = iter;
+  result->iterations = accepted;
+  result->native_iterations = iter;
 
   const double viol =
       quasiroll::MaxConstraintViolation(x, w.g, w.x_lb, w.x_ub, w.g_lb, w.g_ub);

@@ -16,6 +16,9 @@
 // unique); kIterationLimit after max_iterations step attempts;
 // kNumericalFailure for a non-finite residual or Jacobian, or stagnation.
 // Never throws for numerical trouble. The objective is ignored.
+// iterations = accepted steps (core/nlp.h), native_iterations = all steps
+// computed (rejected ones, after which lambda grows, included); multipliers:
+// none of its own (NlpSolver::Solve() estimates them, multipliers_estimated).
 // Backend options (option_table(), the plugin's own): lambda_init_scale,
 // the initial damping lambda_0 = lambda_init_scale * max_j |J e_j|^2.
 #pragma once

@@ -209,7 +209,8 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
                         "jac_evals",
                         "t_end",
                         "host",
-                        "cpu_model"})
+                        "cpu_model",
+                        "nlp_iters_native"})
     EXPECT_NE(std::find(t.header.begin(), t.header.end(), c), t.header.end())
         << c;
   ASSERT_EQ(t.rows.size(), suite_.runs.size());
@@ -231,6 +232,15 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
           std::stod(r.at("err_pos_max")) >= std::stod(r.at("err_pos_rms")),
           true);
       EXPECT_GT(std::stoi(r.at("nlp_solves")), 0);
+      // Comparable count <= native count (docs/harness.md, "Iterations"),
+      // equal for newton and ipopt, which count only accepted iterates.
+      const long long iters = std::stoll(r.at("nlp_iters"));
+      const long long native = std::stoll(r.at("nlp_iters_native"));
+      EXPECT_GE(iters, 0) << r.at("run_id");
+      EXPECT_LE(iters, native) << r.at("run_id");
+      if (r.at("nlp") == "newton" || r.at("nlp").rfind("ipopt", 0) == 0) {
+        EXPECT_EQ(iters, native) << r.at("run_id");
+      }
       // The options the backends used: every option of their tables, as
       // compact JSON (the rk-projection / newton defaults here).
       if (r.at("dae") == "rk-projection") {

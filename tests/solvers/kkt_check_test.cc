@@ -122,6 +122,37 @@ TEST(KktCheckTest, TrueOptimumKeepsConvergedWithLeastSquaresMultipliers) {
   }
 }
 
+// Every kConverged result carries multipliers of size m that certify the
+// reported residual (core/nlp.h, NlpResult::multipliers_estimated): the
+// backend's own when they pass, else the least-squares lambda = 100 that
+// certified the point (backend gave none, or gave lambda = 0, which leaves
+// grad f = (-100, -100) unbalanced).
+TEST(KktCheckTest, ConvergedResultCarriesTheCertifyingMultipliers) {
+  const Bowl p(-kInf, 4.0);
+  struct Case {
+    Eigen::VectorXd given;
+    bool estimated;
+  };
+  for (const Case& c : {Case{Eigen::VectorXd(), true},
+                        Case{Eigen::VectorXd::Constant(1, 100), false},
+                        Case{Eigen::VectorXd::Zero(1), true}}) {
+    ClaimingBackend backend(Eigen::Vector2d(2.0, 2.0), c.given);
+    NlpResult r;
+    ASSERT_EQ(SolveWith(&backend, p, &r), NlpStatus::kConverged)
+        << r.backend_status;
+    ASSERT_EQ(r.multipliers.size(), 1);
+    EXPECT_EQ(r.multipliers_estimated, c.estimated) << c.given.size();
+    EXPECT_EQ(r.has_multipliers, !c.estimated);
+    // lambda* = 100 exactly; the least squares is one 2x1 solve (round-off
+    // a few ulps of 100).
+    EXPECT_NEAR(r.multipliers(0), 100.0, 1e-12);
+    KktVerifier kkt;
+    EXPECT_EQ(kkt.ResidualWith(p, r.x, r.multipliers), r.kkt_residual);
+    // A backend that sets no native count gets its comparable one.
+    EXPECT_EQ(r.native_iterations, r.iterations);
+  }
+}
+
 // The same point (2, 2) when the row is x1 + x2 >= 4: the row is active on
 // its lower side, where the multiplier must be <= 0, but stationarity needs
 // lambda = +100: x is not a minimum (f falls towards (3, 3)). Caught with

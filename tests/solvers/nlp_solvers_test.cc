@@ -361,6 +361,50 @@ TEST_P(BackendTest, OptionTableIsWellFormedAndEnforced) {
   EXPECT_EQ((a.x - b.x).lpNorm<Eigen::Infinity>(), 0.0);
 }
 
+// Comparable counters (core/nlp.h, docs/harness.md "Iterations"). Every
+// converged result carries multipliers (size m) that reproduce the KKT
+// residual Solve() reported; they are Solve()'s least-squares estimate
+// exactly for the backends without their own (newton, slsqp, and ceres on
+// square systems, whose feasibility phase has none). `iterations` counts
+// accepted iterates, so it is positive from these starting points (none is
+// a solution) and at most the native count, which adds rejected trials
+// (ceres: unsuccessful LM steps; slsqp: line-search evaluations); ipopt and
+// newton count exactly their accepted iterates natively.
+TEST_P(BackendTest, ConvergedResultsCarryMultipliersAndComparableCounts) {
+  const std::string& backend = GetParam();
+  for (const char* name : {"hs071", "hs040", "contact_like_18"}) {
+    auto p = MakeReferenceProblem(name);
+    if (solver_->RequiresSquareSystem() && !p->IsSquareSystem()) continue;
+    NlpOptions options;
+    options.max_iterations = 500;
+    NlpResult r;
+    ASSERT_EQ(solver_->Solve(*p, p->starting_point(), options, &r),
+              NlpStatus::kConverged)
+        << name << ": " << r.backend_status;
+    std::printf("[nlp] %-7s %-16s iterations %d native %d multipliers %s\n",
+                backend.c_str(), name, r.iterations, r.native_iterations,
+                r.multipliers_estimated ? "estimated" : "own");
+    ASSERT_EQ(r.multipliers.size(), p->num_constraints()) << name;
+    EXPECT_NE(r.has_multipliers, r.multipliers_estimated) << name;
+    KktVerifier kkt;
+    const double residual = kkt.ResidualWith(*p, r.x, r.multipliers);
+    EXPECT_EQ(residual, r.kkt_residual) << name;
+    EXPECT_LE(residual, options.EffectiveKktTolerance()) << name;
+    if (backend == "newton" || backend == "slsqp") {
+      EXPECT_TRUE(r.multipliers_estimated) << name;
+    } else if (backend == "ceres") {
+      EXPECT_EQ(r.multipliers_estimated, p->IsSquareSystem()) << name;
+    } else if (backend.rfind("ipopt", 0) == 0) {
+      EXPECT_FALSE(r.multipliers_estimated) << name;
+    }
+    EXPECT_GT(r.iterations, 0) << name;
+    EXPECT_LE(r.iterations, r.native_iterations) << name;
+    if (backend == "newton" || backend.rfind("ipopt", 0) == 0) {
+      EXPECT_EQ(r.iterations, r.native_iterations) << name;
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(AllBackends, BackendTest,
                          ::testing::ValuesIn(Backends()), [](const auto& info) {
                            return testing_util::GtestName(info.param);
@@ -659,6 +703,59 @@ TEST(NlpReferenceProblemsTest, DerivativesAndOptimaAreConsistent) {
       }
     }
   }
+}
+
+// x^2 = 2 from x0 = 1: Newton's iterates are the Babylonian ones 3/2, 17/12,
+// 577/408, 665857/470832 with residuals x_k^2 - 2 = 1/4, 1/144, 1/166464,
+// 1/470832^2 = 4.5e-12 (Pell: 665857^2 - 2 * 470832^2 = 1). Each full step
+// cuts the residual by > 16x, so the Armijo test accepts it undamped, and the
+// first residual below feasibility_tolerance = 1e-10 is the 4th: newton
+// takes exactly 4 steps, and both of its counts say 4.
+class SquareRootOfTwo final : public NlpProblem {
+ public:
+  int num_variables() const override { return 1; }
+  int num_constraints() const override { return 1; }
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> xl, Eigen::Ref<Eigen::VectorXd> xu,
+                 Eigen::Ref<Eigen::VectorXd> gl,
+                 Eigen::Ref<Eigen::VectorXd> gu) const override {
+    xl(0) = 0.0;
+    xu(0) = 10.0;
+    gl(0) = gu(0) = 2.0;
+  }
+  double Objective(const Eigen::Ref<const Eigen::VectorXd>&) const override {
+    return 0.0;
+  }
+  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>&,
+                         Eigen::Ref<Eigen::VectorXd> grad) const override {
+    grad.setZero();
+  }
+  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                   Eigen::Ref<Eigen::VectorXd> g) const override {
+    g(0) = x(0) * x(0);
+  }
+  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
+    jac(0, 0) = 2.0 * x(0);
+  }
+};
+
+TEST(IterationCountTest, NewtonCountsExactlyItsSteps) {
+  RegisterBuiltinNlpSolvers();
+  auto solver = NlpSolverRegistry::Create("newton");
+  const SquareRootOfTwo p;
+  NlpOptions options;
+  options.feasibility_tolerance = 1e-10;
+  NlpResult r;
+  ASSERT_EQ(solver->Solve(p, Eigen::VectorXd::Ones(1), options, &r),
+            NlpStatus::kConverged)
+      << r.backend_status;
+  EXPECT_EQ(r.iterations, 4);
+  EXPECT_EQ(r.native_iterations, 4);
+  // x_4 = 665857/470832 = sqrt(2) + 1.6e-12.
+  EXPECT_NEAR(r.x(0), 665857.0 / 470832.0, 1e-15);
+  // The root is isolated: the multiplier is 0 (grad f = 0), estimated.
+  EXPECT_TRUE(r.multipliers_estimated);
+  EXPECT_EQ(r.multipliers(0), 0.0);
 }
 
 }  // namespace
