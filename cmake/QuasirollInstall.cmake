@@ -43,7 +43,10 @@ install(TARGETS quasiroll_core quasiroll_solvers quasiroll_integrators
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT devel
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT runtime
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime
-        INCLUDES DESTINATION ${QUASIROLL_INSTALL_INCLUDEDIR})
+        # <quasiroll/core/nlp.h>; include/quasiroll for the headers' own
+        # "core/options.h"-style includes.
+        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
+                             ${QUASIROLL_INSTALL_INCLUDEDIR})
 
 # Run-time data.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/bench/scenes ${PROJECT_SOURCE_DIR}/bench/suites

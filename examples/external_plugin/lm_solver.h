@@ -26,7 +26,7 @@
 #include <memory>
 #include <string>
 
-#include "core/nlp.h"
+#include <quasiroll/core/nlp.h>
 
 namespace example {
 

@@ -19,7 +19,7 @@
 #include <Eigen/Core>
 #include <string>
 
-#include "core/dae.h"
+#include <quasiroll/core/dae.h>
 
 namespace example {
 

@@ -24,15 +24,16 @@
 #include <string>
 #include <vector>
 
-#include "core/dae.h"
-#include "core/nlp.h"
-#include "core/nlp_reference_problems.h"
-#include "core/scene.h"
-#include "core/simulator.h"
+#include <quasiroll/core/dae.h>
+#include <quasiroll/core/nlp.h>
+#include <quasiroll/core/nlp_reference_problems.h>
+#include <quasiroll/core/scene.h>
+#include <quasiroll/core/simulator.h>
+
 #include "register_plugins.h"
 #ifdef EXAMPLE_HAVE_HARNESS
-#include "bench/harness.h"
-#include "bench/suite.h"
+#include <quasiroll/bench/harness.h>
+#include <quasiroll/bench/suite.h>
 #endif
 
 namespace {

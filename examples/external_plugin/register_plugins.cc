@@ -2,8 +2,9 @@
 
 #include <memory>
 
-#include "core/dae.h"
-#include "core/nlp.h"
+#include <quasiroll/core/dae.h>
+#include <quasiroll/core/nlp.h>
+
 #include "lm_solver.h"
 #include "midpoint_projection.h"
 

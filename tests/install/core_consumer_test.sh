@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# find_package(quasiroll COMPONENTS core) against an installed prefix works
+# without any solver or integrator package: installs BUILD_DIR into a
+# temporary prefix, then configures tests/install/core_consumer with every
+# solver/integrator package disabled (CMAKE_DISABLE_FIND_PACKAGE_<name>: a
+# find_dependency() on one of them would fail the configure) and runs it.
+#   tests/install/core_consumer_test.sh BUILD_DIR
+set -euo pipefail
+build=$(cd "$1" && pwd)
+src=$(cd "$(dirname "$0")/../.." && pwd)
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/quasiroll-core-consumer.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+cmake --install "$build" --prefix "$tmp/prefix" > "$tmp/install.log"
+disable=()
+for pkg in Ceres SUNDIALS NLopt PkgConfig LAPACK BLAS Threads; do
+  disable+=("-DCMAKE_DISABLE_FIND_PACKAGE_$pkg=ON")
+done
+cmake -S "$src/tests/install/core_consumer" -B "$tmp/build" \
+  -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$tmp/prefix" "${disable[@]}" \
+  > "$tmp/configure.log" || { cat "$tmp/configure.log"; exit 1; }
+grep 'core consumer' "$tmp/configure.log"
+cmake --build "$tmp/build" > "$tmp/build.log" || { cat "$tmp/build.log"; exit 1; }
+"$tmp/build/core_consumer"
