@@ -1,9 +1,9 @@
-#include "bench/command_json.h"
+#include "quasiroll/bench/command_json.h"
 
 #include <array>
 
-#include "bench/json_writer.h"
-#include "core/so3.h"
+#include "quasiroll/bench/json_writer.h"
+#include "quasiroll/core/so3.h"
 
 namespace quasiroll {
 

@@ -4,10 +4,10 @@
 
 #include <string>
 
-#include "core/initial_configuration.h"
-#include "core/kinematics.h"
-#include "core/quasi_static.h"
-#include "core/scene.h"
+#include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/kinematics.h"
+#include "quasiroll/core/quasi_static.h"
+#include "quasiroll/core/scene.h"
 
 namespace quasiroll {
 

@@ -1,4 +1,4 @@
-#include "bench/harness.h"
+#include "quasiroll/bench/harness.h"
 
 #include <unistd.h>
 
@@ -20,11 +20,11 @@
 #include <sstream>
 #include <thread>
 
-#include "bench/json_writer.h"
-#include "bench/metrics.h"
-#include "bench/run_output.h"
-#include "bench/shard.h"
-#include "core/nlp.h"
+#include "quasiroll/bench/json_writer.h"
+#include "quasiroll/bench/metrics.h"
+#include "quasiroll/bench/run_output.h"
+#include "quasiroll/bench/shard.h"
+#include "quasiroll/core/nlp.h"
 
 namespace quasiroll::bench {
 

@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "bench/reference.h"
-#include "bench/suite.h"
+#include "quasiroll/bench/reference.h"
+#include "quasiroll/bench/suite.h"
 
 namespace quasiroll::bench {
 

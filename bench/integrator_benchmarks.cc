@@ -11,7 +11,7 @@
 #include <memory>
 #include <string>
 
-#include "core/dae.h"
+#include "quasiroll/core/dae.h"
 
 namespace {
 

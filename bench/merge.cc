@@ -1,4 +1,4 @@
-#include "bench/merge.h"
+#include "quasiroll/bench/merge.h"
 
 #include <algorithm>
 #include <cstdlib>
@@ -9,11 +9,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "bench/harness.h"
-#include "bench/json_writer.h"
-#include "bench/run_output.h"
-#include "bench/suite.h"
-#include "core/scene.h"
+#include "quasiroll/bench/harness.h"
+#include "quasiroll/bench/json_writer.h"
+#include "quasiroll/bench/run_output.h"
+#include "quasiroll/bench/suite.h"
+#include "quasiroll/core/scene.h"
 
 namespace quasiroll::bench {
 

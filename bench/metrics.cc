@@ -1,10 +1,10 @@
-#include "bench/metrics.h"
+#include "quasiroll/bench/metrics.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 
-#include "core/so3.h"
+#include "quasiroll/core/so3.h"
 
 namespace quasiroll::bench {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/simulator.h"
+#include "quasiroll/core/simulator.h"
 
 namespace quasiroll::bench {
 

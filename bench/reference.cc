@@ -1,4 +1,4 @@
-#include "bench/reference.h"
+#include "quasiroll/bench/reference.h"
 
 #include <chrono>
 #include <cmath>
@@ -11,11 +11,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "bench/json_writer.h"
-#include "bench/metrics.h"
-#include "bench/run_output.h"
-#include "core/quasi_static.h"
-#include "core/so3.h"
+#include "quasiroll/bench/json_writer.h"
+#include "quasiroll/bench/metrics.h"
+#include "quasiroll/bench/run_output.h"
+#include "quasiroll/core/quasi_static.h"
+#include "quasiroll/core/so3.h"
 
 namespace quasiroll::bench {
 

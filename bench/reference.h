@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "bench/suite.h"
-#include "core/scene.h"
-#include "core/simulator.h"
-#include "core/terrains.h"
+#include "quasiroll/bench/suite.h"
+#include "quasiroll/core/scene.h"
+#include "quasiroll/core/simulator.h"
+#include "quasiroll/core/terrains.h"
 
 namespace quasiroll::bench {
 

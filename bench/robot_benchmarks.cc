@@ -16,9 +16,9 @@
 #include <memory>
 #include <string>
 
-#include "core/initial_configuration.h"
-#include "core/quasi_static.h"
-#include "core/simulator.h"
+#include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/quasi_static.h"
+#include "quasiroll/core/simulator.h"
 
 namespace quasiroll {
 namespace {

@@ -1,4 +1,4 @@
-#include "bench/run_output.h"
+#include "quasiroll/bench/run_output.h"
 
 #include <dlfcn.h>
 #include <unistd.h>
@@ -15,7 +15,7 @@
 #include <thread>
 #include <variant>
 
-#include "bench/metrics.h"
+#include "quasiroll/bench/metrics.h"
 #include "quasiroll_git_commit.h"
 
 namespace quasiroll {

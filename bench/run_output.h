@@ -4,9 +4,9 @@
 
 #include <string>
 
-#include "bench/json_writer.h"
-#include "core/scene.h"
-#include "core/simulator.h"
+#include "quasiroll/bench/json_writer.h"
+#include "quasiroll/core/scene.h"
+#include "quasiroll/core/simulator.h"
 
 namespace quasiroll {
 

@@ -1,12 +1,12 @@
-#include "bench/shard.h"
+#include "quasiroll/bench/shard.h"
 
 #include <algorithm>
 #include <cmath>
 #include <map>
 
-#include "bench/harness.h"
-#include "bench/reference.h"
-#include "core/scene.h"
+#include "quasiroll/bench/harness.h"
+#include "quasiroll/bench/reference.h"
+#include "quasiroll/core/scene.h"
 
 namespace quasiroll::bench {
 

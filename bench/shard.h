@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "bench/suite.h"
+#include "quasiroll/bench/suite.h"
 
 namespace quasiroll::bench {
 struct HarnessOptions;

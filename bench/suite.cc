@@ -1,4 +1,4 @@
-#include "bench/suite.h"
+#include "quasiroll/bench/suite.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,8 +10,8 @@
 #include <set>
 #include <sstream>
 
-#include "core/nlp.h"
-#include "core/yaml_util.h"
+#include "quasiroll/core/nlp.h"
+#include "quasiroll/core/yaml_util.h"
 
 namespace quasiroll::bench {
 

@@ -16,10 +16,10 @@
 #include <utility>
 #include <vector>
 
-#include "core/dae.h"
-#include "core/scene.h"
-#include "core/simulator.h"
-#include "core/terrains.h"
+#include "quasiroll/core/dae.h"
+#include "quasiroll/core/scene.h"
+#include "quasiroll/core/simulator.h"
+#include "quasiroll/core/terrains.h"
 
 namespace quasiroll::bench {
 

@@ -18,7 +18,8 @@ set(QUASIROLL_INSTALL_INCLUDEDIR ${CMAKE_INSTALL_INCLUDEDIR}/quasiroll)
 set(QUASIROLL_INSTALL_DATADIR ${CMAKE_INSTALL_DATADIR}/quasiroll)
 set(QUASIROLL_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/quasiroll)
 
-# Headers, keeping the "core/nlp.h" include layout.
+# Headers: include/quasiroll/core/nlp.h, included as <quasiroll/core/nlp.h>
+# (the headers' own includes have the same form).
 foreach(_dir core solvers integrators bench)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${_dir}/
           DESTINATION ${QUASIROLL_INSTALL_INCLUDEDIR}/${_dir}
@@ -43,10 +44,9 @@ install(TARGETS quasiroll_core quasiroll_solvers quasiroll_integrators
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT devel
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT runtime
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime
-        # <quasiroll/core/nlp.h>; include/quasiroll for the headers' own
-        # "core/options.h"-style includes.
-        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
-                             ${QUASIROLL_INSTALL_INCLUDEDIR})
+        # Only include/: <quasiroll/core/nlp.h>, so that no quasiroll header
+        # can be reached (or shadowed) as "core/nlp.h".
+        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 
 # Run-time data.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/bench/scenes ${PROJECT_SOURCE_DIR}/bench/suites

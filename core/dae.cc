@@ -1,11 +1,11 @@
-#include "core/dae.h"
+#include "quasiroll/core/dae.h"
 
 #include <chrono>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
-#include "core/registry.h"
+#include "quasiroll/core/registry.h"
 
 namespace quasiroll {
 

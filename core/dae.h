@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "core/options.h"
+#include "quasiroll/core/options.h"
 
 namespace quasiroll {
 

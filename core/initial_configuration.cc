@@ -1,4 +1,4 @@
-#include "core/initial_configuration.h"
+#include "quasiroll/core/initial_configuration.h"
 
 #include <Eigen/Dense>
 #include <cmath>

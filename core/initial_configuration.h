@@ -16,7 +16,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/kinematics.h"
+#include "quasiroll/core/kinematics.h"
 
 namespace quasiroll {
 

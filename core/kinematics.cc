@@ -1,4 +1,4 @@
-#include "core/kinematics.h"
+#include "quasiroll/core/kinematics.h"
 
 #include <cstring>
 #include <stdexcept>

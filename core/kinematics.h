@@ -34,10 +34,10 @@
 #include <array>
 #include <memory>
 
-#include "core/scene.h"
-#include "core/so3.h"
-#include "core/surface_forms.h"
-#include "core/terrain.h"
+#include "quasiroll/core/scene.h"
+#include "quasiroll/core/so3.h"
+#include "quasiroll/core/surface_forms.h"
+#include "quasiroll/core/terrain.h"
 
 namespace quasiroll {
 

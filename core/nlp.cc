@@ -1,4 +1,4 @@
-#include "core/nlp.h"
+#include "quasiroll/core/nlp.h"
 
 #include <Eigen/LU>
 #include <Eigen/QR>
@@ -10,7 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "core/registry.h"
+#include "quasiroll/core/registry.h"
 
 namespace quasiroll {
 

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "core/nlp.h"
+#include "quasiroll/core/nlp.h"
 
 namespace quasiroll {
 

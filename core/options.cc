@@ -1,4 +1,4 @@
-#include "core/options.h"
+#include "quasiroll/core/options.h"
 
 #include <charconv>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "core/quasi_static.h"
+#include "quasiroll/core/quasi_static.h"
 
 #include <Eigen/Dense>
 #include <chrono>
@@ -6,7 +6,7 @@
 #include <limits>
 #include <sstream>
 
-#include "core/initial_configuration.h"
+#include "quasiroll/core/initial_configuration.h"
 
 namespace quasiroll {
 

@@ -28,9 +28,9 @@
 #include <memory>
 #include <string>
 
-#include "core/kinematics.h"
-#include "core/nlp.h"
-#include "core/scene.h"
+#include "quasiroll/core/kinematics.h"
+#include "quasiroll/core/nlp.h"
+#include "quasiroll/core/scene.h"
 
 namespace quasiroll {
 

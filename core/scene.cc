@@ -1,5 +1,5 @@
 // Scene loading (docs/scenes.md documents the schema).
-#include "core/scene.h"
+#include "quasiroll/core/scene.h"
 
 #include <filesystem>
 #include <fstream>
@@ -7,8 +7,8 @@
 #include <sstream>
 #include <system_error>
 
-#include "core/terrains.h"
-#include "core/yaml_util.h"
+#include "quasiroll/core/terrains.h"
+#include "quasiroll/core/yaml_util.h"
 
 namespace quasiroll {
 

@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/terrain.h"
+#include "quasiroll/core/terrain.h"
 
 namespace quasiroll {
 

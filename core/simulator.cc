@@ -1,11 +1,11 @@
-#include "core/simulator.h"
+#include "quasiroll/core/simulator.h"
 
 #include <chrono>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
-#include "core/initial_configuration.h"
+#include "quasiroll/core/initial_configuration.h"
 
 namespace quasiroll {
 

@@ -15,10 +15,10 @@
 #include <string>
 #include <vector>
 
-#include "core/dae.h"
-#include "core/kinematics.h"
-#include "core/quasi_static.h"
-#include "core/scene.h"
+#include "quasiroll/core/dae.h"
+#include "quasiroll/core/kinematics.h"
+#include "quasiroll/core/quasi_static.h"
+#include "quasiroll/core/scene.h"
 
 namespace quasiroll {
 

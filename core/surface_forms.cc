@@ -1,4 +1,4 @@
-#include "core/surface_forms.h"
+#include "quasiroll/core/surface_forms.h"
 
 #include <cmath>
 

@@ -19,8 +19,8 @@
 
 #include <Eigen/Core>
 
-#include "core/so3.h"
-#include "core/terrain.h"
+#include "quasiroll/core/so3.h"
+#include "quasiroll/core/terrain.h"
 
 namespace quasiroll {
 

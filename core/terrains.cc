@@ -1,4 +1,4 @@
-#include "core/terrains.h"
+#include "quasiroll/core/terrains.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -11,7 +11,7 @@
 #include <system_error>
 #include <utility>
 
-#include "core/scene.h"
+#include "quasiroll/core/scene.h"
 
 namespace quasiroll {
 namespace {

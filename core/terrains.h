@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "core/terrain.h"
+#include "quasiroll/core/terrain.h"
 
 namespace quasiroll {
 

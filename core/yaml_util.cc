@@ -1,4 +1,4 @@
-#include "core/yaml_util.h"
+#include "quasiroll/core/yaml_util.h"
 
 #include <yaml-cpp/eventhandler.h>
 

@@ -20,8 +20,8 @@
 #include <utility>
 #include <vector>
 
-#include "core/scene.h"
-#include "core/terrains.h"
+#include "quasiroll/core/scene.h"
+#include "quasiroll/core/terrains.h"
 
 namespace quasiroll::yaml {
 

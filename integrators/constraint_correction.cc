@@ -1,4 +1,4 @@
-#include "integrators/constraint_correction.h"
+#include "quasiroll/integrators/constraint_correction.h"
 
 #include <cmath>
 #include <limits>

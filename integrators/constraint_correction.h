@@ -13,7 +13,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
-#include "core/dae.h"
+#include "quasiroll/core/dae.h"
 
 namespace quasiroll::integrators_internal {
 

@@ -1,4 +1,4 @@
-#include "integrators/cvode_projection.h"
+#include "quasiroll/integrators/cvode_projection.h"
 
 #include <cvode/cvode.h>
 #include <cvode/cvode_ls.h>

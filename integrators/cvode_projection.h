@@ -48,7 +48,7 @@
 #include <memory>
 #include <string>
 
-#include "core/dae.h"
+#include "quasiroll/core/dae.h"
 
 namespace quasiroll {
 

@@ -1,4 +1,4 @@
-#include "integrators/ida_integrator.h"
+#include "quasiroll/integrators/ida_integrator.h"
 
 #include <ida/ida.h>
 #include <nvector/nvector_serial.h>
@@ -13,7 +13,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "integrators/constraint_correction.h"
+#include "quasiroll/integrators/constraint_correction.h"
 
 namespace quasiroll {
 

@@ -46,7 +46,7 @@
 #include <memory>
 #include <string>
 
-#include "core/dae.h"
+#include "quasiroll/core/dae.h"
 
 namespace quasiroll {
 

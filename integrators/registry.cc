@@ -1,12 +1,12 @@
 #include <memory>
 #include <mutex>
 
-#include "core/dae.h"
-#include "integrators/rk_baumgarte.h"
-#include "integrators/rk_projection.h"
+#include "quasiroll/core/dae.h"
+#include "quasiroll/integrators/rk_baumgarte.h"
+#include "quasiroll/integrators/rk_projection.h"
 #ifdef QUASIROLL_HAVE_SUNDIALS
-#include "integrators/cvode_projection.h"
-#include "integrators/ida_integrator.h"
+#include "quasiroll/integrators/cvode_projection.h"
+#include "quasiroll/integrators/ida_integrator.h"
 #endif
 
 namespace quasiroll {

@@ -1,4 +1,4 @@
-#include "integrators/rk_baumgarte.h"
+#include "quasiroll/integrators/rk_baumgarte.h"
 
 namespace quasiroll {
 

@@ -1,4 +1,4 @@
-#include "integrators/rk_projection.h"
+#include "quasiroll/integrators/rk_projection.h"
 
 namespace quasiroll {
 

@@ -19,9 +19,9 @@
 
 #include <string>
 
-#include "core/dae.h"
-#include "integrators/constraint_correction.h"
-#include "integrators/runge_kutta.h"
+#include "quasiroll/core/dae.h"
+#include "quasiroll/integrators/constraint_correction.h"
+#include "quasiroll/integrators/runge_kutta.h"
 
 namespace quasiroll {
 

@@ -1,4 +1,4 @@
-#include "integrators/runge_kutta.h"
+#include "quasiroll/integrators/runge_kutta.h"
 
 #include <algorithm>
 #include <cmath>

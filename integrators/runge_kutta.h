@@ -38,7 +38,7 @@
 #include <Eigen/Core>
 #include <string>
 
-#include "core/dae.h"
+#include "quasiroll/core/dae.h"
 
 namespace quasiroll::integrators_internal {
 

@@ -1,4 +1,4 @@
-#include "solvers/active_set_polish.h"
+#include "quasiroll/solvers/active_set_polish.h"
 
 #include <Eigen/QR>
 #include <algorithm>

@@ -21,7 +21,7 @@
 
 #include <Eigen/Core>
 
-#include "core/nlp.h"
+#include "quasiroll/core/nlp.h"
 
 namespace quasiroll::internal {
 

@@ -1,4 +1,4 @@
-#include "solvers/ceres_solver.h"
+#include "quasiroll/solvers/ceres_solver.h"
 
 #include <ceres/ceres.h>
 
@@ -8,7 +8,7 @@
 #include <limits>
 #include <vector>
 
-#include "solvers/active_set_polish.h"
+#include "quasiroll/solvers/active_set_polish.h"
 
 namespace quasiroll {
 

@@ -1,4 +1,4 @@
-#include "solvers/ipopt_solver.h"
+#include "quasiroll/solvers/ipopt_solver.h"
 
 #include <HSLLoader.h>
 

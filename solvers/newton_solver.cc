@@ -1,4 +1,4 @@
-#include "solvers/newton_solver.h"
+#include "quasiroll/solvers/newton_solver.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>

@@ -25,7 +25,7 @@
 #include <memory>
 #include <string>
 
-#include "core/nlp.h"
+#include "quasiroll/core/nlp.h"
 
 namespace quasiroll {
 

@@ -2,16 +2,16 @@
 #include <memory>
 #include <mutex>
 
-#include "core/nlp.h"
-#include "solvers/newton_solver.h"
+#include "quasiroll/core/nlp.h"
+#include "quasiroll/solvers/newton_solver.h"
 #ifdef QUASIROLL_HAVE_IPOPT
-#include "solvers/ipopt_solver.h"
+#include "quasiroll/solvers/ipopt_solver.h"
 #endif
 #ifdef QUASIROLL_HAVE_NLOPT
-#include "solvers/slsqp_solver.h"
+#include "quasiroll/solvers/slsqp_solver.h"
 #endif
 #ifdef QUASIROLL_HAVE_CERES
-#include "solvers/ceres_solver.h"
+#include "quasiroll/solvers/ceres_solver.h"
 #endif
 
 namespace quasiroll {

@@ -1,4 +1,4 @@
-#include "solvers/slsqp_solver.h"
+#include "quasiroll/solvers/slsqp_solver.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "solvers/active_set_polish.h"
+#include "quasiroll/solvers/active_set_polish.h"
 
 namespace quasiroll {
 

@@ -1,4 +1,4 @@
-#include "bench/cli/bench_command.h"
+#include "quasiroll/bench/cli/bench_command.h"
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -12,11 +12,11 @@
 #include <sstream>
 #include <vector>
 
-#include "bench/cli/cli_support.h"
-#include "bench/harness.h"
-#include "bench/merge.h"
-#include "bench/shard.h"
-#include "bench/suite.h"
+#include "quasiroll/bench/cli/cli_support.h"
+#include "quasiroll/bench/harness.h"
+#include "quasiroll/bench/merge.h"
+#include "quasiroll/bench/shard.h"
+#include "quasiroll/bench/suite.h"
 
 namespace quasiroll::cli {
 

@@ -1,4 +1,4 @@
-#include "bench/cli/cli_support.h"
+#include "quasiroll/bench/cli/cli_support.h"
 
 #include <unistd.h>
 

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "bench/cli/bench_command.h"
-#include "bench/cli/cli_support.h"
+#include "quasiroll/bench/cli/bench_command.h"
+#include "quasiroll/bench/cli/cli_support.h"
 
 namespace quasiroll::cli {
 

@@ -1,4 +1,4 @@
-#include "bench/cli/ipopt_timer_elision.h"
+#include "quasiroll/bench/cli/ipopt_timer_elision.h"
 
 #include <dlfcn.h>
 #include <link.h>

@@ -8,10 +8,10 @@
 #include <iostream>
 #include <stdexcept>
 
-#include "bench/cli/cli_support.h"
-#include "bench/cli/commands.h"
-#include "core/initial_configuration.h"
-#include "core/scene.h"
+#include "quasiroll/bench/cli/cli_support.h"
+#include "quasiroll/bench/cli/commands.h"
+#include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/scene.h"
 
 namespace {
 

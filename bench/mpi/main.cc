@@ -38,13 +38,13 @@
 #include <thread>
 #include <vector>
 
-#include "bench/harness.h"
-#include "bench/json_writer.h"
-#include "bench/run_output.h"
-#include "bench/shard.h"
-#include "bench/suite.h"
-#include "core/initial_configuration.h"
-#include "core/scene.h"
+#include "quasiroll/bench/harness.h"
+#include "quasiroll/bench/json_writer.h"
+#include "quasiroll/bench/run_output.h"
+#include "quasiroll/bench/shard.h"
+#include "quasiroll/bench/suite.h"
+#include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/scene.h"
 
 namespace quasiroll::mpi {
 namespace {

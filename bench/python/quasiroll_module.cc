@@ -14,16 +14,16 @@
 #include <optional>
 #include <string>
 
-#include "bench/command_json.h"
-#include "bench/run_output.h"
-#include "bench/suite.h"
-#include "core/dae.h"
-#include "core/initial_configuration.h"
-#include "core/kinematics.h"
-#include "core/nlp.h"
-#include "core/quasi_static.h"
-#include "core/scene.h"
-#include "core/simulator.h"
+#include "quasiroll/bench/command_json.h"
+#include "quasiroll/bench/run_output.h"
+#include "quasiroll/bench/suite.h"
+#include "quasiroll/core/dae.h"
+#include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/kinematics.h"
+#include "quasiroll/core/nlp.h"
+#include "quasiroll/core/quasi_static.h"
+#include "quasiroll/core/scene.h"
+#include "quasiroll/core/simulator.h"
 
 namespace py = pybind11;
 

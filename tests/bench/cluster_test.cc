@@ -14,11 +14,11 @@
 #include <set>
 #include <sstream>
 
-#include "bench/harness.h"
-#include "bench/merge.h"
-#include "bench/shard.h"
-#include "bench/suite.h"
-#include "core/dae.h"
+#include "quasiroll/bench/harness.h"
+#include "quasiroll/bench/merge.h"
+#include "quasiroll/bench/shard.h"
+#include "quasiroll/bench/suite.h"
+#include "quasiroll/core/dae.h"
 
 namespace quasiroll::bench {
 namespace {

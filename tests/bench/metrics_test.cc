@@ -1,6 +1,6 @@
 // Accuracy and drift metrics on synthetic trajectories with known
 // differences.
-#include "bench/metrics.h"
+#include "quasiroll/bench/metrics.h"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "core/so3.h"
+#include "quasiroll/core/so3.h"
 
 namespace quasiroll::bench {
 namespace {

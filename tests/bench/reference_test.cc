@@ -1,7 +1,7 @@
 // References: detection of the analytic cases (model.md §9.1: O1, O2, O3),
 // agreement of the numerical reference with the closed forms, and the disk
 // cache.
-#include "bench/reference.h"
+#include "quasiroll/bench/reference.h"
 
 #include <gtest/gtest.h>
 
@@ -9,10 +9,10 @@
 #include <filesystem>
 #include <numbers>
 
-#include "bench/metrics.h"
-#include "bench/suite.h"
-#include "core/scene.h"
-#include "core/yaml_util.h"
+#include "quasiroll/bench/metrics.h"
+#include "quasiroll/bench/suite.h"
+#include "quasiroll/core/scene.h"
+#include "quasiroll/core/yaml_util.h"
 
 namespace quasiroll::bench {
 namespace {

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "bench/suite.h"
+#include "quasiroll/bench/suite.h"
 
 namespace quasiroll::bench {
 namespace {

@@ -1,14 +1,14 @@
 // Suite loading: grid expansion, defaults, run ids, and rejection of bad
 // suites with the entry path and value in the message.
-#include "bench/suite.h"
+#include "quasiroll/bench/suite.h"
 
 #include <gtest/gtest.h>
 
 #include <set>
 #include <string>
 
-#include "core/dae.h"
-#include "core/scene.h"
+#include "quasiroll/core/dae.h"
+#include "quasiroll/core/scene.h"
 
 namespace quasiroll::bench {
 namespace {

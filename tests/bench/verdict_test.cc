@@ -6,9 +6,9 @@
 #include <cmath>
 #include <limits>
 
-#include "bench/metrics.h"
-#include "bench/reference.h"
-#include "core/yaml_util.h"
+#include "quasiroll/bench/metrics.h"
+#include "quasiroll/bench/reference.h"
+#include "quasiroll/core/yaml_util.h"
 
 namespace quasiroll::bench {
 namespace {

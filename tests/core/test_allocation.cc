@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <new>
 
-#include "core/simulator.h"
+#include "quasiroll/core/simulator.h"
 #include "tests/test_names.h"
 
 namespace {

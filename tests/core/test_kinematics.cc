@@ -6,10 +6,10 @@
 #include <cmath>
 #include <memory>
 
-#include "core/initial_configuration.h"
-#include "core/kinematics.h"
-#include "core/scene.h"
-#include "core/terrains.h"
+#include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/kinematics.h"
+#include "quasiroll/core/scene.h"
+#include "quasiroll/core/terrains.h"
 
 namespace quasiroll {
 namespace {

@@ -8,10 +8,10 @@
 #include <thread>
 #include <vector>
 
-#include "core/initial_configuration.h"
-#include "core/quasi_static.h"
-#include "core/simulator.h"
-#include "core/terrains.h"
+#include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/quasi_static.h"
+#include "quasiroll/core/simulator.h"
+#include "quasiroll/core/terrains.h"
 #include "tests/test_names.h"
 
 namespace quasiroll {

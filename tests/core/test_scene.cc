@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "core/scene.h"
-#include "core/terrains.h"
-#include "core/yaml_util.h"
+#include "quasiroll/core/scene.h"
+#include "quasiroll/core/terrains.h"
+#include "quasiroll/core/yaml_util.h"
 
 namespace quasiroll {
 namespace {

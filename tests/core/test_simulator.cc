@@ -7,9 +7,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "bench/run_output.h"
-#include "core/initial_configuration.h"
-#include "core/simulator.h"
+#include "quasiroll/bench/run_output.h"
+#include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/simulator.h"
 #include "tests/test_names.h"
 
 namespace quasiroll {

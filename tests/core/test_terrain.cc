@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "core/scene.h"
-#include "core/terrains.h"
+#include "quasiroll/core/scene.h"
+#include "quasiroll/core/terrains.h"
 
 namespace quasiroll {
 namespace {

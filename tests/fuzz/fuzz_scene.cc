@@ -21,7 +21,7 @@
 #include <string>
 #include <typeinfo>
 
-#include "core/scene.h"
+#include "quasiroll/core/scene.h"
 
 namespace {
 const std::string& WorkDir() {

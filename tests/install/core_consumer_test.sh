@@ -3,7 +3,9 @@
 # without any solver or integrator package: installs BUILD_DIR into a
 # temporary prefix, then configures tests/install/core_consumer with every
 # solver/integrator package disabled (CMAKE_DISABLE_FIND_PACKAGE_<name>: a
-# find_dependency() on one of them would fail the configure) and runs it.
+# find_dependency() on one of them would fail the configure) and runs it;
+# checks that the installed headers include each other as
+# "quasiroll/<dir>/x.h", so only include/ needs to be on the include path.
 #   tests/install/core_consumer_test.sh BUILD_DIR
 set -euo pipefail
 build=$(cd "$1" && pwd)
@@ -11,6 +13,11 @@ src=$(cd "$(dirname "$0")/../.." && pwd)
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/quasiroll-core-consumer.XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
 cmake --install "$build" --prefix "$tmp/prefix" > "$tmp/install.log"
+# Installed headers include each other as "quasiroll/<dir>/x.h" only.
+if grep -rnE '^#include "(core|solvers|integrators|bench)/' "$tmp/prefix/include"; then
+  echo "FAIL: installed headers with includes relative to include/quasiroll"
+  exit 1
+fi
 disable=()
 for pkg in Ceres SUNDIALS NLopt PkgConfig LAPACK BLAS Threads; do
   disable+=("-DCMAKE_DISABLE_FIND_PACKAGE_$pkg=ON")

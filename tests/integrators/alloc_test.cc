@@ -12,7 +12,7 @@
 #include <cstddef>
 #include <cstdlib>
 
-#include "core/dae.h"
+#include "quasiroll/core/dae.h"
 #include "tests/integrators/test_problems.h"
 
 #if defined(__SANITIZE_ADDRESS__)

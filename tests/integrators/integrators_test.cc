@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "core/dae.h"
-#include "integrators/constraint_correction.h"
-#include "integrators/runge_kutta.h"
+#include "quasiroll/core/dae.h"
+#include "quasiroll/integrators/constraint_correction.h"
+#include "quasiroll/integrators/runge_kutta.h"
 #include "tests/integrators/test_problems.h"
 
 namespace quasiroll {

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "core/dae.h"
+#include "quasiroll/core/dae.h"
 
 namespace quasiroll {
 namespace {

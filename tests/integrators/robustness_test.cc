@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <string>
 
-#include "core/dae.h"
+#include "quasiroll/core/dae.h"
 #include "tests/integrators/test_problems.h"
 
 namespace quasiroll {

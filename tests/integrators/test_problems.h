@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/dae.h"
+#include "quasiroll/core/dae.h"
 
 namespace quasiroll::testing {
 

@@ -3,7 +3,7 @@
 // quasiroll CLI: it must change no result and leave other callers alone.
 // That no quasiroll library defines getrusage is checked by
 // tests/cli/no_libc_symbols_test.sh.
-#include "bench/cli/ipopt_timer_elision.h"
+#include "quasiroll/bench/cli/ipopt_timer_elision.h"
 
 #include <gtest/gtest.h>
 #include <sys/resource.h>
@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "core/nlp.h"
-#include "core/nlp_reference_problems.h"
+#include "quasiroll/core/nlp.h"
+#include "quasiroll/core/nlp_reference_problems.h"
 
 namespace quasiroll {
 namespace {

@@ -19,11 +19,11 @@
 #include <tuple>
 #include <vector>
 
-#include "core/nlp.h"
-#include "core/nlp_reference_problems.h"
-#include "solvers/active_set_polish.h"
+#include "quasiroll/core/nlp.h"
+#include "quasiroll/core/nlp_reference_problems.h"
+#include "quasiroll/solvers/active_set_polish.h"
 #ifdef QUASIROLL_HAVE_IPOPT
-#include "solvers/ipopt_solver.h"
+#include "quasiroll/solvers/ipopt_solver.h"
 #endif
 #include "tests/test_names.h"
 
