@@ -64,7 +64,7 @@ this = os.path.relpath(os.path.abspath(__file__), repo)
 cite = re.compile(r"\bmodel(?:\.md)?,?\s+((?:§\s?\d+(?:\.\d+)*(?:\s*(?:–|-|,|and|,\s*and)\s*)?)+)")
 number = re.compile(r"§\s?(\d+(?:\.\d+)*)")
 oracle = re.compile(r"(?<![\w-])O\d+[a-z]?(?:-(?:paper|pvc|num))?(?![\w])")
-forbidden = re.compile(r"model[- ]notes|\bnotes §|\bthe notes\b|Appendix A", re.I)
+forbidden = re.compile(r"model[- ]notes|\bnotes §|\bthe notes\b|\bAppendix A\b", re.I)
 
 problems = []
 checked = 0
