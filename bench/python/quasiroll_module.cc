@@ -126,7 +126,8 @@ std::pair<std::string, std::string> RunText(
     std::optional<std::string> rk_method, std::optional<double> sigma,
     std::optional<double> tol, std::optional<double> atol,
     std::optional<double> nlp_tol, std::optional<int> dae_index,
-    std::optional<int> substeps, std::optional<int> contact_check) {
+    std::optional<int> substeps, std::optional<int> contact_check,
+    const GivenOptions& nlp_options, const GivenOptions& dae_options) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
   RequireBackend("nlp", nlp, NlpSolverRegistry::Names());
@@ -151,6 +152,11 @@ std::pair<std::string, std::string> RunText(
     throw std::invalid_argument("dt: must be <= the end time " +
                                 bench::Num(options.t_end) + " s, got " +
                                 bench::Num(options.dt));
+  // Backend options as `quasiroll run --nlp-opt/--dae-opt` takes them
+  // (docs/plugins.md); the shorthands below override the same keys as the
+  // CLI's flags do.
+  options.nlp_options = nlp_options;
+  options.dae_options = dae_options;
   if (tol) options.integrator.rtol = *tol;
   if (atol) options.integrator.atol = *atol;
   // rk_method, sigma, dae_index: shorthands of the integrator options of
@@ -261,7 +267,8 @@ PYBIND11_MODULE(_quasiroll, m) {
         py::arg("coupling"), py::arg("dt"), py::arg("t_end"), py::arg("mu"),
         py::arg("eps"), py::arg("mode"), py::arg("rk_method"), py::arg("sigma"),
         py::arg("tol"), py::arg("atol"), py::arg("nlp_tol"),
-        py::arg("dae_index"), py::arg("substeps"), py::arg("contact_check"));
+        py::arg("dae_index"), py::arg("substeps"), py::arg("contact_check"),
+        py::arg("nlp_options"), py::arg("dae_options"));
   m.def("backends", [] {
     RegisterBuiltinNlpSolvers();
     RegisterBuiltinIntegrators();

@@ -112,6 +112,27 @@ def test_run_equals_cli_run(tmp_path):
     assert stats["options"] == cli["options"]
 
 
+def test_run_backend_options_equal_cli_flags(tmp_path):
+    # A backend's own options through Python give what --nlp-opt/--dae-opt give.
+    traj, stats = quasiroll.run(scene("paper"), "ipopt", "rk-projection", t_end=1,
+                                nlp_options={"mu_strategy": "adaptive"},
+                                dae_options={"rk_method": "rk4"})
+    subprocess.run([BIN, "run", "--scene", os.path.join(SCENES, "paper.yaml"),
+                    "--nlp", "ipopt", "--dae", "rk-projection", "--t-end", "1",
+                    "--nlp-opt", "mu_strategy=adaptive", "--dae-opt", "rk_method=rk4",
+                    "--out", str(tmp_path)], check=True, capture_output=True)
+    cli = json.load(open(tmp_path / "run.json"))
+    assert stats["options"] == cli["options"]
+    assert "adaptive" in json.dumps(stats["options"])
+    with open(tmp_path / "trajectory.csv") as f:
+        assert len(traj) == len(list(csv.reader(f))) - 1
+    with pytest.raises(ValueError, match="no_such_option"):
+        quasiroll.run(scene("flat"), "ipopt", t_end=1,
+                      nlp_options={"no_such_option": 1})
+    with pytest.raises(ValueError, match="dae_options: must be a dict"):
+        quasiroll.run(scene("flat"), t_end=1, dae_options="rk_method=rk4")
+
+
 def test_run_arrays_and_keyword_errors():
     d, stats = quasiroll.run(scene("flat"), t_end=1, as_frame=False)
     # Flat straight drive: x = rho * alphadot * t = 0.1 * 0.6 * t

@@ -72,17 +72,34 @@ def solve(scene, nlp="newton", *, mu=None, eps=None, mode=None, nlp_tol=None):
 def run(scene, nlp="newton", dae="rk-projection", *, coupling="zoh", dt=None,
         t_end=None, mu=None, eps=None, mode=None, rk_method=None, sigma=None,
         tol=None, atol=None, nlp_tol=None, dae_index=None, substeps=None,
-        contact_check=None, as_frame=True):
+        contact_check=None, nlp_options=None, dae_options=None, as_frame=True):
     """Simulates `scene` (`quasiroll run`). Returns (trajectory, stats):
     trajectory is a pandas DataFrame with the columns of trajectory.csv (or,
     with as_frame=False, a dict of numpy arrays), stats the run.json dict
     (status, stop_reason, t_reached, counters, wall_s, options, ...).
-    Options left at None take the scene's value or the library default. The
-    GIL is released while the simulation runs; Ctrl-C raises
-    KeyboardInterrupt."""
+    Options left at None take the scene's value or the library default.
+    nlp_options / dae_options: the backends' own options as a dict (name ->
+    value, as `--nlp-opt` / `--dae-opt`; `quasiroll list --options` lists
+    them); an unknown or ill-typed one raises ValueError naming it. The GIL
+    is released while the simulation runs; Ctrl-C raises KeyboardInterrupt."""
+    def _given(name, value):
+        if value is None:
+            return {}
+        if not isinstance(value, dict):
+            raise ValueError(f"{name}: must be a dict of option name -> value, "
+                             f"got {type(value).__name__}")
+        out = {}
+        for key, item in value.items():
+            if isinstance(item, bool):
+                item = "true" if item else "false"
+            elif isinstance(item, float):
+                item = repr(item)
+            out[str(key)] = str(item)
+        return out
     csv_text, run_json = _quasiroll._run_text(
         scene, nlp, dae, coupling, dt, t_end, mu, eps, mode, rk_method, sigma,
-        tol, atol, nlp_tol, dae_index, substeps, contact_check)
+        tol, atol, nlp_tol, dae_index, substeps, contact_check,
+        _given("nlp_options", nlp_options), _given("dae_options", dae_options))
     stats = json.loads(run_json)
     if as_frame:
         import pandas as pd
