@@ -206,10 +206,13 @@ std::string PhysicalDetail(const std::string& s) {
   return "degenerate_contact";
 }
 // Why a run that left the reference's path did so, from the evidence.
+bool BaumgarteUnstable(const FailureEvidence& e) {
+  return e.dae == "rk-baumgarte" && e.rk_method == "rk4" &&
+         e.sigma * e.step > kRk4RealStabilityBound;
+}
+
 std::string DivergenceDetail(const FailureEvidence& e) {
-  if (e.dae == "rk-baumgarte" && e.rk_method == "rk4" &&
-      e.sigma * e.step > kRk4RealStabilityBound)
-    return "baumgarte_instability";
+  if (BaumgarteUnstable(e)) return "baumgarte_instability";
   if (e.drift_max > e.drift_bound) return "drift_blowup";
   if (e.gap_max > e.gap_bound) return "gap_blowup";
   return "step_too_large";
@@ -220,8 +223,12 @@ FailureCause ClassifyFailure(const FailureEvidence& e) {
   const std::string& st = e.status;
   if (st == "success") return {"", ""};
   if (st == "error") return {"numerical", "error"};
-  if (st == "drift_exceeded") return {"numerical", "drift_blowup"};
-  if (st == "gap_exceeded") return {"numerical", "gap_blowup"};
+  // A run past its bounds: the root cause when it is known (sigma h beyond
+  // RK4's stability interval), else the symptom.
+  if (st == "drift_exceeded" || st == "gap_exceeded")
+    return {"numerical", BaumgarteUnstable(e)     ? "baumgarte_instability"
+                         : st == "drift_exceeded" ? "drift_blowup"
+                                                  : "gap_blowup"};
   // Stops are detected on the output grid (dt), the sampled second-contact
   // check only every contact_check samples: two detection intervals.
   const double tol_t =

@@ -206,6 +206,16 @@ TEST(FailureCauses, SolverIntegratorBoundsAndErrors) {
       "drift_blowup");
   EXPECT_EQ(ClassifyFailure(Evidence("gap_exceeded", 20, "success", 20)).detail,
             "gap_blowup");
+  // A run that reaches t_end past the drift bound with sigma h = 3 > 2.785
+  // (stability.yaml, rk-baumgarte at dt 0.2 s, sigma 15): the root cause.
+  FailureEvidence unstable = Evidence("drift_exceeded", 4, "success", 4);
+  unstable.dae = "rk-baumgarte";
+  unstable.dt = unstable.step = 0.2;
+  unstable.sigma = 15;
+  unstable.drift_max = 2e-3;
+  EXPECT_EQ(ClassifyFailure(unstable).detail, "baumgarte_instability");
+  unstable.sigma = 12.5;  // sigma h = 2.5: stable, the symptom is the cause
+  EXPECT_EQ(ClassifyFailure(unstable).detail, "drift_blowup");
   const FailureCause err =
       ClassifyFailure(Evidence("error", kNaN, "success", 20));
   EXPECT_EQ(err.cause, "numerical");
