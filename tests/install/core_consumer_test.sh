@@ -6,9 +6,16 @@
 # find_dependency() on one of them would fail the configure) and runs it;
 # checks that the installed headers include each other as
 # "quasiroll/<dir>/x.h", so only include/ needs to be on the include path.
-#   tests/install/core_consumer_test.sh BUILD_DIR
+#   tests/install/core_consumer_test.sh BUILD_DIR [--sanitized]
+# (--sanitized: BUILD_DIR is a -fsanitize=address,undefined build, whose
+# instrumented libraries need the sanitizer runtimes at link time.)
 set -euo pipefail
 build=$(cd "$1" && pwd)
+sanitize_flags=()
+if [ "${2:-}" = --sanitized ]; then
+  sanitize_flags=(-DCMAKE_CXX_FLAGS=-fsanitize=address,undefined
+                  -DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined)
+fi
 src=$(cd "$(dirname "$0")/../.." && pwd)
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/quasiroll-core-consumer.XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
@@ -24,6 +31,7 @@ for pkg in Ceres SUNDIALS NLopt PkgConfig LAPACK BLAS Threads; do
 done
 cmake -S "$src/tests/install/core_consumer" -B "$tmp/build" \
   -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$tmp/prefix" "${disable[@]}" \
+  "${sanitize_flags[@]}" \
   > "$tmp/configure.log" || { cat "$tmp/configure.log"; exit 1; }
 grep 'core consumer' "$tmp/configure.log"
 cmake --build "$tmp/build" > "$tmp/build.log" || { cat "$tmp/build.log"; exit 1; }
