@@ -4,7 +4,6 @@ at μ = 0.5, the μ sweep, and a Baumgarte/projection pair."""
 import math
 
 import numpy as np
-from matplotlib import cm
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.transforms import blended_transform_factory

@@ -46,12 +46,6 @@ def _text(value):
     return str(value)
 
 
-def _swatch(styles, method):
-    colour, marker = styles[method]
-    return (f'<span class="swatch" style="color:{colour}">'
-            f'{MARKER_GLYPHS.get(marker, "●")}</span>')
-
-
 def _num(value, unit=""):
     return f'<td class="num">{escape(fmt(value))}{escape(unit) if is_finite(value) else ""}</td>'
 
