@@ -13,7 +13,14 @@ Compares (docs/cluster.md, "What is identical"):
   trajectories/<run_id>.csv byte for byte for every row (unless
              --no-trajectories).
 Exit 0 if identical, 1 with the first differences on stderr otherwise.
+
+Golden outputs (a suite's results recorded once, e.g. before a refactoring
+that must not change them; ctest bench_golden_smoke):
+    compare-bench-outputs.py --record-golden OUT GOLDEN   writes GOLDEN/runs.csv
+        (timing and host columns dropped) and GOLDEN/trajectories.sha256
+    compare-bench-outputs.py --golden GOLDEN OUT          compares OUT with them
 """
+import hashlib
 import csv
 import io
 import json
@@ -43,7 +50,57 @@ def meta_without_invocation(path):
     return [(k, v) for k, v in meta.items() if k not in INVOCATION_META_KEYS]
 
 
+def trajectory_digests(directory, rows):
+    lines = []
+    for r in rows[1:]:
+        name = os.path.join("trajectories", r[0] + ".csv")
+        with open(os.path.join(directory, name), "rb") as f:
+            lines.append(f"{hashlib.sha256(f.read()).hexdigest()}  {name}")
+    return lines
+
+
+def record_golden(out, golden):
+    rows, stripped = runs_without_timing(os.path.join(out, "runs.csv"))
+    os.makedirs(golden, exist_ok=True)
+    with open(os.path.join(golden, "runs.csv"), "w") as f:
+        f.write("\n".join(stripped) + "\n")
+    with open(os.path.join(golden, "trajectories.sha256"), "w") as f:
+        f.write("\n".join(trajectory_digests(out, rows)) + "\n")
+    print(f"compare-bench-outputs: recorded {len(rows) - 1} rows of {out} in {golden}")
+    return 0
+
+
+def compare_golden(golden, out):
+    rows, stripped = runs_without_timing(os.path.join(out, "runs.csv"))
+    with open(os.path.join(golden, "runs.csv")) as f:
+        expected = f.read().splitlines()
+    with open(os.path.join(golden, "trajectories.sha256")) as f:
+        expected_digests = f.read().splitlines()
+    problems = []
+    if expected[0] != stripped[0]:
+        problems.append(f"runs.csv columns differ:\n  golden {expected[0]}\n  now    {stripped[0]}")
+    elif len(expected) != len(stripped):
+        problems.append(f"runs.csv: {len(expected) - 1} golden rows, {len(stripped) - 1} now")
+    else:
+        for k, (x, y) in enumerate(zip(expected, stripped)):
+            if x != y:
+                problems.append(f"runs.csv line {k + 1} differs:\n  golden {x}\n  now    {y}")
+    digests = trajectory_digests(out, rows) if not problems else []
+    for x, y in zip(expected_digests, digests):
+        if x != y:
+            problems.append(f"{y.split()[-1]} differs from the golden one")
+    for p in problems[:10]:
+        print(f"compare-bench-outputs: {p}", file=sys.stderr)
+    if not problems:
+        print(f"compare-bench-outputs: {out} equals the golden {golden} "
+              f"({len(stripped) - 1} rows and their trajectories; timing/host columns aside)")
+    return 1 if problems else 0
+
+
 def main():
+    if len(sys.argv) == 4 and sys.argv[1] in ("--record-golden", "--golden"):
+        mode, x, y = sys.argv[1:]
+        return record_golden(x, y) if mode == "--record-golden" else compare_golden(x, y)
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     trajectories = "--no-trajectories" not in sys.argv
     if len(args) != 2:
