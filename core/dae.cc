@@ -154,7 +154,14 @@ Registry<Integrator>& IntegratorRegistryInstance() {
 void IntegratorRegistry::Register(const std::string& name,
                                   const std::string& description,
                                   Factory factory) {
-  IntegratorRegistryInstance().Register(name, description, std::move(factory));
+  BackendInfo info;
+  info.description = description;
+  IntegratorRegistryInstance().Register(name, std::move(info), std::move(factory));
+}
+
+void IntegratorRegistry::Register(const std::string& name, BackendInfo info,
+                                  Factory factory) {
+  IntegratorRegistryInstance().Register(name, std::move(info), std::move(factory));
 }
 
 std::unique_ptr<Integrator> IntegratorRegistry::Create(
@@ -172,6 +179,14 @@ std::vector<std::string> IntegratorRegistry::Names() {
 
 std::string IntegratorRegistry::Description(const std::string& name) {
   return IntegratorRegistryInstance().Description(name);
+}
+
+BackendInfo IntegratorRegistry::Info(const std::string& name) {
+  return IntegratorRegistryInstance().Info(name);
+}
+
+std::string IntegratorRegistry::WithRole(BackendRole role) {
+  return IntegratorRegistryInstance().WithRole(role);
 }
 
 }  // namespace quasiroll

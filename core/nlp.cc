@@ -506,7 +506,14 @@ Registry<NlpSolver>& NlpSolverRegistryInstance() {
 void NlpSolverRegistry::Register(const std::string& name,
                                  const std::string& description,
                                  Factory factory) {
-  NlpSolverRegistryInstance().Register(name, description, std::move(factory));
+  BackendInfo info;
+  info.description = description;
+  NlpSolverRegistryInstance().Register(name, std::move(info), std::move(factory));
+}
+
+void NlpSolverRegistry::Register(const std::string& name, BackendInfo info,
+                                 Factory factory) {
+  NlpSolverRegistryInstance().Register(name, std::move(info), std::move(factory));
 }
 
 std::unique_ptr<NlpSolver> NlpSolverRegistry::Create(const std::string& name) {
@@ -523,6 +530,14 @@ std::vector<std::string> NlpSolverRegistry::Names() {
 
 std::string NlpSolverRegistry::Description(const std::string& name) {
   return NlpSolverRegistryInstance().Description(name);
+}
+
+BackendInfo NlpSolverRegistry::Info(const std::string& name) {
+  return NlpSolverRegistryInstance().Info(name);
+}
+
+std::string NlpSolverRegistry::WithRole(BackendRole role) {
+  return NlpSolverRegistryInstance().WithRole(role);
 }
 
 }  // namespace quasiroll

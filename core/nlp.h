@@ -57,6 +57,7 @@
 #include <string>
 #include <vector>
 
+#include "quasiroll/core/backend_info.h"
 #include "quasiroll/core/options.h"
 
 namespace quasiroll {
@@ -304,6 +305,14 @@ class NlpSolverRegistry {
   static bool Has(const std::string& name);
   static std::vector<std::string> Names();
   static std::string Description(const std::string& name);
+  // With the info a backend registers about itself (core/backend_info.h).
+  static void Register(const std::string& name, BackendInfo info,
+                       Factory factory);
+  // Empty for an unknown name.
+  static BackendInfo Info(const std::string& name);
+  // The first registered name (in name order) with `role`; throws
+  // std::invalid_argument when none has it.
+  static std::string WithRole(BackendRole role);
 };
 
 // Defined in solvers/registry.cc (library quasiroll::solvers): registers every

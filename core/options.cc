@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "quasiroll/core/backend_info.h"
+
 namespace quasiroll {
 namespace {
 
@@ -332,6 +334,18 @@ std::pair<std::string, std::string> SplitKeyValue(const std::string& text,
     throw std::invalid_argument(flag + ": expected key=value, got \"" + text +
                                 "\"");
   return {text.substr(0, eq), text.substr(eq + 1)};
+}
+
+const char* ToString(BackendRole role) {
+  switch (role) {
+    case BackendRole::kDefault:
+      return "default";
+    case BackendRole::kReference:
+      return "reference";
+    case BackendRole::kReferenceCheck:
+      return "reference_check";
+  }
+  return "?";
 }
 
 }  // namespace quasiroll

@@ -1,5 +1,6 @@
-// Name -> factory registry shared by the NLP and integrator plugin registries
-// (NlpSolverRegistry in nlp.h, IntegratorRegistry in dae.h). Thread-safe.
+// Name -> (BackendInfo, factory) registry shared by the NLP and integrator
+// plugin registries (NlpSolverRegistry in nlp.h, IntegratorRegistry in
+// dae.h). Thread-safe.
 #pragma once
 
 #include <functional>
@@ -11,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "quasiroll/core/backend_info.h"
+
 namespace quasiroll {
 
 template <typename Product>
@@ -21,14 +24,17 @@ class Registry {
   // `kind` names the products in messages, e.g. "NLP backend".
   explicit Registry(std::string kind) : kind_(std::move(kind)) {}
 
-  // Registers (or replaces) `name`. Throws std::invalid_argument for an
-  // empty name or factory.
-  void Register(const std::string& name, const std::string& description,
-                Factory factory) {
+  // Registers `name`. Throws std::invalid_argument for an empty name or
+  // factory, and for a name that is registered already (a plugin cannot
+  // shadow a built-in backend, nor two plugins each other).
+  void Register(const std::string& name, BackendInfo info, Factory factory) {
     if (name.empty() || !factory)
       throw std::invalid_argument(kind_ + " registry: empty name or factory");
     std::lock_guard<std::mutex> lock(mutex_);
-    table_[name] = Entry{description, std::move(factory)};
+    if (table_.count(name) > 0)
+      throw std::invalid_argument(kind_ + " '" + name +
+                                  "' is registered already");
+    table_[name] = Entry{std::move(info), std::move(factory)};
   }
 
   // Throws std::invalid_argument naming the unknown name and the known ones.
@@ -62,14 +68,29 @@ class Registry {
   }
 
   std::string Description(const std::string& name) const {
+    return Info(name).description;
+  }
+
+  // The registered info; an empty one for an unknown name.
+  BackendInfo Info(const std::string& name) const {
     std::lock_guard<std::mutex> lock(mutex_);
     auto it = table_.find(name);
-    return it == table_.end() ? std::string() : it->second.description;
+    return it == table_.end() ? BackendInfo{} : it->second.info;
+  }
+
+  // The first name (in name order) whose info has `role`. Throws
+  // std::invalid_argument when none has.
+  std::string WithRole(BackendRole role) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& entry : table_)
+      if (entry.second.info.HasRole(role)) return entry.first;
+    throw std::invalid_argument("no " + kind_ + " has the role '" +
+                                ToString(role) + "' (none registered?)");
   }
 
  private:
   struct Entry {
-    std::string description;
+    BackendInfo info;
     Factory factory;
   };
   std::string kind_;

@@ -1,4 +1,7 @@
-// Registers every NLP backend compiled into quasiroll::solvers.
+// Registers every NLP backend compiled into quasiroll::solvers, each with
+// the BackendInfo it carries (core/backend_info.h). Cost ratios: seconds per
+// hold interval with rk-projection in zoh mode relative to newton's, from
+// the calibration of docs/cluster.md ("Cost model", default suite).
 #include <memory>
 #include <mutex>
 
@@ -16,32 +19,53 @@
 
 namespace quasiroll {
 
+namespace {
+BackendInfo Info(const char* description, const char* family,
+                 const char* library, const char* version, double cost_ratio) {
+  BackendInfo info;
+  info.description = description;
+  info.family = family;
+  info.library = library;
+  info.library_version = version;
+  info.cost_ratio = cost_ratio;
+  return info;
+}
+}  // namespace
+
 void RegisterBuiltinNlpSolvers() {
   static std::once_flag once;
   std::call_once(once, [] {
-    NlpSolverRegistry::Register(
-        "newton", "damped Newton with dense LU on square equality systems",
-        [] { return std::make_unique<NewtonSolver>(); });
+    BackendInfo newton =
+        Info("damped Newton with dense LU on square equality systems",
+             "Newton", "", "", 1.0);
+    newton.roles = {BackendRole::kDefault, BackendRole::kReference};
+    NlpSolverRegistry::Register("newton", std::move(newton),
+                                [] { return std::make_unique<NewtonSolver>(); });
 #ifdef QUASIROLL_HAVE_IPOPT
     NlpSolverRegistry::Register(
         "ipopt",
-        "Ipopt interior point (exact or L-BFGS Hessian), dense LDL^T KKT "
-        "solves",
+        Info("Ipopt interior point (exact or L-BFGS Hessian), dense LDL^T KKT "
+             "solves",
+             "interior point", "Ipopt", QUASIROLL_IPOPT_VERSION, 12.25),
         [] { return std::make_unique<IpoptSolver>(); });
     NlpSolverRegistry::Register(
         "ipopt-mumps",
-        "Ipopt interior point with its stock MUMPS linear solver (serial)", [] {
-          return std::make_unique<IpoptSolver>(IpoptLinearSolver::kMumps);
-        });
+        Info("Ipopt interior point with its stock MUMPS linear solver (serial)",
+             "interior point", "Ipopt", QUASIROLL_IPOPT_VERSION, 88.1),
+        [] { return std::make_unique<IpoptSolver>(IpoptLinearSolver::kMumps); });
 #endif
 #ifdef QUASIROLL_HAVE_NLOPT
     NlpSolverRegistry::Register(
-        "slsqp", "NLopt SLSQP with an active-set Newton feasibility polish",
+        "slsqp",
+        Info("NLopt SLSQP with an active-set Newton feasibility polish", "SQP",
+             "NLopt", QUASIROLL_NLOPT_VERSION, 2.13),
         [] { return std::make_unique<SlsqpSolver>(); });
 #endif
 #ifdef QUASIROLL_HAVE_CERES
     NlpSolverRegistry::Register(
-        "ceres", "Ceres: least-squares feasibility + augmented Lagrangian",
+        "ceres",
+        Info("Ceres: least-squares feasibility + augmented Lagrangian",
+             "least squares", "Ceres", QUASIROLL_CERES_VERSION, 3.63),
         [] { return std::make_unique<CeresNlpSolver>(); });
 #endif
   });

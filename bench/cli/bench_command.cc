@@ -13,10 +13,10 @@
 #include <vector>
 
 #include "quasiroll/bench/cli/cli_support.h"
-#include "quasiroll/bench/harness.h"
-#include "quasiroll/bench/merge.h"
-#include "quasiroll/bench/shard.h"
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/harness/harness.h"
+#include "quasiroll/bench/cluster/merge.h"
+#include "quasiroll/bench/cluster/shard.h"
+#include "quasiroll/bench/harness/suite.h"
 
 namespace quasiroll::cli {
 

@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "quasiroll/bench/command_json.h"
-#include "quasiroll/bench/harness.h"
-#include "quasiroll/bench/json_writer.h"
-#include "quasiroll/bench/run_output.h"
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/io/command_json.h"
+#include "quasiroll/bench/harness/harness.h"
+#include "quasiroll/bench/io/json_writer.h"
+#include "quasiroll/bench/io/run_output.h"
+#include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/kinematics.h"
@@ -61,6 +61,9 @@ void Commands::Register(CLI::App& app) {
   RegisterBuiltinIntegrators();
   const std::vector<std::string> nlps = NlpSolverRegistry::Names();
   const std::vector<std::string> daes = IntegratorRegistry::Names();
+  // Defaults: the registered backends with the default role.
+  solve_.nlp = run_.nlp = NlpSolverRegistry::WithRole(BackendRole::kDefault);
+  run_.dae = IntegratorRegistry::WithRole(BackendRole::kDefault);
 
   CLI::App* pose = app.add_subcommand(
       "pose", "Print the initial consistent configuration of a scene");

@@ -29,7 +29,7 @@ struct SceneOverrides {
 
 struct SolveArgs {
   std::string scene;
-  std::string nlp = "newton";
+  std::string nlp;  // "" until Commands::Register: the default NLP
   SceneOverrides overrides;
   std::optional<double> nlp_tol;
   std::vector<std::string> nlp_opts;  // --nlp-opt key=value
@@ -38,8 +38,9 @@ struct SolveArgs {
 
 struct RunArgs {
   std::string scene;
-  std::string nlp = "newton";
-  std::string dae = "rk-projection";
+  // "" until Commands::Register: the registry's default backends.
+  std::string nlp;
+  std::string dae;
   std::string coupling = "zoh";
   std::optional<double> dt, t_end;
   SceneOverrides overrides;

@@ -14,9 +14,9 @@
 #include <optional>
 #include <string>
 
-#include "quasiroll/bench/command_json.h"
-#include "quasiroll/bench/run_output.h"
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/io/command_json.h"
+#include "quasiroll/bench/io/run_output.h"
+#include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/kinematics.h"
@@ -92,11 +92,15 @@ std::string PoseText(const Scene& scene) {
   return json;
 }
 
-std::string SolveText(const Scene& scene_in, const std::string& nlp,
+std::string SolveText(const Scene& scene_in, const std::string& nlp_given,
                       std::optional<double> mu, std::optional<double> eps,
                       std::optional<std::string> mode,
                       std::optional<double> nlp_tol) {
   RegisterBuiltinNlpSolvers();
+  // "" (Python None): the registry's default NLP.
+  const std::string nlp = nlp_given.empty() ? NlpSolverRegistry::WithRole(
+                                                  BackendRole::kDefault)
+                                            : nlp_given;
   RequireBackend("nlp", nlp, NlpSolverRegistry::Names());
   RequirePositive("nlp_tol", nlp_tol);
   const Scene scene = WithOverrides(scene_in, mu, eps, mode);
@@ -119,8 +123,8 @@ std::string SolveText(const Scene& scene_in, const std::string& nlp,
 
 // (trajectory.csv text, run.json text) of one simulation.
 std::pair<std::string, std::string> RunText(
-    const Scene& scene_in, const std::string& nlp, const std::string& dae,
-    const std::string& coupling, std::optional<double> dt,
+    const Scene& scene_in, const std::string& nlp_given,
+    const std::string& dae_given, const std::string& coupling, std::optional<double> dt,
     std::optional<double> t_end, std::optional<double> mu,
     std::optional<double> eps, std::optional<std::string> mode,
     std::optional<std::string> rk_method, std::optional<double> sigma,
@@ -130,6 +134,13 @@ std::pair<std::string, std::string> RunText(
     const GivenOptions& nlp_options, const GivenOptions& dae_options) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
+  // "" (Python None): the registry's default backends.
+  const std::string nlp = nlp_given.empty() ? NlpSolverRegistry::WithRole(
+                                                  BackendRole::kDefault)
+                                            : nlp_given;
+  const std::string dae = dae_given.empty() ? IntegratorRegistry::WithRole(
+                                                  BackendRole::kDefault)
+                                            : dae_given;
   RequireBackend("nlp", nlp, NlpSolverRegistry::Names());
   RequireBackend("dae", dae, IntegratorRegistry::Names());
   RequirePositive("dt", dt);

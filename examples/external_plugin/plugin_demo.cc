@@ -32,8 +32,8 @@
 
 #include "register_plugins.h"
 #ifdef EXAMPLE_HAVE_HARNESS
-#include <quasiroll/bench/harness.h>
-#include <quasiroll/bench/suite.h>
+#include <quasiroll/bench/harness/harness.h>
+#include <quasiroll/bench/harness/suite.h>
 #endif
 
 namespace {
@@ -428,7 +428,7 @@ groups:
   options.out_dir = out.string();
   options.jobs = jobs;
   options.progress = 0;
-  std::printf("== suite runner (bench/harness.h): %zu runs -> %s\n",
+  std::printf("== suite runner (bench/harness/harness.h): %zu runs -> %s\n",
               suite.runs.size(), options.out_dir.c_str());
   const bench::HarnessSummary summary = bench::RunSuite(suite, options);
   Check(summary.executed == summary.selected && summary.failures == 0,

@@ -165,9 +165,9 @@ def _reference_method(spec):
         scheme = "DP5(4), rtol 1e-10 / atol 1e-12"
     else:
         scheme = f"{(fields['rk'] or 'rk4').upper()}, step {fmt(step)} s"
-    parts = [f"{fields['coupling'] or 'coupled'} {fields['dae'] or 'rk-projection'}",
+    parts = [f"{fields['coupling'] or 'coupled'} {fields['dae'] or '?'}",
              scheme, f"output every {fmt(out_dt)} s",
-             f"{fields['nlp'] or 'newton'} at residual {fields['residual_tolerance'] or '?'}"]
+             f"{fields['nlp'] or '?'} at residual {fields['residual_tolerance'] or '?'}"]
     # (A stated "method" returned above; older caches may carry the rest.)
     for key in ("dt", "tolerance", "check_method", "check_kind"):
         if key in spec and not isinstance(spec[key], (dict, list)):

@@ -6,9 +6,12 @@ of one problem share a reference (`ref_hash`, docs/harness.md); only they may
 share a chart, a Pareto front or a table row. Results without `ref_hash`
 fall back to the tuple of those columns.
 
-Styles are fixed per name, not per report: colour = NLP backend, marker =
-integrator, line style = coupling, so a method looks the same in every
-figure of every report.
+Styles: colour = NLP backend, marker = integrator, line style = coupling,
+so a method looks the same in every figure. Backends are styled by their
+position in the build's backend list (meta.json "backends", written from the
+registry in name order, see use_backends), so every report of one build
+styles them alike; a name not in that list gets a stable pick from its hash.
+No backend is named here.
 """
 
 import math
@@ -17,25 +20,42 @@ import zlib
 
 from .data import is_finite
 
-NLP_COLOURS = {"newton": "#1f77b4", "ipopt": "#ff7f0e", "ipopt-mumps": "#8c564b",
-               "slsqp": "#2ca02c", "ceres": "#d62728", "reference": "#000000"}
-_EXTRA_COLOURS = ["#9467bd", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f", "#393b79"]
-DAE_MARKERS = {"rk-baumgarte": "s", "rk-projection": "o", "ida": "^",
-               "cvode-projection": "D", "cvode": "D"}
-_EXTRA_MARKERS = ["v", "P", "X", "*", "h", "p", "<", ">"]
+REFERENCE_COLOUR = "#000000"
+_COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#8c564b", "#9467bd",
+            "#e377c2", "#17becf", "#bcbd22", "#7f7f7f", "#393b79"]
+_MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*", "h", "p", "<", ">"]
 COUPLING_LINES = {"zoh": "-", "coupled": "--"}
+# Backend names in the build's order (use_backends); empty until a report
+# reads its meta.json.
+_BACKENDS = {"nlp": [], "dae": []}
+
+
+def use_backends(meta):
+    """Takes the backend lists of a results directory's meta.json."""
+    backends = meta.get("backends") if isinstance(meta, dict) else None
+    for kind in ("nlp", "dae"):
+        entries = backends.get(kind, []) if isinstance(backends, dict) else []
+        _BACKENDS[kind] = [e["name"] for e in entries
+                           if isinstance(e, dict) and isinstance(e.get("name"), str)]
 
 
 def _stable_pick(name, choices):
     return choices[zlib.crc32(name.encode("utf-8")) % len(choices)]
 
 
+def _style(kind, name, choices):
+    names = _BACKENDS[kind]
+    if name in names and names.index(name) < len(choices):
+        return choices[names.index(name)]
+    return _stable_pick(name, choices)
+
+
 def nlp_colour(nlp):
-    return NLP_COLOURS.get(nlp) or _stable_pick(nlp, _EXTRA_COLOURS)
+    return REFERENCE_COLOUR if nlp == "reference" else _style("nlp", nlp, _COLOURS)
 
 
 def dae_marker(dae):
-    return DAE_MARKERS.get(dae) or _stable_pick(dae, _EXTRA_MARKERS)
+    return _style("dae", dae, _MARKERS)
 
 
 def coupling_line(coupling):

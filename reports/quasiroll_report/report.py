@@ -6,6 +6,7 @@ import sys
 
 from . import figures_methods as fm
 from . import figures_paper as fp
+from . import problems
 from . import selection as sel
 from .data import (ReportError, TrajectoryStore, read_meta, read_references,
                    read_runs, read_terrain)
@@ -43,6 +44,7 @@ class Context:
         self.out_dir = out_dir
         self.runs, self.header = read_runs(self.results_dir)
         self.meta = read_meta(self.results_dir)
+        problems.use_backends(self.meta)
         self.references = read_references(self.results_dir)
         self.styles = sel.method_styles(self.runs)
         self.failed_only = sel.failed_only_methods(self.runs)

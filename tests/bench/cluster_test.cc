@@ -14,10 +14,10 @@
 #include <set>
 #include <sstream>
 
-#include "quasiroll/bench/harness.h"
-#include "quasiroll/bench/merge.h"
-#include "quasiroll/bench/shard.h"
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/harness/harness.h"
+#include "quasiroll/bench/cluster/merge.h"
+#include "quasiroll/bench/cluster/shard.h"
+#include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/dae.h"
 
 namespace quasiroll::bench {

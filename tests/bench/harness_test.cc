@@ -1,7 +1,7 @@
 // End-to-end: a tiny suite through the harness (runs.csv with one row per
 // grid point, failure and error rows, --jobs invariance, --resume, --filter)
 // and the CLI's exit codes.
-#include "quasiroll/bench/harness.h"
+#include "quasiroll/bench/harness/harness.h"
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -14,7 +14,7 @@
 #include <map>
 #include <sstream>
 
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/harness/suite.h"
 
 namespace quasiroll::bench {
 namespace {

@@ -1,6 +1,6 @@
 // Accuracy and drift metrics on synthetic trajectories with known
 // differences.
-#include "quasiroll/bench/metrics.h"
+#include "quasiroll/bench/harness/metrics.h"
 
 #include <gtest/gtest.h>
 

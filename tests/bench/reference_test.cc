@@ -1,7 +1,7 @@
 // References: detection of the analytic cases (model.md §9.1: O1, O2, O3),
 // agreement of the numerical reference with the closed forms, and the disk
 // cache.
-#include "quasiroll/bench/reference.h"
+#include "quasiroll/bench/harness/reference.h"
 
 #include <gtest/gtest.h>
 
@@ -9,8 +9,8 @@
 #include <filesystem>
 #include <numbers>
 
-#include "quasiroll/bench/metrics.h"
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/harness/metrics.h"
+#include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/yaml_util.h"
 

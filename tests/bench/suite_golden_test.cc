@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/harness/suite.h"
 
 namespace quasiroll::bench {
 namespace {

@@ -1,6 +1,6 @@
 // Suite loading: grid expansion, defaults, run ids, and rejection of bad
 // suites with the entry path and value in the message.
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/harness/suite.h"
 
 #include <gtest/gtest.h>
 

@@ -5,9 +5,13 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <string>
 
-#include "quasiroll/bench/metrics.h"
-#include "quasiroll/bench/reference.h"
+#include "quasiroll/bench/harness/failure_causes.h"
+#include "quasiroll/bench/harness/metrics.h"
+#include "quasiroll/bench/harness/reference.h"
+#include "quasiroll/core/dae.h"
 #include "quasiroll/core/yaml_util.h"
 
 namespace quasiroll::bench {
@@ -83,6 +87,22 @@ TEST(QuasiStaticValidity, RotationalInertiaEntersThroughTheMomentScale) {
   EXPECT_TRUE(std::isnan(QuasiStaticInertiaRatio(run, scene)));
 }
 
+// What the integrator's BackendInfo knows a priori about a fixed-step RK4
+// run of `dae` with Baumgarte gain `sigma` (where it has one) at `step`.
+std::string KnownInstability(const std::string& dae, double sigma,
+                             double step) {
+  RegisterBuiltinIntegrators();
+  std::unique_ptr<Integrator> integrator = IntegratorRegistry::Create(dae);
+  GivenOptions given;
+  const OptionTable table = integrator->option_table();
+  if (FindOption(table, "baumgarte_sigma"))
+    given["baumgarte_sigma"] = std::to_string(sigma);
+  if (FindOption(table, "rk_method")) given["rk_method"] = "rk4";
+  integrator->SetBackendOptions(given);
+  return IntegratorRegistry::Info(dae).KnownInstability(
+      integrator->backend_options(), step);
+}
+
 // Evidence of a paper-scene run (dt 0.05, RK4) against a reference on the
 // dt/4 grid that reached `ref_t` with `ref_status`.
 FailureEvidence Evidence(const std::string& status, double t_reached,
@@ -90,9 +110,8 @@ FailureEvidence Evidence(const std::string& status, double t_reached,
   FailureEvidence e;
   e.status = status;
   e.t_reached = t_reached;
-  e.dae = "rk-projection";
-  e.dt = e.step = 0.05;
-  e.sigma = 5;
+  e.dt = 0.05;
+  e.known_instability = KnownInstability("rk-projection", 5, 0.05);
   e.drift_max = 1e-12;
   e.gap_max = 1e-13;
   e.drift_bound = e.gap_bound = 1e-3;
@@ -138,15 +157,15 @@ TEST(FailureCauses, FrictionStopShared) {
 // mu_min 4.1 while the reference drives on: never a friction limit.
 TEST(FailureCauses, BlowUpIsNeverAFrictionLimit) {
   FailureEvidence e = Evidence("INFEASIBLE_FRICTION", 3.2, "success", 20.0);
-  e.dae = "rk-baumgarte";
-  e.dt = e.step = 3.2;
+  e.dt = 3.2;
+  e.known_instability = KnownInstability("rk-baumgarte", 5, 3.2);
   e.drift_max = 0.74;
   e.gap_max = 0.37;
   FailureCause c = ClassifyFailure(e);
   EXPECT_EQ(c.cause, "numerical");
   EXPECT_EQ(c.detail, "baumgarte_instability");
   // Within RK4's bound the drift is the evidence ...
-  e.sigma = 0.5;  // sigma h = 1.6
+  e.known_instability = KnownInstability("rk-baumgarte", 0.5, 3.2);  // 1.6
   EXPECT_EQ(ClassifyFailure(e).detail, "drift_blowup");
   e.drift_max = 1e-6;
   EXPECT_EQ(ClassifyFailure(e).detail, "gap_blowup");
@@ -154,8 +173,7 @@ TEST(FailureCauses, BlowUpIsNeverAFrictionLimit) {
   e.gap_max = 1e-6;
   EXPECT_EQ(ClassifyFailure(e).detail, "step_too_large");
   // Projection has no Baumgarte term: sigma does not matter there.
-  e.dae = "rk-projection";
-  e.sigma = 200;
+  e.known_instability = KnownInstability("rk-projection", 200, 3.2);
   EXPECT_EQ(ClassifyFailure(e).detail, "step_too_large");
   // No reference: the solver's verdict stands unless the method's own
   // evidence contradicts it.
@@ -209,12 +227,12 @@ TEST(FailureCauses, SolverIntegratorBoundsAndErrors) {
   // A run that reaches t_end past the drift bound with sigma h = 3 > 2.785
   // (stability.yaml, rk-baumgarte at dt 0.2 s, sigma 15): the root cause.
   FailureEvidence unstable = Evidence("drift_exceeded", 4, "success", 4);
-  unstable.dae = "rk-baumgarte";
-  unstable.dt = unstable.step = 0.2;
-  unstable.sigma = 15;
+  unstable.dt = 0.2;
+  unstable.known_instability = KnownInstability("rk-baumgarte", 15, 0.2);
   unstable.drift_max = 2e-3;
   EXPECT_EQ(ClassifyFailure(unstable).detail, "baumgarte_instability");
-  unstable.sigma = 12.5;  // sigma h = 2.5: stable, the symptom is the cause
+  // sigma h = 2.5: stable, the symptom is the cause
+  unstable.known_instability = KnownInstability("rk-baumgarte", 12.5, 0.2);
   EXPECT_EQ(ClassifyFailure(unstable).detail, "drift_blowup");
   const FailureCause err =
       ClassifyFailure(Evidence("error", kNaN, "success", 20));

@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "quasiroll/bench/run_output.h"
+#include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/simulator.h"
 #include "tests/test_names.h"

@@ -3,7 +3,7 @@ benchmark results (docs/python.md).
 
     import quasiroll
     scene = quasiroll.load_scene("bench/scenes/paper.yaml")
-    traj, stats = quasiroll.run(scene, nlp="newton", dae="rk-projection", t_end=5)
+    traj, stats = quasiroll.run(scene, t_end=5)  # the default backends
     traj.plot(x="x", y="y")
 
 Every result has the keys and columns of the CLI's outputs (docs/formats.md):
@@ -54,14 +54,14 @@ def pose(scene):
     return _arrays(json.loads(_quasiroll._pose_json(scene)))
 
 
-def solve(scene, nlp="newton", *, mu=None, eps=None, mode=None, nlp_tol=None):
+def solve(scene, nlp=None, *, mu=None, eps=None, mode=None, nlp_tol=None):
     """One quasi-static solve at the scene's initial configuration
     (`quasiroll solve --json`). Returns a dict: status, message, mu_min,
     twist, joint_rates, actuator_torques (numpy; None when the status is not
     OK), gap, iterations, residual, condition_number, wall_s, critical_wheel
     (1-based or None), contacts (list of 3 dicts of numpy arrays, or None)
     and ok (status == "OK")."""
-    d = json.loads(_quasiroll._solve_json(scene, nlp, mu, eps, mode, nlp_tol))
+    d = json.loads(_quasiroll._solve_json(scene, nlp or "", mu, eps, mode, nlp_tol))
     if d["status"] != "OK":
         d["contacts"] = None
     d = _arrays(d)
@@ -69,7 +69,7 @@ def solve(scene, nlp="newton", *, mu=None, eps=None, mode=None, nlp_tol=None):
     return d
 
 
-def run(scene, nlp="newton", dae="rk-projection", *, coupling="zoh", dt=None,
+def run(scene, nlp=None, dae=None, *, coupling="zoh", dt=None,
         t_end=None, mu=None, eps=None, mode=None, rk_method=None, sigma=None,
         tol=None, atol=None, nlp_tol=None, dae_index=None, substeps=None,
         contact_check=None, nlp_options=None, dae_options=None, as_frame=True):
@@ -77,7 +77,8 @@ def run(scene, nlp="newton", dae="rk-projection", *, coupling="zoh", dt=None,
     trajectory is a pandas DataFrame with the columns of trajectory.csv (or,
     with as_frame=False, a dict of numpy arrays), stats the run.json dict
     (status, stop_reason, t_reached, counters, wall_s, options, ...).
-    Options left at None take the scene's value or the library default.
+    Options left at None take the scene's value or the library default (nlp,
+    dae: the backends registered as defaults, `quasiroll list`).
     nlp_options / dae_options: the backends' own options as a dict (name ->
     value, as `--nlp-opt` / `--dae-opt`; `quasiroll list --options` lists
     them); an unknown or ill-typed one raises ValueError naming it. The GIL
@@ -97,7 +98,7 @@ def run(scene, nlp="newton", dae="rk-projection", *, coupling="zoh", dt=None,
             out[str(key)] = str(item)
         return out
     csv_text, run_json = _quasiroll._run_text(
-        scene, nlp, dae, coupling, dt, t_end, mu, eps, mode, rk_method, sigma,
+        scene, nlp or "", dae or "", coupling, dt, t_end, mu, eps, mode, rk_method, sigma,
         tol, atol, nlp_tol, dae_index, substeps, contact_check,
         _given("nlp_options", nlp_options), _given("dae_options", dae_options))
     stats = json.loads(run_json)

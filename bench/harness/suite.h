@@ -16,21 +16,13 @@
 #include <utility>
 #include <vector>
 
+#include "quasiroll/bench/io/format.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/simulator.h"
 #include "quasiroll/core/terrains.h"
 
 namespace quasiroll::bench {
-
-// ------------------------------------------------------------- hashing ----
-
-// FNV-1a, 64 bit, of the bytes of `text`.
-std::uint64_t Fnv1a64(std::string_view text);
-// 16 lower-case hex digits.
-std::string Hex64(std::uint64_t value);
-// Shortest round-trip decimal of v ("0.05", "1e-08", "nan", "inf").
-std::string Num(double v);
 
 // ------------------------------------------------------------- schema ----
 
@@ -59,8 +51,13 @@ struct ReferenceSettings {
   int dt_divisor = 4;
   // RK4 steps per output interval (step = scene dt / (dt_divisor * substeps)).
   int substeps = 4;
-  std::string nlp = "newton";
+  // NLP backend; "" = the registry's BackendRole::kReference one.
+  std::string nlp;
   double residual_tolerance = 1e-12;
+  // `nlp`, or the registered reference NLP when it is empty.
+  std::string Nlp() const;
+  // The fixed-step integrator of references (BackendRole::kReference).
+  static std::string Integrator();
   // Canonical text (part of every reference key).
   std::string Canonical() const;
 };

@@ -1,4 +1,4 @@
-#include "quasiroll/bench/run_output.h"
+#include "quasiroll/bench/io/run_output.h"
 
 #include <dlfcn.h>
 #include <unistd.h>
@@ -15,7 +15,9 @@
 #include <thread>
 #include <variant>
 
-#include "quasiroll/bench/metrics.h"
+#include "quasiroll/bench/harness/metrics.h"
+#include "quasiroll/core/dae.h"
+#include "quasiroll/core/nlp.h"
 #include "quasiroll_git_commit.h"
 
 namespace quasiroll {
@@ -142,6 +144,37 @@ void WriteBuildOptions(JsonWriter* json) {
   json->Key("cxx_flags").Value(QUASIROLL_CXX_FLAGS);
   json->Key("options").Value(QUASIROLL_BUILD_OPTIONS);
 #endif
+  json->EndObject();
+}
+
+namespace {
+template <typename RegistryT>
+void WriteBackendList(JsonWriter* json) {
+  json->BeginArray();
+  for (const std::string& name : RegistryT::Names()) {
+    const BackendInfo info = RegistryT::Info(name);
+    json->BeginObject();
+    json->Key("name").Value(name);
+    json->Key("description").Value(info.description);
+    json->Key("family").Value(info.family);
+    json->Key("library").Value(info.library);
+    json->Key("library_version").Value(info.library_version);
+    json->Key("thread_safe").Value(info.thread_safe);
+    json->Key("roles").BeginArray();
+    for (BackendRole role : info.roles) json->Value(ToString(role));
+    json->EndArray();
+    json->EndObject();
+  }
+  json->EndArray();
+}
+}  // namespace
+
+void WriteBackends(JsonWriter* json) {
+  json->BeginObject();
+  json->Key("nlp");
+  WriteBackendList<NlpSolverRegistry>(json);
+  json->Key("dae");
+  WriteBackendList<IntegratorRegistry>(json);
   json->EndObject();
 }
 

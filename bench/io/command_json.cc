@@ -1,8 +1,8 @@
-#include "quasiroll/bench/command_json.h"
+#include "quasiroll/bench/io/command_json.h"
 
 #include <array>
 
-#include "quasiroll/bench/json_writer.h"
+#include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/core/so3.h"
 
 namespace quasiroll {

@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "quasiroll/bench/reference.h"
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/harness/reference.h"
+#include "quasiroll/bench/harness/suite.h"
 
 namespace quasiroll::bench {
 
@@ -29,7 +29,7 @@ struct HarnessOptions {
   // one line per finished run), 0 never, 1 lines, 2 updating line.
   int progress = -1;
   std::FILE* log = stderr;
-  // --shard I/N (bench/shard.h): run only slice shard_index of shard_count;
+  // --shard I/N (bench/cluster/shard.h): run only slice shard_index of shard_count;
   // shard_count 0 = no sharding. runs.csv and meta.json then go to
   // DIR/shards/<I>-of-<N>/ so that the N shards may share DIR.
   int shard_index = 0;
@@ -58,7 +58,7 @@ std::string CsvField(const std::string& value);
 // `reference` (null if unavailable; `reference_error` then says why). The
 // row's status is the harness's verdict: result.status, except that a run
 // that reached t_end beyond run.bounds is drift_exceeded / gap_exceeded;
-// cause / cause_detail from ClassifyFailure (bench/metrics.h).
+// cause / cause_detail from ClassifyFailure (bench/harness/failure_causes.h).
 std::vector<std::string> MakeRow(const RunSpec& run,
                                  const std::string& terrain_id,
                                  const SimulationResult& result,

@@ -1,4 +1,4 @@
-#include "quasiroll/bench/harness.h"
+#include "quasiroll/bench/harness/harness.h"
 
 #include <unistd.h>
 
@@ -20,10 +20,11 @@
 #include <sstream>
 #include <thread>
 
-#include "quasiroll/bench/json_writer.h"
-#include "quasiroll/bench/metrics.h"
-#include "quasiroll/bench/run_output.h"
-#include "quasiroll/bench/shard.h"
+#include "quasiroll/bench/io/json_writer.h"
+#include "quasiroll/bench/harness/failure_causes.h"
+#include "quasiroll/bench/harness/metrics.h"
+#include "quasiroll/bench/io/run_output.h"
+#include "quasiroll/bench/cluster/shard.h"
 #include "quasiroll/core/nlp.h"
 
 namespace quasiroll::bench {
@@ -228,11 +229,11 @@ FailureEvidence Evidence(const RunSpec& run, const std::string& status,
   FailureEvidence e;
   e.status = status;
   e.t_reached = t_reached;
-  e.dae = run.dae;
-  e.rk_method = run.rk_method;
   e.dt = run.dt;
-  e.step = run.dt / run.substeps;
-  e.sigma = run.sigma;
+  std::unique_ptr<Integrator> dae = IntegratorRegistry::Create(run.dae);
+  dae->SetBackendOptions(run.dae_options);
+  e.known_instability = IntegratorRegistry::Info(run.dae).KnownInstability(
+      dae->backend_options(), run.dt / run.substeps);
   e.contact_check = run.contact_check;
   e.drift_bound = run.bounds.drift;
   e.gap_bound = run.bounds.gap;
@@ -595,6 +596,8 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
   WriteNumericalLibraries(&w);
   w.Key("build");
   WriteBuildOptions(&w);
+  w.Key("backends");
+  WriteBackends(&w);
   w.Key("machine");
   WriteMachine(&w);
   w.Key("jobs").Value(jobs);
@@ -699,7 +702,7 @@ ReferenceJob ReferenceJobFor(const Suite& suite, const RunSpec& run) {
   job.terrain = SweptTerrain(sc, run.seed, run.roughness);
   job.digest = sc.heightmap_digest;
   job.label = sc.name;
-  job.nlp = suite.reference.nlp;
+  job.nlp = suite.reference.Nlp();
   job.key = ReferenceKey(job.scene, job.terrain, job.digest, suite.reference);
   return job;
 }

@@ -1,41 +1,20 @@
 // Splitting a suite's run list across processes (docs/cluster.md): the
-// a-priori run cost that balances `bench --shard I/N` slices and orders the
-// MPI driver's dispatch (biggest first), and the deterministic partition.
+// deterministic partition of `bench --shard I/N` (balanced by the a-priori
+// run costs of cost_model.h) and the `bench --plan` listing.
 #pragma once
 
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/cluster/cost_model.h"
+#include "quasiroll/bench/harness/suite.h"
 
 namespace quasiroll::bench {
 struct HarnessOptions;
 }
 
 namespace quasiroll::bench {
-
-// Estimated cost of a run in seconds (docs/cluster.md, "Cost model"):
-//
-//   cost = repeats * (c0 + holds * s[nlp, dae, coupling] * f_tol)
-//
-// holds = t_end / dt * substeps; s = measured seconds per hold interval of
-// each method (scripts/fit_run_costs.py on default.yaml; for an unmeasured
-// combination the NLP's ratio to newton times newton's cost with that
-// integrator and coupling, for an unknown backend the table's median);
-// f_tol = (1e-8 / tol)^p for the adaptive schemes (DP5(4), BS3(2), IDA),
-// 1 for fixed-step RK4; c0 the per-run overhead. The run's physics may end
-// it early (a failure): the estimate cannot know that. Deterministic
-// arithmetic on the run's parameters only: every shard computes the same
-// partition.
-double EstimatedRunCost(const RunSpec& run);
-
-// Estimated cost of computing a numerical reference (docs/harness.md,
-// References) of a scene with hold interval `scene_dt` up to `t_end`: a
-// coupled rk-projection run of settings.nlp at step scene_dt / (dt_divisor *
-// substeps), by the same model.
-double EstimatedReferenceCost(double scene_dt, double t_end,
-                              const ReferenceSettings& settings);
 
 // "I/N" -> {I, N}: 0 <= I < N <= 1000000, decimal integers. Throws
 // SceneError naming --shard and the value otherwise.

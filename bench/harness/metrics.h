@@ -84,43 +84,4 @@ Vec3 EstimatedInertia(const Scene& scene);
 double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
                                const Scene& scene);
 
-// ------------------------------------------------- failure causes ----
-
-// Everything ClassifyFailure() looks at (docs/harness.md, Failure causes).
-struct FailureEvidence {
-  std::string status;  // runs.csv status (after the suite's bounds)
-  double t_reached = 0;
-  // Method.
-  std::string dae;
-  std::string rk_method = "rk4";  // RK scheme ("rk4", "dp54", ...)
-  double dt = 0;                  // hold / output interval
-  double step = 0;                // integrator step (dt / substeps)
-  double sigma = 0;
-  int contact_check = 0;  // sampled second-contact check every N samples
-  // Constraint health over the samples, and the suite's bounds.
-  double drift_max = 0, gap_max = 0, drift_bound = 0, gap_bound = 0;
-  // Reference: has_reference false when none could be computed.
-  bool has_reference = false;
-  std::string ref_status;
-  double ref_t_reached = 0;
-  double ref_dt = 0;  // spacing of the reference's samples
-};
-
-struct FailureCause {
-  std::string cause;   // "", "physical" or "numerical"
-  std::string detail;  // "", friction_limit, ... (docs/harness.md)
-};
-
-// RK4's stability interval on the negative real axis is (-2.785, 0): a
-// Baumgarte term -sigma H integrated by fixed-step RK4 grows for
-// sigma h > 2.785.
-constexpr double kRk4RealStabilityBound = 2.785;
-
-// Classifies a non-success row (rules in docs/harness.md, Failure causes):
-// physical when the reference stops at the same place
-// (|t_reached - t_ref| <= 2 max(dt max(1, contact_check), ref_dt)) with a
-// physical status, numerical when the method stops where the reference goes
-// on, breaks the bounds, or its NLP fails (SOLVER_FAILURE).
-FailureCause ClassifyFailure(const FailureEvidence& e);
-
 }  // namespace quasiroll::bench

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "quasiroll/bench/json_writer.h"
+#include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/simulator.h"
 
@@ -23,7 +23,7 @@ std::string TrajectoryCsv(const SimulationResult& result);
 // a git checkout), with "-dirty" when the tree had uncommitted changes to
 // tracked files at build time (cmake/QuasirollGitCommit.cmake).
 std::string GitCommit();
-// {"eigen": "3.4.0", "ipopt": ..., ...}: versions seen at configure time.
+// {"eigen": "3.4.0", ...}: versions seen at configure time.
 void WriteLibraryVersions(JsonWriter* json);
 // The files the process's BLAS (ddot_) and LAPACK (dsytrf_) calls bind to, or
 // "none": {"blas": "/usr/lib/.../blas/libblas.so.3", "lapack": ...}. Which
@@ -43,6 +43,10 @@ const MachineInfo& ThisMachine();
 void WriteBuildOptions(JsonWriter* json);
 // Host name, CPU model, core count.
 void WriteMachine(JsonWriter* json);
+// The registered backends with their BackendInfo (core/backend_info.h):
+// {"nlp": [{"name", "description", "family", "library", "library_version",
+// "thread_safe", "roles": [...]}, ...], "dae": [...]}, in name order.
+void WriteBackends(JsonWriter* json);
 std::string IsoTimeNow();
 
 // run.json of `quasiroll run`.

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/simulator.h"
 #include "quasiroll/core/terrains.h"

@@ -1,4 +1,4 @@
-#include "quasiroll/bench/reference.h"
+#include "quasiroll/bench/harness/reference.h"
 
 #include <chrono>
 #include <cmath>
@@ -11,9 +11,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "quasiroll/bench/json_writer.h"
-#include "quasiroll/bench/metrics.h"
-#include "quasiroll/bench/run_output.h"
+#include "quasiroll/bench/io/json_writer.h"
+#include "quasiroll/bench/harness/metrics.h"
+#include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/so3.h"
 
@@ -274,8 +274,8 @@ SimulationResult ComputeNumericalReference(const Scene& scene,
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
   SimulationOptions o;
-  o.nlp = settings.nlp;
-  o.dae = "rk-projection";
+  o.nlp = settings.Nlp();
+  o.dae = ReferenceSettings::Integrator();
   o.coupling = Coupling::kCoupled;
   o.dt = scene.dt / settings.dt_divisor;
   o.t_end = scene.t_end;
@@ -306,7 +306,7 @@ SimulationOptions CheckReferenceOptions(const Scene& scene,
                                         const ReferenceSettings& settings,
                                         const std::string& primary_method) {
   SimulationOptions o;
-  o.nlp = settings.nlp;
+  o.nlp = settings.Nlp();
   o.coupling = Coupling::kCoupled;
   o.dt = scene.dt / settings.dt_divisor;
   o.t_end = scene.t_end;
@@ -315,11 +315,12 @@ SimulationOptions CheckReferenceOptions(const Scene& scene,
   o.integrator.atol = 1e-12;
   o.quasi_static.residual_tolerance = settings.residual_tolerance;
   if (primary_method == "rk4") {
-    o.dae = "rk-projection";
+    o.dae = ReferenceSettings::Integrator();
     o.dae_options = {{"rk_method", "dp54"}};
     o.integrator.step = o.dt;  // initial step; DP5(4) controls it
   } else {
-    o.dae = "ida";  // index 2 + final projection (model.md §8)
+    // An implicit method (IDA: index 2 + final projection, model.md §8).
+    o.dae = IntegratorRegistry::WithRole(BackendRole::kReferenceCheck);
     o.integrator.step = o.dt;
   }
   return o;
@@ -330,8 +331,12 @@ std::string DescribeReferenceMethod(const SimulationOptions& o) {
   os << ToString(o.coupling) << " " << o.dae;
   const auto rk = o.dae_options.find("rk_method");
   const std::string scheme = rk == o.dae_options.end() ? "rk4" : rk->second;
-  if (o.dae != "ida") os << " " << scheme;
-  if (o.dae != "ida" && scheme == "rk4")
+  // A scheme is named for integrators that have one (the RK family).
+  const bool has_scheme =
+      FindOption(IntegratorRegistry::Create(o.dae)->option_table(),
+                 "rk_method") != nullptr;
+  if (has_scheme) os << " " << scheme;
+  if (has_scheme && scheme == "rk4")
     os << " step " << Num(o.integrator.step) << " s";
   else
     os << " rtol " << Num(o.integrator.rtol) << " atol "
@@ -585,8 +590,8 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
     result = ComputeNumericalReference(scene, settings, &method);
     ref.kind = method == "rk4" ? "numerical" : "numerical:" + method;
     SimulationOptions used;
-    used.nlp = settings.nlp;
-    used.dae = "rk-projection";
+    used.nlp = settings.Nlp();
+    used.dae = ReferenceSettings::Integrator();
     used.coupling = Coupling::kCoupled;
     used.dt = scene.dt / settings.dt_divisor;
     used.dae_options = {{"rk_method", method}};

@@ -1,4 +1,4 @@
-#include "quasiroll/bench/merge.h"
+#include "quasiroll/bench/cluster/merge.h"
 
 #include <algorithm>
 #include <cstdlib>
@@ -9,10 +9,10 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "quasiroll/bench/harness.h"
-#include "quasiroll/bench/json_writer.h"
-#include "quasiroll/bench/run_output.h"
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/harness/harness.h"
+#include "quasiroll/bench/io/json_writer.h"
+#include "quasiroll/bench/io/run_output.h"
+#include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/scene.h"
 
 namespace quasiroll::bench {

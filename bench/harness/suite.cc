@@ -1,4 +1,4 @@
-#include "quasiroll/bench/suite.h"
+#include "quasiroll/bench/harness/suite.h"
 
 #include <algorithm>
 #include <cmath>
@@ -22,30 +22,23 @@ using yaml::Fail;
 using yaml::JoinIndex;
 using yaml::JoinKey;
 
-std::uint64_t Fnv1a64(std::string_view text) {
-  std::uint64_t h = 14695981039346656037ull;
-  for (unsigned char c : text) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  return h;
+std::string ReferenceSettings::Nlp() const {
+  if (!nlp.empty()) return nlp;
+  RegisterBuiltinNlpSolvers();
+  return NlpSolverRegistry::WithRole(BackendRole::kReference);
 }
 
-std::string Hex64(std::uint64_t value) {
-  char buf[17];
-  std::snprintf(buf, sizeof(buf), "%016llx",
-                static_cast<unsigned long long>(value));
-  return buf;
+std::string ReferenceSettings::Integrator() {
+  RegisterBuiltinIntegrators();
+  return IntegratorRegistry::WithRole(BackendRole::kReference);
 }
-
-std::string Num(double v) { return yaml::FormatNumber(v); }
 
 std::string ReferenceSettings::Canonical() const {
   std::ostringstream os;
   os << "reference{analytic=" << (analytic ? 1 : 0)
      << ";dt_divisor=" << dt_divisor << ";substeps=" << substeps
-     << ";nlp=" << nlp << ";residual_tolerance=" << Num(residual_tolerance)
-     << ";coupling=coupled;dae=rk-projection;rk=rk4}";
+     << ";nlp=" << Nlp() << ";residual_tolerance=" << Num(residual_tolerance)
+     << ";coupling=coupled;dae=" << Integrator() << ";rk=rk4}";
   return os.str();
 }
 
@@ -578,9 +571,11 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
   if (scene_idx.empty()) Fail(JoinKey(path, "scenes"), "no scenes, got none");
 
   const std::vector<std::string> nlps =
-      ReadNameAxis(node, path, "nlp", NlpSolverRegistry::Names(), {"newton"});
-  const std::vector<std::string> daes = ReadNameAxis(
-      node, path, "dae", IntegratorRegistry::Names(), {"rk-projection"});
+      ReadNameAxis(node, path, "nlp", NlpSolverRegistry::Names(),
+                   {NlpSolverRegistry::WithRole(BackendRole::kDefault)});
+  const std::vector<std::string> daes =
+      ReadNameAxis(node, path, "dae", IntegratorRegistry::Names(),
+                   {IntegratorRegistry::WithRole(BackendRole::kDefault)});
   const std::vector<std::string> couplings =
       ReadNameAxis(node, path, "coupling", {"zoh", "coupled"}, {"zoh"});
   const std::vector<std::string> rks =
