@@ -34,6 +34,12 @@ class Registry {
     if (table_.count(name) > 0)
       throw std::invalid_argument(kind_ + " '" + name +
                                   "' is registered already");
+    for (BackendRole role : info.roles)
+      for (const auto& entry : table_)
+        if (entry.second.info.HasRole(role))
+          throw std::invalid_argument(
+              kind_ + " '" + name + "' claims the role '" + ToString(role) +
+              "' of '" + entry.first + "'");
     table_[name] = Entry{std::move(info), std::move(factory)};
   }
 

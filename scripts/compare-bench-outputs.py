@@ -9,7 +9,7 @@ Compares (docs/cluster.md, "What is identical"):
              wall_per_sim_s, host, cpu_model) from both;
   meta.json  key by key, in order, after dropping the invocation keys
              (machine, jobs, resume, options, shard, start_time, end_time,
-             wall_s, runs_executed, runs_resumed, merge, mpi);
+             wall_s, runs_executed, runs_resumed, merge, mpi, command);
   trajectories/<run_id>.csv byte for byte for every row (unless
              --no-trajectories).
 Exit 0 if identical, 1 with the first differences on stderr otherwise.
@@ -30,7 +30,8 @@ import sys
 TIMING_AND_HOST_COLUMNS = {"wall_s", "wall_s_median", "wall_s_min", "wall_s_max",
                            "wall_s_all", "wall_per_sim_s", "host", "cpu_model"}
 INVOCATION_META_KEYS = {"machine", "jobs", "resume", "options", "shard", "start_time",
-                        "end_time", "wall_s", "runs_executed", "runs_resumed", "merge", "mpi"}
+                        "end_time", "wall_s", "runs_executed", "runs_resumed", "merge", "mpi",
+                        "command"}
 
 
 def runs_without_timing(path):

@@ -273,37 +273,52 @@ GivenOptions ParseOptionFlags(const std::vector<std::string>& flags,
 
 }  // namespace
 
+namespace {
+// The registered backends with their BackendInfo as a JSON array.
+template <typename RegistryT>
+std::string BackendListJson(bool with_options) {
+  std::string out = "[";
+  for (const std::string& name : RegistryT::Names()) {
+    const BackendInfo info = RegistryT::Info(name);
+    std::string roles;
+    for (BackendRole role : info.roles) {
+      if (!roles.empty()) roles += ",";
+      roles += JsonText(ToString(role));
+    }
+    if (out.size() > 1) out += ",";
+    out += "{\"name\":";
+    out += JsonText(name);
+    out += ",\"description\":";
+    out += JsonText(info.description);
+    out += ",\"family\":";
+    out += JsonText(info.family);
+    out += ",\"library\":";
+    out += JsonText(info.library);
+    out += ",\"library_version\":";
+    out += JsonText(info.library_version);
+    out += info.thread_safe ? ",\"thread_safe\":true" : ",\"thread_safe\":false";
+    out += ",\"roles\":[";
+    out += roles;
+    out += "]";
+    if (with_options) {
+      out += ",\"options\":";
+      out += OptionTableJson(RegistryT::Create(name)->option_table());
+    }
+    out += "}";
+  }
+  return out + "]";
+}
+}  // namespace
+
 int RunList(const ListArgs& args) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
   if (args.json) {
-    // {"nlp": [{"name", "description"[, "options": [...]]}], "dae": [...]}
-    std::string out = "{\"nlp\":[";
-    bool first = true;
-    for (const std::string& name : NlpSolverRegistry::Names()) {
-      out +=
-          std::string(first ? "" : ",") + "{\"name\":" + JsonText(name) +
-          ",\"description\":" + JsonText(NlpSolverRegistry::Description(name));
-      if (args.options)
-        out += ",\"options\":" +
-               OptionTableJson(NlpSolverRegistry::Create(name)->option_table());
-      out += "}";
-      first = false;
-    }
-    out += "],\"dae\":[";
-    first = true;
-    for (const std::string& name : IntegratorRegistry::Names()) {
-      out +=
-          std::string(first ? "" : ",") + "{\"name\":" + JsonText(name) +
-          ",\"description\":" + JsonText(IntegratorRegistry::Description(name));
-      if (args.options)
-        out +=
-            ",\"options\":" +
-            OptionTableJson(IntegratorRegistry::Create(name)->option_table());
-      out += "}";
-      first = false;
-    }
-    std::cout << out << "]}\n";
+    // {"nlp": [{"name", "description", "family", "library",
+    // "library_version", "thread_safe", "roles"[, "options"]}], "dae": [...]}
+    std::cout << "{\"nlp\":" << BackendListJson<NlpSolverRegistry>(args.options)
+              << ",\"dae\":"
+              << BackendListJson<IntegratorRegistry>(args.options) << "}\n";
     return 0;
   }
   std::printf("NLP backends (--nlp):\n");

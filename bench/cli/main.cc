@@ -7,10 +7,16 @@
 #include <cstring>
 #include <iostream>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "quasiroll/bench/cli/cli_support.h"
 #include "quasiroll/bench/cli/commands.h"
+#include "quasiroll/bench/io/run_output.h"
+#include "quasiroll/core/dae.h"
 #include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/nlp.h"
+#include "quasiroll/core/plugin_loader.h"
 #include "quasiroll/core/scene.h"
 
 namespace {
@@ -18,6 +24,20 @@ namespace {
 int BadInput(const std::string& message) {
   std::cerr << "error: " << message << "\n";
   return quasiroll::cli::kExitBadInput;
+}
+
+// The values of every `--plugin FILE` / `--plugin=FILE`: plugins register
+// backends, so they are loaded before the commands check backend names.
+std::vector<std::string> PluginFlags(int argc, char** argv) {
+  std::vector<std::string> files;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--plugin" && i + 1 < argc)
+      files.push_back(argv[++i]);
+    else if (arg.rfind("--plugin=", 0) == 0)
+      files.push_back(arg.substr(9));
+  }
+  return files;
 }
 
 }  // namespace
@@ -32,6 +52,19 @@ int main(int argc, char** argv) {
   app.set_version_flag(
       "--version", [] { return VersionText(); },
       "Print version, commit, build type and backends");
+  quasiroll::SetInvocation(argc, argv);
+  std::vector<std::string> plugins;
+  app.add_option("--plugin", plugins,
+                 "Load backends from a plugin library (repeatable; also "
+                 "$QUASIROLL_PLUGIN_PATH, colon-separated; docs/plugins.md)");
+  app.fallthrough();
+  try {
+    quasiroll::RegisterBuiltinNlpSolvers();
+    quasiroll::RegisterBuiltinIntegrators();
+    quasiroll::LoadPlugins(PluginFlags(argc, argv));
+  } catch (const std::exception& e) {
+    return BadInput(e.what());
+  }
   Commands commands;
   commands.Register(app);
 

@@ -23,7 +23,8 @@ const std::vector<std::string>& InvocationMetaKeys() {
   static const std::vector<std::string> keys = {
       "machine",       "jobs",         "resume",   "options",
       "shard",         "start_time",   "end_time", "wall_s",
-      "runs_executed", "runs_resumed", "merge",    "mpi"};
+      "runs_executed", "runs_resumed", "merge",    "mpi",
+      "command"};
   return keys;
 }
 

@@ -43,7 +43,10 @@
 #include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/bench/cluster/shard.h"
 #include "quasiroll/bench/harness/suite.h"
+#include "quasiroll/core/dae.h"
 #include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/nlp.h"
+#include "quasiroll/core/plugin_loader.h"
 #include "quasiroll/core/scene.h"
 
 namespace quasiroll::mpi {
@@ -484,6 +487,10 @@ int main(int argc, char** argv) {
   CLI::App* bench = app.add_subcommand(
       "bench", "Run a benchmark suite; writes DIR/runs.csv as quasiroll bench");
   bench->add_option("--suite", args.suite, "Suite YAML file")->required();
+  std::vector<std::string> plugins;
+  bench->add_option("--plugin", plugins,
+                    "Load backends from a plugin library (repeatable; also "
+                    "$QUASIROLL_PLUGIN_PATH; docs/plugins.md)");
   bench
       ->add_option("--out", args.out,
                    "Output directory (on a file system all ranks share)")
@@ -499,9 +506,21 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "bar", "lines", "none"}))
       ->capture_default_str();
   int code = 0;
+  quasiroll::SetInvocation(argc, argv);
   try {
     app.parse(argc, argv);
-    code = quasiroll::mpi::Bench(args, rank, size);
+    // Every rank loads the same plugins before the suite names backends.
+    quasiroll::RegisterBuiltinNlpSolvers();
+    quasiroll::RegisterBuiltinIntegrators();
+    bool plugins_loaded = true;
+    try {
+      quasiroll::LoadPlugins(plugins);
+    } catch (const std::exception& e) {  // bad input: exit 2, as quasiroll
+      if (rank == 0) std::cerr << "error: " << e.what() << "\n";
+      plugins_loaded = false;
+      code = 2;
+    }
+    if (plugins_loaded) code = quasiroll::mpi::Bench(args, rank, size);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) {
       if (rank == 0) app.exit(e);

@@ -598,6 +598,9 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
   WriteBuildOptions(&w);
   w.Key("backends");
   WriteBackends(&w);
+  w.Key("plugins");
+  WritePlugins(&w);
+  if (!Invocation().empty()) w.Key("command").Value(Invocation());
   w.Key("machine");
   WriteMachine(&w);
   w.Key("jobs").Value(jobs);

@@ -18,6 +18,7 @@
 #include "quasiroll/bench/harness/metrics.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/nlp.h"
+#include "quasiroll/core/plugin_loader.h"
 #include "quasiroll_git_commit.h"
 
 namespace quasiroll {
@@ -177,6 +178,51 @@ void WriteBackends(JsonWriter* json) {
   WriteBackendList<IntegratorRegistry>(json);
   json->EndObject();
 }
+
+void WritePlugins(JsonWriter* json) {
+  json->BeginArray();
+  for (const LoadedPlugin& p : LoadedPlugins()) {
+    json->BeginObject();
+    json->Key("file").Value(p.file);
+    json->Key("path").Value(p.path);
+    json->Key("sha256").Value(p.sha256);
+    json->Key("version").Value(p.version);
+    json->Key("nlp").BeginArray();
+    for (const std::string& n : p.nlp_backends) json->Value(n);
+    json->EndArray();
+    json->Key("dae").BeginArray();
+    for (const std::string& n : p.integrators) json->Value(n);
+    json->EndArray();
+    json->EndObject();
+  }
+  json->EndArray();
+}
+
+namespace {
+std::string& InvocationText() {
+  static std::string text;
+  return text;
+}
+// A word as a POSIX shell reads it back.
+std::string ShellQuoted(const std::string& word) {
+  if (!word.empty() &&
+      word.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVW"
+                             "XYZ0123456789_-+=./,:@%") == std::string::npos)
+    return word;
+  std::string out = "'";
+  for (char c : word) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+}  // namespace
+
+void SetInvocation(int argc, const char* const* argv) {
+  std::string text;
+  for (int i = 0; i < argc; ++i)
+    text += (i ? " " : "") + ShellQuoted(argv[i]);
+  InvocationText() = text;
+}
+
+const std::string& Invocation() { return InvocationText(); }
 
 namespace {
 std::string LoadedLibraryProviding(const char* symbol) {

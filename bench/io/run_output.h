@@ -47,6 +47,13 @@ void WriteMachine(JsonWriter* json);
 // {"nlp": [{"name", "description", "family", "library", "library_version",
 // "thread_safe", "roles": [...]}, ...], "dae": [...]}, in name order.
 void WriteBackends(JsonWriter* json);
+// The plugins loaded into this process (core/plugin_loader.h): [{"file",
+// "path", "sha256", "version", "nlp": [...], "dae": [...]}, ...].
+void WritePlugins(JsonWriter* json);
+// The program's command line, recorded once by main() (shell-quoted words;
+// "" when none was recorded, e.g. in the library's own tests).
+void SetInvocation(int argc, const char* const* argv);
+const std::string& Invocation();
 std::string IsoTimeNow();
 
 // run.json of `quasiroll run`.

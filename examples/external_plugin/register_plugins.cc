@@ -2,6 +2,7 @@
 
 #include <memory>
 
+#include <quasiroll/core/backend_info.h>
 #include <quasiroll/core/dae.h>
 #include <quasiroll/core/nlp.h>
 
@@ -11,15 +12,21 @@
 namespace example {
 
 void RegisterExamplePlugins() {
-  quasiroll::NlpSolverRegistry::Register(
-      kNlpName,
+  quasiroll::BackendInfo lm;
+  lm.description =
       "example plugin: Levenberg-Marquardt (QR, More scaling) on square "
-      "equality systems",
+      "equality systems";
+  lm.family = "least squares";
+  quasiroll::NlpSolverRegistry::Register(
+      kNlpName, std::move(lm),
       [] { return std::make_unique<LevenbergMarquardtSolver>(); });
+  quasiroll::BackendInfo midpoint;
+  midpoint.description =
+      "example plugin: explicit midpoint (RK2, fixed step) + Newton "
+      "projection onto H = 0";
+  midpoint.family = "explicit Runge-Kutta";
   quasiroll::IntegratorRegistry::Register(
-      kDaeName,
-      "example plugin: explicit midpoint (RK2, fixed step) + Newton projection "
-      "onto H = 0",
+      kDaeName, std::move(midpoint),
       [] { return std::make_unique<MidpointProjectionIntegrator>(); });
 }
 

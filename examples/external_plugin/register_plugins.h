@@ -1,6 +1,7 @@
-// Registers the example plugins with quasiroll's registries. Idempotent and
-// thread-safe (Register() replaces an entry of the same name under a lock),
-// but call it once, before creating solvers or loading suites.
+// Registers the example plugins with quasiroll's registries, each with its
+// BackendInfo. Call it once, before creating solvers or loading suites (a
+// second registration of a name throws std::invalid_argument). As a
+// loadable plugin the loader calls it through plugin_entry.cc.
 #pragma once
 
 namespace example {

@@ -1,0 +1,172 @@
+#include "quasiroll/core/plugin_loader.h"
+
+#include <dlfcn.h>
+
+#include <array>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "quasiroll/core/dae.h"
+#include "quasiroll/core/nlp.h"
+
+namespace quasiroll {
+
+namespace {
+
+// FIPS 180-4 SHA-256 of `data`.
+std::string Sha256Hex(const std::string& data) {
+  static constexpr std::array<std::uint32_t, 64> k = {
+      0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1,
+      0x923f82a4, 0xab1c5ed5, 0xd807aa98, 0x12835b01, 0x243185be, 0x550c7dc3,
+      0x72be5d74, 0x80deb1fe, 0x9bdc06a7, 0xc19bf174, 0xe49b69c1, 0xefbe4786,
+      0x0fc19dc6, 0x240ca1cc, 0x2de92c6f, 0x4a7484aa, 0x5cb0a9dc, 0x76f988da,
+      0x983e5152, 0xa831c66d, 0xb00327c8, 0xbf597fc7, 0xc6e00bf3, 0xd5a79147,
+      0x06ca6351, 0x14292967, 0x27b70a85, 0x2e1b2138, 0x4d2c6dfc, 0x53380d13,
+      0x650a7354, 0x766a0abb, 0x81c2c92e, 0x92722c85, 0xa2bfe8a1, 0xa81a664b,
+      0xc24b8b70, 0xc76c51a3, 0xd192e819, 0xd6990624, 0xf40e3585, 0x106aa070,
+      0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a,
+      0x5b9cca4f, 0x682e6ff3, 0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208,
+      0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2};
+  std::array<std::uint32_t, 8> h = {0x6a09e667, 0xbb67ae85, 0x3c6ef372,
+                                    0xa54ff53a, 0x510e527f, 0x9b05688c,
+                                    0x1f83d9ab, 0x5be0cd19};
+  std::string msg = data;
+  const std::uint64_t bits = static_cast<std::uint64_t>(data.size()) * 8;
+  msg.push_back(static_cast<char>(0x80));
+  while (msg.size() % 64 != 56) msg.push_back('\0');
+  for (int i = 7; i >= 0; --i)
+    msg.push_back(static_cast<char>((bits >> (8 * i)) & 0xff));
+  auto rotr = [](std::uint32_t x, int n) { return (x >> n) | (x << (32 - n)); };
+  for (std::size_t block = 0; block < msg.size(); block += 64) {
+    std::array<std::uint32_t, 64> w{};
+    for (int i = 0; i < 16; ++i)
+      for (int b = 0; b < 4; ++b)
+        w[i] = (w[i] << 8) |
+               static_cast<unsigned char>(msg[block + 4 * i + b]);
+    for (int i = 16; i < 64; ++i) {
+      const std::uint32_t s0 =
+          rotr(w[i - 15], 7) ^ rotr(w[i - 15], 18) ^ (w[i - 15] >> 3);
+      const std::uint32_t s1 =
+          rotr(w[i - 2], 17) ^ rotr(w[i - 2], 19) ^ (w[i - 2] >> 10);
+      w[i] = w[i - 16] + s0 + w[i - 7] + s1;
+    }
+    std::array<std::uint32_t, 8> v = h;
+    for (int i = 0; i < 64; ++i) {
+      const std::uint32_t s1 = rotr(v[4], 6) ^ rotr(v[4], 11) ^ rotr(v[4], 25);
+      const std::uint32_t ch = (v[4] & v[5]) ^ (~v[4] & v[6]);
+      const std::uint32_t t1 = v[7] + s1 + ch + k[i] + w[i];
+      const std::uint32_t s0 = rotr(v[0], 2) ^ rotr(v[0], 13) ^ rotr(v[0], 22);
+      const std::uint32_t maj = (v[0] & v[1]) ^ (v[0] & v[2]) ^ (v[1] & v[2]);
+      const std::uint32_t t2 = s0 + maj;
+      for (int j = 7; j > 0; --j) v[j] = v[j - 1];
+      v[4] += t1;
+      v[0] = t1 + t2;
+    }
+    for (int j = 0; j < 8; ++j) h[j] += v[j];
+  }
+  char out[65];
+  for (int j = 0; j < 8; ++j)
+    std::snprintf(out + 8 * j, 9, "%08x", static_cast<unsigned>(h[j]));
+  return std::string(out, 64);
+}
+
+std::vector<std::string> Added(const std::vector<std::string>& before,
+                               const std::vector<std::string>& after) {
+  const std::set<std::string> old(before.begin(), before.end());
+  std::vector<std::string> added;
+  for (const std::string& name : after)
+    if (old.count(name) == 0) added.push_back(name);
+  return added;
+}
+
+std::mutex& LoaderMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+std::vector<LoadedPlugin>& Loaded() {
+  static std::vector<LoadedPlugin> loaded;
+  return loaded;
+}
+
+[[noreturn]] void Fail(const std::string& file, const std::string& why) {
+  throw std::runtime_error("plugin '" + file + "': " + why);
+}
+
+}  // namespace
+
+std::string FileSha256(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read '" + path + "'");
+  const std::string bytes((std::istreambuf_iterator<char>(in)),
+                          std::istreambuf_iterator<char>());
+  return Sha256Hex(bytes);
+}
+
+LoadedPlugin LoadPlugin(const std::string& file) {
+  std::lock_guard<std::mutex> lock(LoaderMutex());
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec))
+    Fail(file, "no such file");
+  const std::string path = std::filesystem::absolute(file).lexically_normal();
+  for (const LoadedPlugin& p : Loaded())
+    if (p.path == path) return p;
+  const std::vector<std::string> nlps = NlpSolverRegistry::Names();
+  const std::vector<std::string> daes = IntegratorRegistry::Names();
+  void* handle = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (!handle) {
+    const char* why = ::dlerror();
+    Fail(file, std::string("cannot be loaded: ") + (why ? why : "dlopen failed"));
+  }
+  auto* entry =
+      reinterpret_cast<void (*)()>(::dlsym(handle, kPluginEntryPoint));
+  if (!entry)
+    Fail(file, std::string("not a quasiroll plugin: it exports no ") +
+                   kPluginEntryPoint + "()");
+  try {
+    entry();
+  } catch (const std::exception& e) {
+    Fail(file, std::string("registration failed: ") + e.what());
+  }
+  LoadedPlugin plugin;
+  plugin.file = file;
+  plugin.path = path;
+  plugin.sha256 = FileSha256(path);
+  if (auto* version = reinterpret_cast<const char* (*)()>(
+          ::dlsym(handle, "quasiroll_plugin_version")))
+    plugin.version = version();
+  plugin.nlp_backends = Added(nlps, NlpSolverRegistry::Names());
+  plugin.integrators = Added(daes, IntegratorRegistry::Names());
+  if (plugin.nlp_backends.empty() && plugin.integrators.empty())
+    Fail(file, std::string(kPluginEntryPoint) + "() registered no backend");
+  // The library stays loaded for the life of the process: its factories
+  // are in the registries.
+  Loaded().push_back(plugin);
+  return plugin;
+}
+
+std::vector<LoadedPlugin> LoadPlugins(const std::vector<std::string>& files) {
+  std::vector<LoadedPlugin> out;
+  if (const char* env = std::getenv(kPluginPathVariable)) {
+    std::stringstream list(env);
+    std::string file;
+    while (std::getline(list, file, ':'))
+      if (!file.empty()) out.push_back(LoadPlugin(file));
+  }
+  for (const std::string& file : files) out.push_back(LoadPlugin(file));
+  return out;
+}
+
+std::vector<LoadedPlugin> LoadedPlugins() {
+  std::lock_guard<std::mutex> lock(LoaderMutex());
+  return Loaded();
+}
+
+}  // namespace quasiroll
