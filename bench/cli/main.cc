@@ -53,11 +53,6 @@ int main(int argc, char** argv) {
       "--version", [] { return VersionText(); },
       "Print version, commit, build type and backends");
   quasiroll::SetInvocation(argc, argv);
-  std::vector<std::string> plugins;
-  app.add_option("--plugin", plugins,
-                 "Load backends from a plugin library (repeatable; also "
-                 "$QUASIROLL_PLUGIN_PATH, colon-separated; docs/plugins.md)");
-  app.fallthrough();
   try {
     quasiroll::RegisterBuiltinNlpSolvers();
     quasiroll::RegisterBuiltinIntegrators();
@@ -67,6 +62,14 @@ int main(int argc, char** argv) {
   }
   Commands commands;
   commands.Register(app);
+  // --plugin is accepted before and after the command (loaded above).
+  std::vector<std::string> plugins;
+  const char* plugin_help =
+      "Load backends from a plugin library (repeatable; also "
+      "$QUASIROLL_PLUGIN_PATH, colon-separated; docs/plugins.md)";
+  app.add_option("--plugin", plugins, plugin_help);
+  for (CLI::App* command : app.get_subcommands({}))
+    command->add_option("--plugin", plugins, plugin_help);
 
   std::vector<std::string> names;
   for (const CLI::App* command : app.get_subcommands({}))
