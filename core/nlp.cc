@@ -359,6 +359,43 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
                            const NlpOptions& options, NlpResult* result) {
   if (result == nullptr)
     throw std::invalid_argument("NlpSolver::Solve: result must not be null");
+  ValidateInputs(problem, x0, options);
+  const int n = problem.num_variables(), m = problem.num_constraints();
+  result->status = NlpStatus::kNotRun;
+  result->backend = name();
+  result->backend_status.clear();
+  result->has_multipliers = false;
+  result->multipliers_estimated = false;
+  result->native_iterations = -1;  // = iterations unless the backend sets it
+  result->kkt_residual = std::numeric_limits<double>::quiet_NaN();
+  result->iterations = result->objective_evaluations = 0;
+  result->constraint_evaluations = result->jacobian_evaluations = 0;
+  result->x.resize(n);
+  result->x = x0;
+  if (result->multipliers.size() != m) result->multipliers.setZero(m);
+
+  if (!backend_options_) SetBackendOptions({});  // the table's defaults
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    DoSolve(problem, x0, options, result);
+  } catch (const std::exception& e) {
+    // Third-party exceptions are numerics, not misuse: map to a status.
+    result->status = NlpStatus::kNumericalFailure;
+    result->backend_status = std::string("exception: ") + e.what();
+  }
+  result->wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
+  if (result->native_iterations < 0)
+    result->native_iterations = result->iterations;
+
+  CheckAnswer(problem, options, result);
+  return result->status;
+}
+
+void NlpSolver::ValidateInputs(const NlpProblem& problem,
+                               const Eigen::Ref<const Eigen::VectorXd>& x0,
+                               const NlpOptions& options) {
   std::string why;
   if (!options.IsValid(&why))
     throw std::invalid_argument("NlpSolver::Solve(" + name() +
@@ -414,36 +451,11 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
        << " equalities)";
     throw std::invalid_argument(os.str());
   }
+}
 
-  result->status = NlpStatus::kNotRun;
-  result->backend = name();
-  result->backend_status.clear();
-  result->has_multipliers = false;
-  result->multipliers_estimated = false;
-  result->native_iterations = -1;  // = iterations unless the backend sets it
-  result->kkt_residual = std::numeric_limits<double>::quiet_NaN();
-  result->iterations = result->objective_evaluations = 0;
-  result->constraint_evaluations = result->jacobian_evaluations = 0;
-  result->x.resize(n);
-  result->x = x0;
-  if (result->multipliers.size() != m) result->multipliers.setZero(m);
-
-  if (!backend_options_) SetBackendOptions({});  // the table's defaults
-  const auto start = std::chrono::steady_clock::now();
-  try {
-    DoSolve(problem, x0, options, result);
-  } catch (const std::exception& e) {
-    // Third-party exceptions are numerics, not misuse: map to a status.
-    result->status = NlpStatus::kNumericalFailure;
-    result->backend_status = std::string("exception: ") + e.what();
-  }
-  result->wall_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-          .count();
-  if (result->native_iterations < 0)
-    result->native_iterations = result->iterations;
-
-  // Independent acceptance check.
+void NlpSolver::CheckAnswer(const NlpProblem& problem,
+                            const NlpOptions& options, NlpResult* result) {
+  const int n = problem.num_variables(), m = problem.num_constraints();
   bool finite = result->x.size() == n && result->x.allFinite();
   if (finite) {
     problem.Constraints(result->x, g_);
@@ -493,7 +505,6 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
       result->backend_status += os.str();
     }
   }
-  return result->status;
 }
 
 namespace {

@@ -279,6 +279,15 @@ class NlpSolver {
                        const Eigen::Ref<const Eigen::VectorXd>& x0,
                        const NlpOptions& options, NlpResult* result) = 0;
 
+  // Solve()'s phases. Misuse -> std::invalid_argument; loads the bounds
+  // into the workspace below.
+  void ValidateInputs(const NlpProblem& problem,
+                      const Eigen::Ref<const Eigen::VectorXd>& x0,
+                      const NlpOptions& options);
+  // The independent acceptance check of DoSolve()'s answer (top of file).
+  void CheckAnswer(const NlpProblem& problem, const NlpOptions& options,
+                   NlpResult* result);
+
   Eigen::VectorXd x_lb_, x_ub_, g_lb_, g_ub_, g_;  // validation workspace
   KktVerifier kkt_;
   std::optional<OptionValues> backend_options_;  // set before DoSolve

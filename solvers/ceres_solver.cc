@@ -8,7 +8,7 @@
 #include <limits>
 #include <vector>
 
-#include "quasiroll/solvers/active_set_polish.h"
+#include "quasiroll/core/nlp_polish.h"
 
 namespace quasiroll {
 
@@ -27,7 +27,7 @@ struct CeresNlpSolver::Impl {
   // ---- problem classification (refreshed every solve, no allocation when
   // sizes repeat) -----------------------------------------------------------
   const NlpProblem* problem = nullptr;
-  internal::NlpBounds b;
+  NlpBounds b;
   int n = 0, m = 0;
   std::vector<int> eq_rows, side_rows, fixed_vars, lb_vars, ub_vars;
   std::vector<double> side_sign;  // +1: h = g - g_ub, -1: h = g_lb - g
@@ -248,6 +248,42 @@ struct CeresNlpSolver::Impl {
     ls->AddResidualBlock(cost.get(), nullptr, xp.data());
     ls_key = key;
   }
+
+  // ---- DoSolve()'s phases (defined below) ---------------------------------
+  // Per-solve counts. native: LM steps (both kinds) + BFGS iterations +
+  // polish steps; comparable (core/nlp.h): accepted iterates, i.e.
+  // successful LM steps, BFGS iterations (each ends with an accepted
+  // line-search point) and polish steps that moved x.
+  int iterations = 0, accepted = 0;
+  // Sets the status and copies the counts into `result`.
+  void Finish(NlpStatus status, NlpResult* result) const;
+  // The active-set polish of *x, its steps and evaluations counted.
+  PolishStats Polish(double active_tol, double feas_tol, Eigen::VectorXd* x);
+  // Phase 1 on result->x; true when it settled the status (square systems,
+  // infeasibility, failure), false to go on with phase 2.
+  bool FeasibilityPhase(const NlpOptions& options, NlpResult* result);
+  ceres::Solver::Options FeasibilityOptions(const NlpOptions& options);
+  // Phase 2 from result->x, polish and multipliers included.
+  void AugmentedLagrangianPhase(const NlpOptions& options, NlpResult* result);
+  // lam / mu zero, or seeded from result.multipliers (warm start).
+  void InitMultipliers(const NlpOptions& options, const NlpResult& result);
+  ceres::GradientProblemSolver::Options InnerOptions(const NlpOptions& options,
+                                                     double grad_scale) const;
+  // The outer iterations' progress.
+  struct AlState {
+    int outer = 0;
+    double viol = std::numeric_limits<double>::infinity();
+    bool converged = false, polished = false;
+    ceres::GradientProblemSolver::Summary inner;  // the last inner solve
+  };
+  // False when a failure status was set.
+  bool AugmentedLagrangianLoop(const ceres::GradientProblemSolver::Options& go,
+                               const NlpOptions& options, AlState* al,
+                               NlpResult* result);
+  // Multiplier updates at x (g = g(x)); returns the feasibility /
+  // complementarity measure V.
+  double UpdateMultipliers(const Eigen::VectorXd& x);
+  void StoreMultipliers(NlpResult* result) const;
 };
 
 CeresNlpSolver::CeresNlpSolver() : impl_(std::make_unique<Impl>()) {}
@@ -331,169 +367,156 @@ const char* TerminationName(ceres::TerminationType t) {
 }
 }  // namespace
 
-void CeresNlpSolver::DoSolve(const NlpProblem& problem,
-                             const Eigen::Ref<const Eigen::VectorXd>& x0,
-                             const NlpOptions& options, NlpResult* result) {
-  Impl& s = *impl_;
-  s.Classify(problem);
-  const int n = s.n, m = s.m;
+void CeresNlpSolver::Impl::Finish(NlpStatus status, NlpResult* result) const {
+  result->status = status;
+  result->iterations = accepted;
+  result->native_iterations = iterations;
+  result->objective_evaluations = f_evals;
+  result->constraint_evaluations = g_evals;
+  result->jacobian_evaluations = j_evals;
+}
+
+PolishStats CeresNlpSolver::Impl::Polish(double active_tol, double feas_tol,
+                                         Eigen::VectorXd* x) {
+  const PolishStats ps = PolishActiveConstraints(
+      *problem, b, active_tol, feas_tol, settings.polish_max_iterations, x);
+  accepted += ps.accepted_steps;
+  iterations += ps.iterations;
+  g_evals += ps.constraint_evaluations;
+  j_evals += ps.jacobian_evaluations;
+  return ps;
+}
+
+ceres::Solver::Options CeresNlpSolver::Impl::FeasibilityOptions(
+    const NlpOptions& options) {
+  ceres::Solver::Options o;
+  o.minimizer_type = ceres::TRUST_REGION;
+  o.trust_region_strategy_type = settings.trust_region;
+  o.linear_solver_type = settings.linear_solver;
+  o.max_num_iterations = options.max_iterations;
+  // Round-off, not Ceres' tolerances, should end a zero-residual solve; the
+  // callback stops as soon as every residual is below the tolerance.
+  o.function_tolerance = 1e-16;
+  o.gradient_tolerance = 1e-16;
+  o.parameter_tolerance = 1e-16;
+  o.num_threads = 1;
+  o.logging_type =
+      options.verbosity > 0 ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  o.minimizer_progress_to_stdout = options.verbosity > 0;
+  stop_cb.threshold = 0.5 * options.feasibility_tolerance;
+  o.callbacks.push_back(&stop_cb);
+  return o;
+}
+
+bool CeresNlpSolver::Impl::FeasibilityPhase(const NlpOptions& options,
+                                            NlpResult* result) {
   const double feas_tol = options.feasibility_tolerance;
-  const bool square = static_cast<int>(s.eq_rows.size()) == n;
+  const bool square = static_cast<int>(eq_rows.size()) == n;
   char msg[256];
   Eigen::VectorXd& x = result->x;
-  for (int j = 0; j < n; ++j)
-    x(j) = std::clamp(x0(j), s.b.x_lb(j), s.b.x_ub(j));
-  // native: LM steps (both kinds) + BFGS iterations + polish steps;
-  // comparable (core/nlp.h): accepted iterates, i.e. successful LM steps,
-  // BFGS iterations (each ends with an accepted line-search point) and
-  // polish steps that moved x.
-  int iterations = 0;
-  int accepted = 0;
-  auto finish = [&](NlpStatus status) {
-    result->status = status;
-    result->iterations = accepted;
-    result->native_iterations = iterations;
-    result->objective_evaluations = s.f_evals;
-    result->constraint_evaluations = s.g_evals;
-    result->jacobian_evaluations = s.j_evals;
-  };
-
-  // -------------------------------------------------------------- phase 1 --
-  if (s.NumResiduals() > 0) {
-    s.PrepareLeastSquares();
-    s.xp = x;
-    for (int j : s.lb_vars)
-      s.ls->SetParameterLowerBound(s.xp.data(), j, s.b.x_lb(j));
-    for (int j : s.ub_vars)
-      s.ls->SetParameterUpperBound(s.xp.data(), j, s.b.x_ub(j));
-    ceres::Solver::Options o;
-    o.minimizer_type = ceres::TRUST_REGION;
-    o.trust_region_strategy_type = s.settings.trust_region;
-    o.linear_solver_type = s.settings.linear_solver;
-    o.max_num_iterations = options.max_iterations;
-    // Round-off, not Ceres' tolerances, should end a zero-residual solve; the
-    // callback stops as soon as every residual is below the tolerance.
-    o.function_tolerance = 1e-16;
-    o.gradient_tolerance = 1e-16;
-    o.parameter_tolerance = 1e-16;
-    o.num_threads = 1;
-    o.logging_type =
-        options.verbosity > 0 ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
-    o.minimizer_progress_to_stdout = options.verbosity > 0;
-    s.stop_cb.threshold = 0.5 * feas_tol;
-    o.callbacks.push_back(&s.stop_cb);
-    std::string why;
-    if (!o.IsValid(&why)) {
-      result->backend_status = "invalid Ceres options: " + why;
-      finish(NlpStatus::kNumericalFailure);
-      return;
-    }
-    ceres::Solver::Summary summary;
-    ceres::Solve(o, s.ls.get(), &summary);
-    // Entry 0 of summary.iterations is the starting point; every later entry
-    // is one trust-region step, successful (accepted) or not.
-    for (const ceres::IterationSummary& it : summary.iterations) {
-      if (it.iteration == 0) continue;
-      ++iterations;
-      accepted += it.step_is_successful;
-    }
-    x = s.xp;
-    s.g.resize(m);
-    problem.Constraints(x, s.g);
-    ++s.g_evals;
-    const double viol =
-        MaxConstraintViolation(x, s.g, s.b.x_lb, s.b.x_ub, s.b.g_lb, s.b.g_ub);
-    std::snprintf(msg, sizeof msg, "LM %s after %d iterations, violation %.2e",
-                  TerminationName(summary.termination_type), iterations, viol);
-    result->backend_status = msg;
-    if (summary.termination_type == ceres::FAILURE || !std::isfinite(viol)) {
-      result->backend_status += ": " + summary.message;
-      finish(NlpStatus::kNumericalFailure);
-      return;
-    }
-    if (viol > feas_tol) {
-      if (summary.termination_type == ceres::CONVERGENCE &&
-          viol >= s.settings.infeasible_threshold) {
-        result->backend_status += " (minimum of the violation > 0)";
-        finish(NlpStatus::kInfeasible);
-        return;
-      }
-      if (square) {
-        // LM's cost-decrease test can stall on ill-conditioned roots (cond
-        // ~1e7-1e8); finish with affine-invariant Newton steps from nearby.
-        // active_tol = 0: the root is isolated, so a variable merely close to
-        // a bound must stay free (freezing it drops a column of a square J).
-        if (viol <= s.settings.infeasible_threshold) {
-          const internal::PolishStats ps = internal::PolishActiveConstraints(
-              problem, s.b, /*active_tol=*/0.0, feas_tol,
-              s.settings.polish_max_iterations, &x);
-          accepted += ps.accepted_steps;
-          iterations += ps.iterations;
-          s.g_evals += ps.constraint_evaluations;
-          s.j_evals += ps.jacobian_evaluations;
-          std::snprintf(msg, sizeof msg, "; polish -> violation %.2e",
-                        ps.max_violation);
-          result->backend_status += msg;
-          if (ps.success) {
-            finish(NlpStatus::kConverged);
-            return;
-          }
-        }
-        finish(summary.termination_type == ceres::NO_CONVERGENCE
-                   ? NlpStatus::kIterationLimit
-                   : NlpStatus::kNumericalFailure);
-        return;
-      }
-    } else if (square) {
-      finish(NlpStatus::kConverged);  // isolated root: the objective is moot
-      return;
+  PrepareLeastSquares();
+  xp = x;
+  for (int j : lb_vars) ls->SetParameterLowerBound(xp.data(), j, b.x_lb(j));
+  for (int j : ub_vars) ls->SetParameterUpperBound(xp.data(), j, b.x_ub(j));
+  const ceres::Solver::Options o = FeasibilityOptions(options);
+  std::string why;
+  if (!o.IsValid(&why)) {
+    result->backend_status = "invalid Ceres options: " + why;
+    Finish(NlpStatus::kNumericalFailure, result);
+    return true;
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(o, ls.get(), &summary);
+  // Entry 0 of summary.iterations is the starting point; every later entry
+  // is one trust-region step, successful (accepted) or not.
+  for (const ceres::IterationSummary& it : summary.iterations) {
+    if (it.iteration == 0) continue;
+    ++iterations;
+    accepted += it.step_is_successful;
+  }
+  x = xp;
+  g.resize(m);
+  problem->Constraints(x, g);
+  ++g_evals;
+  const double viol =
+      MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
+  std::snprintf(msg, sizeof msg, "LM %s after %d iterations, violation %.2e",
+                TerminationName(summary.termination_type), iterations, viol);
+  result->backend_status = msg;
+  if (summary.termination_type == ceres::FAILURE || !std::isfinite(viol)) {
+    result->backend_status += ": " + summary.message;
+    Finish(NlpStatus::kNumericalFailure, result);
+    return true;
+  }
+  if (viol <= feas_tol) {
+    if (!square) return false;
+    Finish(NlpStatus::kConverged, result);  // isolated root: f is moot
+    return true;
+  }
+  if (summary.termination_type == ceres::CONVERGENCE &&
+      viol >= settings.infeasible_threshold) {
+    result->backend_status += " (minimum of the violation > 0)";
+    Finish(NlpStatus::kInfeasible, result);
+    return true;
+  }
+  if (!square) return false;
+  // LM's cost-decrease test can stall on ill-conditioned roots (cond
+  // ~1e7-1e8); finish with affine-invariant Newton steps from nearby.
+  // active_tol = 0: the root is isolated, so a variable merely close to a
+  // bound must stay free (freezing it drops a column of a square J).
+  if (viol <= settings.infeasible_threshold) {
+    const PolishStats ps = Polish(/*active_tol=*/0.0, feas_tol, &x);
+    std::snprintf(msg, sizeof msg, "; polish -> violation %.2e",
+                  ps.max_violation);
+    result->backend_status += msg;
+    if (ps.success) {
+      Finish(NlpStatus::kConverged, result);
+      return true;
     }
   }
+  Finish(summary.termination_type == ceres::NO_CONVERGENCE
+             ? NlpStatus::kIterationLimit
+             : NlpStatus::kNumericalFailure,
+         result);
+  return true;
+}
 
-  // -------------------------------------------------------------- phase 2 --
-  const size_t n_eq = s.eq_rows.size(), n_side = s.side_rows.size();
-  s.lam_eq.setZero(static_cast<Eigen::Index>(n_eq));
-  s.mu_side.setZero(static_cast<Eigen::Index>(n_side));
-  s.lam_fix.setZero(static_cast<Eigen::Index>(s.fixed_vars.size()));
-  s.mu_lb.setZero(static_cast<Eigen::Index>(s.lb_vars.size()));
-  s.mu_ub.setZero(static_cast<Eigen::Index>(s.ub_vars.size()));
-  if (options.warm_start_multipliers && result->multipliers.size() == m &&
-      result->multipliers.allFinite()) {
-    const Eigen::VectorXd& lam = result->multipliers;
-    for (size_t k = 0; k < n_eq; ++k) s.lam_eq(k) = lam(s.eq_rows[k]);
-    for (size_t k = 0; k < n_side; ++k)
-      s.mu_side(k) = std::max(0.0, s.side_sign[k] * lam(s.side_rows[k]));
-    // Box multipliers from the reduced gradient r = grad f + J^T lambda:
-    // r = z_L - z_U at a KKT point.
-    problem.ObjectiveGradient(x, s.grad);
-    problem.ConstraintJacobian(x, s.jac);
-    ++s.j_evals;
-    s.gx = s.grad;
-    s.gx.noalias() += s.jac.transpose() * lam;
-    if (s.gx.allFinite()) {
-      for (size_t k = 0; k < s.fixed_vars.size(); ++k)
-        s.lam_fix(k) = -s.gx(s.fixed_vars[k]);
-      for (size_t k = 0; k < s.lb_vars.size(); ++k)
-        s.mu_lb(k) = std::max(0.0, s.gx(s.lb_vars[k]));
-      for (size_t k = 0; k < s.ub_vars.size(); ++k)
-        s.mu_ub(k) = std::max(0.0, -s.gx(s.ub_vars[k]));
-    }
+void CeresNlpSolver::Impl::InitMultipliers(const NlpOptions& options,
+                                           const NlpResult& result) {
+  const size_t n_eq = eq_rows.size(), n_side = side_rows.size();
+  lam_eq.setZero(static_cast<Eigen::Index>(n_eq));
+  mu_side.setZero(static_cast<Eigen::Index>(n_side));
+  lam_fix.setZero(static_cast<Eigen::Index>(fixed_vars.size()));
+  mu_lb.setZero(static_cast<Eigen::Index>(lb_vars.size()));
+  mu_ub.setZero(static_cast<Eigen::Index>(ub_vars.size()));
+  if (!options.warm_start_multipliers || result.multipliers.size() != m ||
+      !result.multipliers.allFinite())
+    return;
+  const Eigen::VectorXd& lam = result.multipliers;
+  for (size_t k = 0; k < n_eq; ++k) lam_eq(k) = lam(eq_rows[k]);
+  for (size_t k = 0; k < n_side; ++k)
+    mu_side(k) = std::max(0.0, side_sign[k] * lam(side_rows[k]));
+  // Box multipliers from the reduced gradient r = grad f + J^T lambda:
+  // r = z_L - z_U at a KKT point.
+  problem->ObjectiveGradient(result.x, grad);
+  problem->ConstraintJacobian(result.x, jac);
+  ++j_evals;
+  gx = grad;
+  gx.noalias() += jac.transpose() * lam;
+  if (gx.allFinite()) {
+    for (size_t k = 0; k < fixed_vars.size(); ++k)
+      lam_fix(k) = -gx(fixed_vars[k]);
+    for (size_t k = 0; k < lb_vars.size(); ++k)
+      mu_lb(k) = std::max(0.0, gx(lb_vars[k]));
+    for (size_t k = 0; k < ub_vars.size(); ++k)
+      mu_ub(k) = std::max(0.0, -gx(ub_vars[k]));
   }
-  s.rho = s.settings.rho_init;
+}
 
-  if (!s.gp || s.gp_n != n) {
-    s.gp =
-        std::make_unique<ceres::GradientProblem>(new Impl::AlFunction(&s, n));
-    s.gp_n = n;
-  }
-  s.xa = x;
-  problem.ObjectiveGradient(x, s.grad);
-  const double grad_scale =
-      s.grad.allFinite() ? std::max(1.0, s.grad.lpNorm<Eigen::Infinity>())
-                         : 1.0;
-
+ceres::GradientProblemSolver::Options CeresNlpSolver::Impl::InnerOptions(
+    const NlpOptions& options, double grad_scale) const {
   ceres::GradientProblemSolver::Options go;
-  go.line_search_direction_type = s.settings.direction;
+  go.line_search_direction_type = settings.direction;
   go.line_search_type = ceres::WOLFE;
   go.max_num_iterations = options.max_iterations;
   go.function_tolerance = 1e-16;
@@ -502,139 +525,174 @@ void CeresNlpSolver::DoSolve(const NlpProblem& problem,
   go.logging_type =
       options.verbosity > 0 ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
   go.minimizer_progress_to_stdout = options.verbosity > 0;
-  std::string why;
-  if (!go.IsValid(&why)) {
-    result->backend_status = "invalid Ceres options: " + why;
-    finish(NlpStatus::kNumericalFailure);
-    return;
-  }
+  return go;
+}
 
+double CeresNlpSolver::Impl::UpdateMultipliers(const Eigen::VectorXd& x) {
+  double v = 0.0;
+  for (size_t k = 0; k < eq_rows.size(); ++k) {
+    const double c = g(eq_rows[k]) - b.g_lb(eq_rows[k]);
+    v = std::max(v, std::abs(c));
+    lam_eq(k) += rho * c;
+  }
+  auto upd = [&](double& mu, double h) {
+    v = std::max(v, std::abs(std::min(-h, mu / rho)));
+    mu = std::max(0.0, mu + rho * h);
+  };
+  for (size_t k = 0; k < side_rows.size(); ++k) upd(mu_side(k), SideValue(k));
+  for (size_t k = 0; k < fixed_vars.size(); ++k) {
+    const int j = fixed_vars[k];
+    const double c = x(j) - b.x_lb(j);
+    v = std::max(v, std::abs(c));
+    lam_fix(k) += rho * c;
+  }
+  for (size_t k = 0; k < lb_vars.size(); ++k)
+    upd(mu_lb(k), b.x_lb(lb_vars[k]) - x(lb_vars[k]));
+  for (size_t k = 0; k < ub_vars.size(); ++k)
+    upd(mu_ub(k), x(ub_vars[k]) - b.x_ub(ub_vars[k]));
+  return v;
+}
+
+bool CeresNlpSolver::Impl::AugmentedLagrangianLoop(
+    const ceres::GradientProblemSolver::Options& go, const NlpOptions& options,
+    AlState* al, NlpResult* result) {
+  const double feas_tol = options.feasibility_tolerance;
+  Eigen::VectorXd& x = result->x;
   // V below which the answer is finished by an active-set Newton polish: the
   // AL error bound |x - x*| <= C |lambda - lambda*| / rho ~ C V makes further
   // outer iterations pointless once V is this small.
-  const double polish_v = std::max(feas_tol, s.settings.polish_threshold);
-  bool polished = false;
+  const double polish_v = std::max(feas_tol, settings.polish_threshold);
   double v_prev = std::numeric_limits<double>::infinity();
-  double viol = std::numeric_limits<double>::infinity();
-  bool converged = false;
-  int outer = 0;
-  ceres::GradientProblemSolver::Summary gs;
-  for (; outer < options.max_iterations && !converged; ++outer) {
-    ceres::Solve(go, *s.gp, s.xa.data(), &gs);
+  ceres::GradientProblemSolver::Summary& gs = al->inner;
+  for (; al->outer < options.max_iterations && !al->converged; ++al->outer) {
+    ceres::Solve(go, *gp, xa.data(), &gs);
     if (!gs.iterations.empty()) {
       iterations += static_cast<int>(gs.iterations.size()) - 1;
       accepted += static_cast<int>(gs.iterations.size()) - 1;
     }
     if (gs.termination_type == ceres::FAILURE && gs.iterations.size() <= 1 &&
         !std::isfinite(gs.final_cost)) {
-      std::snprintf(msg, sizeof msg, "; AL inner solve failed: ");
-      result->backend_status += msg + gs.message;
-      x = s.xa;
-      finish(NlpStatus::kNumericalFailure);
-      return;
+      result->backend_status += "; AL inner solve failed: " + gs.message;
+      x = xa;
+      Finish(NlpStatus::kNumericalFailure, result);
+      return false;
     }
-    x = s.xa;
-    problem.Constraints(x, s.g);
-    ++s.g_evals;
-    if (!s.g.allFinite()) {
-      finish(NlpStatus::kNumericalFailure);
+    x = xa;
+    problem->Constraints(x, g);
+    ++g_evals;
+    if (!g.allFinite()) {
+      Finish(NlpStatus::kNumericalFailure, result);
       result->backend_status += "; non-finite constraints in the AL loop";
-      return;
+      return false;
     }
-    viol =
-        MaxConstraintViolation(x, s.g, s.b.x_lb, s.b.x_ub, s.b.g_lb, s.b.g_ub);
+    al->viol = MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
     // Feasibility / complementarity measure and multiplier updates.
-    double v = 0.0;
-    for (size_t k = 0; k < n_eq; ++k) {
-      const double c = s.g(s.eq_rows[k]) - s.b.g_lb(s.eq_rows[k]);
-      v = std::max(v, std::abs(c));
-      s.lam_eq(k) += s.rho * c;
-    }
-    auto upd = [&](double& mu, double h) {
-      v = std::max(v, std::abs(std::min(-h, mu / s.rho)));
-      mu = std::max(0.0, mu + s.rho * h);
-    };
-    for (size_t k = 0; k < n_side; ++k) upd(s.mu_side(k), s.SideValue(k));
-    for (size_t k = 0; k < s.fixed_vars.size(); ++k) {
-      const int j = s.fixed_vars[k];
-      const double c = x(j) - s.b.x_lb(j);
-      v = std::max(v, std::abs(c));
-      s.lam_fix(k) += s.rho * c;
-    }
-    for (size_t k = 0; k < s.lb_vars.size(); ++k)
-      upd(s.mu_lb(k), s.b.x_lb(s.lb_vars[k]) - x(s.lb_vars[k]));
-    for (size_t k = 0; k < s.ub_vars.size(); ++k)
-      upd(s.mu_ub(k), x(s.ub_vars[k]) - s.b.x_ub(s.ub_vars[k]));
+    const double v = UpdateMultipliers(x);
     // KKT: the inner gradient is grad_x L at the updated multipliers.
     const double inner_grad = gs.iterations.empty()
                                   ? std::numeric_limits<double>::infinity()
                                   : gs.iterations.back().gradient_max_norm;
     const bool stationary = inner_grad <= 100.0 * go.gradient_tolerance ||
                             gs.termination_type == ceres::CONVERGENCE;
-    converged = viol <= feas_tol && v <= feas_tol && stationary;
-    if (!converged && stationary && v <= polish_v) {
+    al->converged = al->viol <= feas_tol && v <= feas_tol && stationary;
+    if (!al->converged && stationary && v <= polish_v) {
       // Close enough that the active set is settled: finish feasibility with
       // a Newton polish instead of driving rho up against round-off.
-      s.xa = x;
-      const internal::PolishStats ps = internal::PolishActiveConstraints(
-          problem, s.b, /*active_tol=*/s.settings.polish_threshold, feas_tol,
-          s.settings.polish_max_iterations, &s.xa);
-      accepted += ps.accepted_steps;
-      iterations += ps.iterations;
-      s.g_evals += ps.constraint_evaluations;
-      s.j_evals += ps.jacobian_evaluations;
+      xa = x;
+      const PolishStats ps =
+          Polish(/*active_tol=*/settings.polish_threshold, feas_tol, &xa);
       if (ps.success) {
-        x = s.xa;
-        viol = ps.max_violation;
-        converged = true;
-        polished = true;
+        x = xa;
+        al->viol = ps.max_violation;
+        al->converged = true;
+        al->polished = true;
       } else {
-        s.xa = x;
+        xa = x;
       }
     }
     if (options.verbosity > 0)
       std::printf(
           "ceres AL outer %3d: inner %-14s %4zu it, |grad L| %.2e, "
           "violation %.2e, V %.2e, rho %.0e\n",
-          outer, TerminationName(gs.termination_type),
+          al->outer, TerminationName(gs.termination_type),
           gs.iterations.empty() ? size_t{0} : gs.iterations.size() - 1,
-          inner_grad, viol, v, s.rho);
-    if (v > s.settings.rho_grow_unless * v_prev)
-      s.rho = std::min(s.settings.rho_growth * s.rho, s.settings.rho_max);
+          inner_grad, al->viol, v, rho);
+    if (v > settings.rho_grow_unless * v_prev)
+      rho = std::min(settings.rho_growth * rho, settings.rho_max);
     v_prev = v;
   }
+  return true;
+}
 
+void CeresNlpSolver::Impl::StoreMultipliers(NlpResult* result) const {
+  // Ipopt's convention: lambda = mu_upper - mu_lower.
+  if (result->multipliers.size() != m) result->multipliers.resize(m);
+  result->multipliers.setZero();
+  for (size_t k = 0; k < eq_rows.size(); ++k)
+    result->multipliers(eq_rows[k]) = lam_eq(k);
+  for (size_t k = 0; k < side_rows.size(); ++k)
+    result->multipliers(side_rows[k]) += side_sign[k] * mu_side(k);
+  result->has_multipliers = true;
+}
+
+void CeresNlpSolver::Impl::AugmentedLagrangianPhase(const NlpOptions& options,
+                                                    NlpResult* result) {
+  const double feas_tol = options.feasibility_tolerance;
+  Eigen::VectorXd& x = result->x;
+  InitMultipliers(options, *result);
+  rho = settings.rho_init;
+  if (!gp || gp_n != n) {
+    gp = std::make_unique<ceres::GradientProblem>(new AlFunction(this, n));
+    gp_n = n;
+  }
+  xa = x;
+  problem->ObjectiveGradient(x, grad);
+  const double grad_scale =
+      grad.allFinite() ? std::max(1.0, grad.lpNorm<Eigen::Infinity>()) : 1.0;
+  const ceres::GradientProblemSolver::Options go =
+      InnerOptions(options, grad_scale);
+  std::string why;
+  if (!go.IsValid(&why)) {
+    result->backend_status = "invalid Ceres options: " + why;
+    Finish(NlpStatus::kNumericalFailure, result);
+    return;
+  }
+
+  AlState al;
+  if (!AugmentedLagrangianLoop(go, options, &al, result)) return;
+  char msg[256];
   std::snprintf(
       msg, sizeof msg,
       "; AL %d outer iterations, rho %.0e, violation %.2e%s, last inner %s",
-      outer, s.rho, viol, polished ? " (polished)" : "",
-      TerminationName(gs.termination_type));
+      al.outer, rho, al.viol, al.polished ? " (polished)" : "",
+      TerminationName(al.inner.termination_type));
   result->backend_status += msg;
   NlpStatus status =
-      converged ? NlpStatus::kConverged : NlpStatus::kIterationLimit;
-  if (!converged && viol > feas_tol &&
-      viol <= s.settings.infeasible_threshold) {
-    const internal::PolishStats ps = internal::PolishActiveConstraints(
-        problem, s.b, /*active_tol=*/s.settings.polish_threshold, feas_tol,
-        s.settings.polish_max_iterations, &x);
-    accepted += ps.accepted_steps;
-    iterations += ps.iterations;
-    s.g_evals += ps.constraint_evaluations;
-    s.j_evals += ps.jacobian_evaluations;
+      al.converged ? NlpStatus::kConverged : NlpStatus::kIterationLimit;
+  if (!al.converged && al.viol > feas_tol &&
+      al.viol <= settings.infeasible_threshold) {
+    const PolishStats ps =
+        Polish(/*active_tol=*/settings.polish_threshold, feas_tol, &x);
     std::snprintf(msg, sizeof msg, "; polish -> violation %.2e",
                   ps.max_violation);
     result->backend_status += msg;
     if (ps.success) status = NlpStatus::kConverged;
   }
-  // Multipliers in Ipopt's convention.
-  if (result->multipliers.size() != m) result->multipliers.resize(m);
-  result->multipliers.setZero();
-  for (size_t k = 0; k < n_eq; ++k)
-    result->multipliers(s.eq_rows[k]) = s.lam_eq(k);
-  for (size_t k = 0; k < n_side; ++k)
-    result->multipliers(s.side_rows[k]) += s.side_sign[k] * s.mu_side(k);
-  result->has_multipliers = true;
-  finish(status);
+  StoreMultipliers(result);
+  Finish(status, result);
+}
+
+void CeresNlpSolver::DoSolve(const NlpProblem& problem,
+                             const Eigen::Ref<const Eigen::VectorXd>& x0,
+                             const NlpOptions& options, NlpResult* result) {
+  Impl& s = *impl_;
+  s.Classify(problem);
+  for (int j = 0; j < s.n; ++j)
+    result->x(j) = std::clamp(x0(j), s.b.x_lb(j), s.b.x_ub(j));
+  s.iterations = s.accepted = 0;
+  // Phase 1 settles square systems (and failures); phase 2 the others.
+  if (s.NumResiduals() > 0 && s.FeasibilityPhase(options, result)) return;
+  s.AugmentedLagrangianPhase(options, result);
 }
 
 }  // namespace quasiroll

@@ -38,7 +38,7 @@
 // amplifies round-off; instead, once V <= max(feasibility_tolerance, 1e-7)
 // (active set settled; AL theory gives |x - x*| <= C |lambda - lambda*|/rho
 // ~ C V), the point is finished by an active-set Newton polish
-// (active_set_polish.h: minimum-norm Gauss-Newton steps on the active rows,
+// (core/nlp_polish.h: minimum-norm Gauss-Newton steps on the active rows,
 // moving x by O(V)). The answer is only kConverged if every constraint
 // residual is <= feasibility_tolerance.
 //

@@ -1,12 +1,12 @@
 // Backends "ipopt" and "ipopt-mumps": Ipopt's primal-dual interior-point
 // method, differing only in the linear solver of the KKT systems:
 //   ipopt        dense Bunch-Kaufman LDL^T (LAPACK dsytrf), plugged in through
-//                Ipopt's MA27 interface (HSLLoader.h: LSL_setMA27). For
-//                quasiroll's NLPs (n + m <= ~60) it is 3-4x faster than
-//                MUMPS, whose per-call overhead dominated
-//                (docs/performance.md), and it keeps no global state, so solver
-//                objects may run in parallel threads (Ipopt >= 3.11 keeps its
-//                tags thread-local).
+//                Ipopt's MA27 interface (HSLLoader.h: LSL_setMA27; see
+//                ipopt_dense_ma27.cc). For quasiroll's NLPs (n + m <= ~60)
+//                it is 3-4x faster than MUMPS, whose per-call overhead
+//                dominated (docs/performance.md), and it keeps no global state,
+//                so solver objects may run in parallel threads (Ipopt >= 3.11
+//                keeps its tags thread-local).
 //   ipopt-mumps  Debian's sequential MUMPS, Ipopt's stock solver. MUMPS with
 //                its dummy MPI is not thread-safe: never run two ipopt-mumps
 //                solvers at once (the harness serialises them).

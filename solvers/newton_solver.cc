@@ -7,10 +7,12 @@
 #include <cstdio>
 #include <vector>
 
+#include "quasiroll/core/nlp_polish.h"
+
 namespace quasiroll {
 
 struct NewtonSolver::Workspace {
-  Eigen::VectorXd x_lb, x_ub, g_lb, g_ub;
+  NlpBounds bounds;  // loaded per solve
   Eigen::VectorXd g, g_trial, r, r_trial, dx, dx_bar, x_trial;
   Eigen::MatrixXd jac, jac_eq, jtj, jtj_damped;
   Eigen::VectorXd jtr, jtj_diag;
@@ -19,10 +21,6 @@ struct NewtonSolver::Workspace {
   std::vector<int> eq_rows;
 
   void Resize(int n, int m) {
-    x_lb.resize(n);
-    x_ub.resize(n);
-    g_lb.resize(m);
-    g_ub.resize(m);
     g.resize(m);
     g_trial.resize(m);
     r.resize(n);
@@ -121,7 +119,7 @@ bool NewtonSolver::LevenbergMarquardtStep(const NlpProblem& problem,
     w->x_trial = result->x - w->dx;
     problem.Constraints(w->x_trial, w->g_trial);
     ++result->constraint_evaluations;
-    if (Residual(w->g_trial, w->g_lb, w->eq_rows, &w->r_trial) &&
+    if (Residual(w->g_trial, w->bounds.g_lb, w->eq_rows, &w->r_trial) &&
         w->r_trial.squaredNorm() < phi) {
       lm_lambda_ *= 0.1;
       return true;
@@ -136,24 +134,37 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
   const int n = problem.num_variables(), m = problem.num_constraints();
   Workspace& w = *ws_;
   w.Resize(n, m);
-  problem.GetBounds(w.x_lb, w.x_ub, w.g_lb, w.g_ub);
+  w.bounds.Load(problem);
   w.eq_rows.clear();
   for (int i = 0; i < m; ++i)
-    if (w.g_lb(i) == w.g_ub(i)) w.eq_rows.push_back(i);  // n rows (validated)
+    if (w.bounds.g_lb(i) == w.bounds.g_ub(i))
+      w.eq_rows.push_back(i);  // n rows (validated)
 
-  const double tol = options.feasibility_tolerance;
   lm_lambda_ = settings_.lm_lambda_init;
-  char msg[160];
   Eigen::VectorXd& x = result->x;
   x = x0;
   problem.Constraints(x, w.g);
   ++result->constraint_evaluations;
-  if (!Residual(w.g, w.g_lb, w.eq_rows, &w.r)) {
+  if (!Residual(w.g, w.bounds.g_lb, w.eq_rows, &w.r)) {
     result->status = NlpStatus::kNumericalFailure;
     result->backend_status = "non-finite residual at the starting point";
     return;
   }
+  int iter = 0;
+  if (!Iterate(problem, options, &iter, result)) return;
+  result->iterations = iter;
+  // The equalities hold; the root is unique nearby, so bounds or inequality
+  // rows violated there mean the problem is (locally) infeasible.
+  ClassifySquareSystemRoot(w.bounds, x, w.g, w.r.lpNorm<Eigen::Infinity>(),
+                           options.feasibility_tolerance, iter, result);
+}
 
+bool NewtonSolver::Iterate(const NlpProblem& problem, const NlpOptions& options,
+                           int* iter_out, NlpResult* result) {
+  Workspace& w = *ws_;
+  const double tol = options.feasibility_tolerance;
+  char msg[160];
+  Eigen::VectorXd& x = result->x;
   // An approximate root (|r| <= a loose tol) can violate an inequality row
   // that the root itself satisfies (the friction cone is active to O(eps) on
   // the root of a sliding contact). Before calling such a point infeasible,
@@ -162,12 +173,13 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
   const double polish_floor = settings_.polish_floor;
   double target = tol;
   bool polishing = false;
-  int iter = 0;
+  int& iter = *iter_out;
   for (;; ++iter) {
     const double r_max = w.r.lpNorm<Eigen::Infinity>();
     if (r_max <= target) {
       if (target <= polish_floor) break;
-      if (MaxConstraintViolation(x, w.g, w.x_lb, w.x_ub, w.g_lb, w.g_ub) <= tol)
+      if (MaxConstraintViolation(x, w.g, w.bounds.x_lb, w.bounds.x_ub,
+                                 w.bounds.g_lb, w.bounds.g_ub) <= tol)
         break;
       polishing = true;
       target = std::max(polish_floor, 1e-4 * r_max);
@@ -180,69 +192,16 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
                     r_max);
       result->backend_status = msg;
       result->iterations = iter;
-      return;
+      return false;
     }
-    problem.ConstraintJacobian(x, w.jac);
-    ++result->jacobian_evaluations;
-    for (int k = 0; k < n; ++k) w.jac_eq.row(k) = w.jac.row(w.eq_rows[k]);
-    if (!w.jac_eq.allFinite()) {
+    if (!FactorJacobian(problem, polishing, iter, result)) {
       if (polishing) break;
-      result->status = NlpStatus::kNumericalFailure;
-      result->backend_status = "non-finite Jacobian";
-      result->iterations = iter;
-      return;
-    }
-    w.lu.compute(w.jac_eq);
-    // Rank test on the pivots of U: partial pivoting puts the largest
-    // available entry on the diagonal, so a pivot at round-off level relative
-    // to the largest one means a (numerically) rank-deficient Jacobian.
-    const auto u_diag = w.lu.matrixLU().diagonal().cwiseAbs();
-    const double pivot_max = u_diag.maxCoeff(), pivot_min = u_diag.minCoeff();
-    if (!(pivot_min > settings_.rank_pivot_ratio * pivot_max)) {
-      if (polishing) break;
-      result->status = NlpStatus::kNumericalFailure;
-      std::snprintf(
-          msg, sizeof msg,
-          "rank-deficient Jacobian (pivot ratio %.3e) at iteration %d",
-          pivot_max > 0 ? pivot_min / pivot_max : 0.0, iter);
-      result->backend_status = msg;
-      result->iterations = iter;
-      return;
+      return false;
     }
     w.dx = w.lu.solve(w.r);
     w.dx = -w.dx;
-
-    // Damping: accept x + alpha dx when either
-    //  (a) natural monotonicity (Deuflhard, affine invariant): the simplified
-    //      correction dxbar = -J(x)^{-1} r(x + alpha dx), reusing this LU,
-    //      satisfies |dxbar| <= (1 - alpha/4) |dx|, or
-    //  (b) Armijo on phi = |r|^2: phi(x + alpha dx) <= (1 - 2e-4 alpha) phi(x).
-    // (a) matters for ill-conditioned systems (the creeping friction law has
-    // condition numbers ~1e7-1e8): there a full step can raise |r| while
-    // moving much closer to the root, and a residual-only test stalls.
     const double phi = w.r.squaredNorm();
-    const double dx_norm = w.dx.norm();
-    double alpha = 1.0;
-    bool accepted = false;
-    while (alpha >= settings_.min_damping) {
-      w.x_trial = x + alpha * w.dx;
-      problem.Constraints(w.x_trial, w.g_trial);
-      ++result->constraint_evaluations;
-      if (Residual(w.g_trial, w.g_lb, w.eq_rows, &w.r_trial)) {
-        const double phi_trial = w.r_trial.squaredNorm();
-        if (phi_trial <= (1.0 - settings_.armijo * alpha) * phi ||
-            w.r_trial.lpNorm<Eigen::Infinity>() <= target) {
-          accepted = true;
-          break;
-        }
-        w.dx_bar = w.lu.solve(w.r_trial);
-        if (w.dx_bar.norm() <= (1.0 - 0.25 * alpha) * dx_norm) {
-          accepted = true;
-          break;
-        }
-      }
-      alpha *= 0.5;
-    }
+    bool accepted = DampedStep(problem, phi, target, result);
     if (!accepted && polishing) break;  // |r| <= tol already holds
     if (!accepted) accepted = LevenbergMarquardtStep(problem, &w, phi, result);
     if (!accepted) {
@@ -253,30 +212,78 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
           iter, r_max);
       result->backend_status = msg;
       result->iterations = iter;
-      return;
+      return false;
     }
     x.swap(w.x_trial);
     w.g.swap(w.g_trial);
     w.r.swap(w.r_trial);
   }
-  result->iterations = iter;
+  return true;
+}
 
-  // The equalities hold; the root is unique nearby, so bounds or inequality
-  // rows violated there mean the problem is (locally) infeasible.
-  const double viol =
-      MaxConstraintViolation(x, w.g, w.x_lb, w.x_ub, w.g_lb, w.g_ub);
-  if (viol > tol) {
-    result->status = NlpStatus::kInfeasible;
-    std::snprintf(msg, sizeof msg,
-                  "root found in %d iterations violates bounds/inequalities "
-                  "by %.3e",
-                  iter, viol);
-  } else {
-    result->status = NlpStatus::kConverged;
-    std::snprintf(msg, sizeof msg, "converged in %d iterations, |r|_inf = %.3e",
-                  iter, w.r.lpNorm<Eigen::Infinity>());
+bool NewtonSolver::FactorJacobian(const NlpProblem& problem, bool polishing,
+                                  int iter, NlpResult* result) {
+  Workspace& w = *ws_;
+  const int n = static_cast<int>(w.eq_rows.size());
+  problem.ConstraintJacobian(result->x, w.jac);
+  ++result->jacobian_evaluations;
+  for (int k = 0; k < n; ++k) w.jac_eq.row(k) = w.jac.row(w.eq_rows[k]);
+  if (!w.jac_eq.allFinite()) {
+    if (polishing) return false;
+    result->status = NlpStatus::kNumericalFailure;
+    result->backend_status = "non-finite Jacobian";
+    result->iterations = iter;
+    return false;
   }
-  result->backend_status = msg;
+  w.lu.compute(w.jac_eq);
+  // Rank test on the pivots of U: partial pivoting puts the largest
+  // available entry on the diagonal, so a pivot at round-off level relative
+  // to the largest one means a (numerically) rank-deficient Jacobian.
+  const auto u_diag = w.lu.matrixLU().diagonal().cwiseAbs();
+  const double pivot_max = u_diag.maxCoeff(), pivot_min = u_diag.minCoeff();
+  if (!(pivot_min > settings_.rank_pivot_ratio * pivot_max)) {
+    if (polishing) return false;
+    result->status = NlpStatus::kNumericalFailure;
+    char msg[160];
+    std::snprintf(msg, sizeof msg,
+                  "rank-deficient Jacobian (pivot ratio %.3e) at iteration %d",
+                  pivot_max > 0 ? pivot_min / pivot_max : 0.0, iter);
+    result->backend_status = msg;
+    result->iterations = iter;
+    return false;
+  }
+  return true;
+}
+
+// Damping: accept x + alpha dx when either
+//  (a) natural monotonicity (Deuflhard, affine invariant): the simplified
+//      correction dxbar = -J(x)^{-1} r(x + alpha dx), reusing this LU,
+//      satisfies |dxbar| <= (1 - alpha/4) |dx|, or
+//  (b) Armijo on phi = |r|^2: phi(x + alpha dx) <= (1 - 2e-4 alpha) phi(x).
+// (a) matters for ill-conditioned systems (the creeping friction law has
+// condition numbers ~1e7-1e8): there a full step can raise |r| while
+// moving much closer to the root, and a residual-only test stalls.
+bool NewtonSolver::DampedStep(const NlpProblem& problem, double phi,
+                              double target, NlpResult* result) {
+  Workspace& w = *ws_;
+  const double dx_norm = w.dx.norm();
+  double alpha = 1.0;
+  while (alpha >= settings_.min_damping) {
+    w.x_trial = result->x + alpha * w.dx;
+    problem.Constraints(w.x_trial, w.g_trial);
+    ++result->constraint_evaluations;
+    if (Residual(w.g_trial, w.bounds.g_lb, w.eq_rows, &w.r_trial)) {
+      const double phi_trial = w.r_trial.squaredNorm();
+      if (phi_trial <= (1.0 - settings_.armijo * alpha) * phi ||
+          w.r_trial.lpNorm<Eigen::Infinity>() <= target) {
+        return true;
+      }
+      w.dx_bar = w.lu.solve(w.r_trial);
+      if (w.dx_bar.norm() <= (1.0 - 0.25 * alpha) * dx_norm) return true;
+    }
+    alpha *= 0.5;
+  }
+  return false;
 }
 
 }  // namespace quasiroll

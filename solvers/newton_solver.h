@@ -11,7 +11,8 @@
 // Converged when max_i |r_i| <= options.feasibility_tolerance. The objective
 // is ignored (the root is isolated); bounds and inequality rows are checked at
 // the root: if the root violates them the status is kInfeasible (the root of
-// a nonsingular square system is locally unique).
+// a nonsingular square system is locally unique; ClassifySquareSystemRoot,
+// core/nlp_polish.h).
 // When no damped step is acceptable (J nearly singular away from the root),
 // one Levenberg-Marquardt step (J^T J + lambda diag(J^T J)) dx = -J^T r with
 // increasing lambda is taken instead, and Newton resumes from there.
@@ -45,6 +46,20 @@ class NewtonSolver final : public NlpSolver {
                const NlpOptions& options, NlpResult* result) override;
 
   struct Workspace;
+  // Newton iterations until the equality residual meets its target (the
+  // polish_floor tightening included); false when a failure status was set.
+  // *iter = steps.
+  bool Iterate(const NlpProblem& problem, const NlpOptions& options, int* iter,
+               NlpResult* result);
+  // LU of the equality Jacobian at result->x into the workspace; false if it
+  // is non-finite or rank deficient (a failure status is set unless
+  // `polishing`, which then just stops).
+  bool FactorJacobian(const NlpProblem& problem, bool polishing, int iter,
+                      NlpResult* result);
+  // Backtracking along the workspace's dx; true with x_trial, g_trial,
+  // r_trial holding the accepted point.
+  bool DampedStep(const NlpProblem& problem, double phi, double target,
+                  NlpResult* result);
   bool LevenbergMarquardtStep(const NlpProblem& problem, Workspace* w,
                               double phi, NlpResult* result);
 

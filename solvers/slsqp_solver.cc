@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "quasiroll/solvers/active_set_polish.h"
+#include "quasiroll/core/nlp_polish.h"
 
 namespace quasiroll {
 
@@ -26,7 +26,7 @@ struct SlsqpSolver::Impl {
   double con_tol = -1.0;
 
   const NlpProblem* problem = nullptr;
-  internal::NlpBounds bounds;
+  NlpBounds bounds;
   std::vector<int> eq_rows, ineq_rows;
   std::vector<double> ineq_sign;  // +1: g - g_ub <= 0, -1: g_lb - g <= 0
   std::vector<double> x, lb, ub, tol_eq, tol_ineq;
@@ -162,6 +162,14 @@ struct SlsqpSolver::Impl {
     n_ineq = static_cast<int>(ineq_rows.size());
     con_tol = tol;
   }
+
+  // DoSolve()'s phases (defined below).
+  enum class Outcome { kSuccess, kMaxEval, kRoundoff, kFailure, kNonFinite };
+  void Prepare(const NlpProblem& p, const Eigen::Ref<const Eigen::VectorXd>& x0,
+               const NlpOptions& options);
+  Outcome Optimize(NlpResult* result);
+  void PolishAndClassify(const NlpOptions& options, Outcome outcome,
+                         NlpResult* result);
 };
 
 SlsqpSolver::SlsqpSolver() : impl_(std::make_unique<Impl>()) {}
@@ -237,73 +245,74 @@ const char* NloptResultName(nlopt::result r) {
 }
 }  // namespace
 
-void SlsqpSolver::DoSolve(const NlpProblem& problem,
-                          const Eigen::Ref<const Eigen::VectorXd>& x0,
-                          const NlpOptions& options, NlpResult* result) {
-  Impl& s = *impl_;
-  const int n = problem.num_variables(), m = problem.num_constraints();
-  s.problem = &problem;
-  s.bounds.Load(problem);
-  const internal::NlpBounds& b = s.bounds;
+// Rows by kind, the NLopt object (rebuilt when the structure changed), the
+// per-solve counters and the box-clamped start.
+void SlsqpSolver::Impl::Prepare(const NlpProblem& p,
+                                const Eigen::Ref<const Eigen::VectorXd>& x0,
+                                const NlpOptions& options) {
+  const int nv = p.num_variables(), m = p.num_constraints();
+  problem = &p;
+  bounds.Load(p);
+  const NlpBounds& b = bounds;
 
-  s.eq_rows.clear();
-  s.ineq_rows.clear();
-  s.ineq_sign.clear();
+  eq_rows.clear();
+  ineq_rows.clear();
+  ineq_sign.clear();
   for (int i = 0; i < m; ++i) {
     if (b.g_lb(i) == b.g_ub(i)) {
-      s.eq_rows.push_back(i);
+      eq_rows.push_back(i);
       continue;
     }
     if (std::isfinite(b.g_lb(i))) {
-      s.ineq_rows.push_back(i);
-      s.ineq_sign.push_back(-1.0);
+      ineq_rows.push_back(i);
+      ineq_sign.push_back(-1.0);
     }
     if (std::isfinite(b.g_ub(i))) {
-      s.ineq_rows.push_back(i);
-      s.ineq_sign.push_back(+1.0);
+      ineq_rows.push_back(i);
+      ineq_sign.push_back(+1.0);
     }
   }
-  const double con_tol = options.feasibility_tolerance;
-  if (!s.opt || s.n != n || s.n_eq != static_cast<int>(s.eq_rows.size()) ||
-      s.n_ineq != static_cast<int>(s.ineq_rows.size()) ||
-      s.con_tol != con_tol) {
-    s.Build(n, con_tol);  // new structure: (re)create the NLopt object
+  const double tol = options.feasibility_tolerance;
+  if (!opt || n != nv || n_eq != static_cast<int>(eq_rows.size()) ||
+      n_ineq != static_cast<int>(ineq_rows.size()) || con_tol != tol) {
+    Build(nv, tol);  // new structure: (re)create the NLopt object
   }
-  s.cache_x.resize(n);
-  s.g.resize(m);
-  s.jac.resize(m, n);
-  s.g_valid = s.jac_valid = false;
-  s.cache_x.setConstant(std::numeric_limits<double>::quiet_NaN());
-  s.obj_evals = s.grad_evals = s.con_evals = s.jac_evals = 0;
-  s.nonfinite = false;
-  s.trial.resize(n);
-  s.started = s.have_trial = false;
-  s.accepted = 0;
+  cache_x.resize(nv);
+  g.resize(m);
+  jac.resize(m, nv);
+  g_valid = jac_valid = false;
+  cache_x.setConstant(std::numeric_limits<double>::quiet_NaN());
+  obj_evals = grad_evals = con_evals = jac_evals = 0;
+  nonfinite = false;
+  trial.resize(nv);
+  started = have_trial = false;
+  accepted = 0;
 
-  s.lb.resize(static_cast<size_t>(n));
-  s.ub.resize(static_cast<size_t>(n));
-  s.x.resize(static_cast<size_t>(n));
-  for (int j = 0; j < n; ++j) {
-    s.lb[j] = b.x_lb(j);
-    s.ub[j] = b.x_ub(j);
-    s.x[j] = std::clamp(x0(j), b.x_lb(j), b.x_ub(j));
+  lb.resize(static_cast<size_t>(nv));
+  ub.resize(static_cast<size_t>(nv));
+  x.resize(static_cast<size_t>(nv));
+  for (int j = 0; j < nv; ++j) {
+    lb[j] = b.x_lb(j);
+    ub[j] = b.x_ub(j);
+    x[j] = std::clamp(x0(j), b.x_lb(j), b.x_ub(j));
   }
-  nlopt::opt& opt = *s.opt;
-  opt.set_lower_bounds(s.lb);
-  opt.set_upper_bounds(s.ub);
-  const Impl::Settings& set = s.settings;
-  opt.set_ftol_rel(set.ftol_rel > 0 ? set.ftol_rel
-                                    : options.optimality_tolerance);
-  opt.set_xtol_rel(set.xtol_rel > 0 ? set.xtol_rel
-                                    : options.optimality_tolerance);
-  opt.set_ftol_abs(set.ftol_abs);
-  opt.set_maxeval(set.maxeval_per_iteration * options.max_iterations);
+  opt->set_lower_bounds(lb);
+  opt->set_upper_bounds(ub);
+  opt->set_ftol_rel(settings.ftol_rel > 0 ? settings.ftol_rel
+                                          : options.optimality_tolerance);
+  opt->set_xtol_rel(settings.xtol_rel > 0 ? settings.xtol_rel
+                                          : options.optimality_tolerance);
+  opt->set_ftol_abs(settings.ftol_abs);
+  opt->set_maxeval(settings.maxeval_per_iteration * options.max_iterations);
+}
 
-  enum class Outcome { kSuccess, kMaxEval, kRoundoff, kFailure, kNonFinite };
+// NLopt's run, its result code / exception mapped to an Outcome; x and the
+// counters copied into `result`.
+SlsqpSolver::Impl::Outcome SlsqpSolver::Impl::Optimize(NlpResult* result) {
   Outcome outcome = Outcome::kFailure;
   double f_opt = 0.0;
   try {
-    const nlopt::result r = opt.optimize(s.x, f_opt);
+    const nlopt::result r = opt->optimize(x, f_opt);
     result->backend_status = NloptResultName(r);
     outcome = (r == nlopt::MAXEVAL_REACHED || r == nlopt::MAXTIME_REACHED)
                   ? Outcome::kMaxEval
@@ -313,7 +322,7 @@ void SlsqpSolver::DoSolve(const NlpProblem& problem,
     outcome = Outcome::kRoundoff;
   } catch (const nlopt::forced_stop&) {
     result->backend_status = "FORCED_STOP";
-    outcome = s.nonfinite ? Outcome::kNonFinite : Outcome::kFailure;
+    outcome = nonfinite ? Outcome::kNonFinite : Outcome::kFailure;
   } catch (const std::bad_alloc&) {
     result->backend_status = "OUT_OF_MEMORY";
     outcome = Outcome::kFailure;
@@ -324,28 +333,24 @@ void SlsqpSolver::DoSolve(const NlpProblem& problem,
     result->backend_status = std::string("FAILURE: ") + e.what();
     outcome = Outcome::kFailure;
   }
-  for (int j = 0; j < n; ++j) result->x(j) = s.x[j];
-  s.FinishTracking(result->x);
-  result->iterations = s.accepted;
-  result->native_iterations = s.grad_evals;
-  result->objective_evaluations = s.obj_evals;
-  result->constraint_evaluations = s.con_evals;
-  result->jacobian_evaluations = s.jac_evals;
+  for (int j = 0; j < n; ++j) result->x(j) = x[j];
+  FinishTracking(result->x);
+  result->iterations = accepted;
+  result->native_iterations = grad_evals;
+  result->objective_evaluations = obj_evals;
+  result->constraint_evaluations = con_evals;
+  result->jacobian_evaluations = jac_evals;
+  return outcome;
+}
 
-  if (outcome == Outcome::kNonFinite || !result->x.allFinite()) {
-    result->status = NlpStatus::kNumericalFailure;
-    result->backend_status += " (non-finite function value)";
-    return;
-  }
-  if (outcome == Outcome::kMaxEval) {
-    result->status = NlpStatus::kIterationLimit;
-    return;
-  }
-
-  // Independent feasibility check (+ active-set Newton polish if needed).
-  const internal::PolishStats ps = internal::PolishActiveConstraints(
-      problem, b, set.polish_active_tol, options.feasibility_tolerance,
-      set.polish_max_iterations, &result->x);
+// Independent feasibility check (+ active-set Newton polish if needed) of a
+// finished run, and its status.
+void SlsqpSolver::Impl::PolishAndClassify(const NlpOptions& options,
+                                          Outcome outcome, NlpResult* result) {
+  const PolishStats ps =
+      PolishActiveConstraints(*problem, bounds, settings.polish_active_tol,
+                              options.feasibility_tolerance,
+                              settings.polish_max_iterations, &result->x);
   result->constraint_evaluations += ps.constraint_evaluations;
   result->jacobian_evaluations += ps.jacobian_evaluations;
   result->iterations += ps.accepted_steps;
@@ -361,7 +366,7 @@ void SlsqpSolver::DoSolve(const NlpProblem& problem,
     result->status = NlpStatus::kConverged;
     return;
   }
-  if (internal::LooksLocallyInfeasible(problem, b, result->x)) {
+  if (LooksLocallyInfeasible(*problem, bounds, result->x)) {
     result->status = NlpStatus::kInfeasible;
     result->backend_status += " (stationary point of the constraint violation)";
     return;
@@ -372,6 +377,24 @@ void SlsqpSolver::DoSolve(const NlpProblem& problem,
                   ps.max_violation);
     result->backend_status += msg;
   }
+}
+
+void SlsqpSolver::DoSolve(const NlpProblem& problem,
+                          const Eigen::Ref<const Eigen::VectorXd>& x0,
+                          const NlpOptions& options, NlpResult* result) {
+  Impl& s = *impl_;
+  s.Prepare(problem, x0, options);
+  const Impl::Outcome outcome = s.Optimize(result);
+  if (outcome == Impl::Outcome::kNonFinite || !result->x.allFinite()) {
+    result->status = NlpStatus::kNumericalFailure;
+    result->backend_status += " (non-finite function value)";
+    return;
+  }
+  if (outcome == Impl::Outcome::kMaxEval) {
+    result->status = NlpStatus::kIterationLimit;
+    return;
+  }
+  s.PolishAndClassify(options, outcome, result);
 }
 
 }  // namespace quasiroll

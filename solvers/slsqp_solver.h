@@ -17,14 +17,15 @@
 // NLopt may report success (SUCCESS/FTOL/XTOL/STOPVAL, also ROUNDOFF_LIMITED
 // which "typically returns a useful result") with constraints violated beyond
 // our tolerance. Such answers are re-checked; if violated, a cheap Newton
-// polish on the active constraints (see active_set_polish.h: minimum-norm
+// polish on the active constraints (core/nlp_polish.h: minimum-norm
 // Gauss-Newton steps, moving x by O(violation), so the objective changes only
 // at second order) is applied, and only a point that then meets
 // feasibility_tolerance is kConverged. Otherwise: kInfeasible if x is a
 // stationary point of the constraint violation with clearly positive
-// violation, else kNumericalFailure. NLopt exceptions (roundoff_limited,
-// forced_stop, bad_alloc, invalid_argument, runtime_error) map to statuses;
-// non-finite function values force a stop -> kNumericalFailure.
+// violation (LooksLocallyInfeasible), else kNumericalFailure. NLopt exceptions
+// (roundoff_limited, forced_stop, bad_alloc, invalid_argument, runtime_error)
+// map to statuses; non-finite function values force a stop ->
+// kNumericalFailure.
 //
 // Backend options (option_table()): ftol_rel, xtol_rel (0 = NlpOptions'
 // optimality_tolerance), ftol_abs (0 = off), maxeval_per_iteration (the 3

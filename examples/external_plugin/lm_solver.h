@@ -13,7 +13,8 @@
 // Statuses (docs/plugins.md): kConverged when max|r| <= feasibility_tolerance
 // and the bounds / inequality rows hold at the root; kInfeasible when the
 // root violates them (a root of a nonsingular square system is locally
-// unique); kIterationLimit after max_iterations step attempts;
+// unique: quasiroll::ClassifySquareSystemRoot, core/nlp_polish.h);
+// kIterationLimit after max_iterations step attempts;
 // kNumericalFailure for a non-finite residual or Jacobian, or stagnation.
 // Never throws for numerical trouble. The objective is ignored.
 // iterations = accepted steps (core/nlp.h), native_iterations = all steps
@@ -47,6 +48,26 @@ class LevenbergMarquardtSolver final : public quasiroll::NlpSolver {
                const Eigen::Ref<const Eigen::VectorXd>& x0,
                const quasiroll::NlpOptions& options,
                quasiroll::NlpResult* result) override;
+
+  // DoSolve()'s phases.
+  // LM steps until |r|_inf <= feasibility_tolerance; false when a failure
+  // status was set. *iter = steps computed.
+  bool Iterate(const quasiroll::NlpProblem& problem,
+               const quasiroll::NlpOptions& options, int* iter,
+               quasiroll::NlpResult* result);
+  // Sets `status` with "<what> at iteration <iter>, |r|_inf = ..."; false.
+  bool Fail(quasiroll::NlpStatus status, const char* what, int iter,
+            quasiroll::NlpResult* result) const;
+  // J, the scaling D and the first lambda at result->x; the failure
+  // message, or nullptr.
+  const char* UpdateJacobian(const quasiroll::NlpProblem& problem,
+                             quasiroll::NlpResult* result);
+  // The damped step dx and the predicted decrease of phi; false if dx is not
+  // finite.
+  bool ComputeStep(double* predicted);
+  // Evaluates x + dx and moves there if accepted (lambda updated).
+  bool TryStep(const quasiroll::NlpProblem& problem, double predicted,
+               double tol, quasiroll::NlpResult* result);
 
   struct Workspace;
   std::unique_ptr<Workspace> ws_;  // per instance: one solver per thread

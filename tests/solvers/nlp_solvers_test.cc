@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "quasiroll/core/nlp.h"
+#include "quasiroll/core/nlp_polish.h"
 #include "quasiroll/core/nlp_reference_problems.h"
-#include "quasiroll/solvers/active_set_polish.h"
 #ifdef QUASIROLL_HAVE_IPOPT
 #include "quasiroll/solvers/ipopt_solver.h"
 #endif
@@ -543,21 +543,21 @@ class NaturalStepRaisesViolation : public FreeVariableSystem {
 
 TEST(ActiveSetPolishTest, NeverReturnsAPointWorseThanItsStart) {
   NaturalStepRaisesViolation p;
-  internal::NlpBounds bounds;
+  NlpBounds bounds;
   bounds.Load(p);
   const double a = 0.1;
   Eigen::VectorXd x = Eigen::Vector2d(0.0, a), g(2);
   p.Constraints(x, g);
   const double start_violation = g.lpNorm<Eigen::Infinity>();  // K a^3 = 1
-  internal::PolishStats one_step = internal::PolishActiveConstraints(
+  PolishStats one_step = PolishActiveConstraints(
       p, bounds, /*active_tol=*/0.0, /*feasibility_tolerance=*/1e-12,
       /*max_iterations=*/1, &x);
   EXPECT_FALSE(one_step.success);
   EXPECT_LE(one_step.max_violation, start_violation);
   EXPECT_EQ(x, Eigen::Vector2d(0.0, a));
   // Given iterations, the same polish reaches the root (x2 = 0, then linear).
-  internal::PolishStats full = internal::PolishActiveConstraints(
-      p, bounds, 0.0, 1e-12, /*max_iterations=*/20, &x);
+  PolishStats full =
+      PolishActiveConstraints(p, bounds, 0.0, 1e-12, /*max_iterations=*/20, &x);
   EXPECT_TRUE(full.success) << full.max_violation;
 }
 

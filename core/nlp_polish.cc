@@ -1,11 +1,12 @@
-#include "quasiroll/solvers/active_set_polish.h"
+#include "quasiroll/core/nlp_polish.h"
 
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
-namespace quasiroll::internal {
+namespace quasiroll {
 
 void NlpBounds::Load(const NlpProblem& problem) {
   const int n = problem.num_variables(), m = problem.num_constraints();
@@ -163,7 +164,7 @@ PolishStats PolishActiveConstraints(const NlpProblem& problem,
 }
 
 bool LooksLocallyInfeasible(const NlpProblem& problem, const NlpBounds& b,
-                            const Eigen::VectorXd& x) {
+                            const Eigen::Ref<const Eigen::VectorXd>& x) {
   const int n = problem.num_variables(), m = problem.num_constraints();
   Eigen::VectorXd g(m), v(m), grad(n);
   Eigen::MatrixXd jac(m, n);
@@ -172,7 +173,7 @@ bool LooksLocallyInfeasible(const NlpProblem& problem, const NlpBounds& b,
   if (!g.allFinite() || !jac.allFinite()) return false;
   const double viol =
       MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
-  if (viol < 1e-6) return false;  // not clearly infeasible
+  if (viol < kInfeasibleViolation) return false;  // not clearly infeasible
   for (int i = 0; i < m; ++i)
     v(i) = g(i) < b.g_lb(i) ? g(i) - b.g_lb(i)
                             : (g(i) > b.g_ub(i) ? g(i) - b.g_ub(i) : 0.0);
@@ -184,7 +185,30 @@ bool LooksLocallyInfeasible(const NlpProblem& problem, const NlpBounds& b,
   }
   const double scale =
       std::max(1.0, jac.cwiseAbs().maxCoeff()) * v.lpNorm<Eigen::Infinity>();
-  return grad.lpNorm<Eigen::Infinity>() <= 1e-6 * scale;
+  return grad.lpNorm<Eigen::Infinity>() <= kInfeasibleStationarity * scale;
 }
 
-}  // namespace quasiroll::internal
+NlpStatus ClassifySquareSystemRoot(const NlpBounds& b,
+                                   const Eigen::Ref<const Eigen::VectorXd>& x,
+                                   const Eigen::Ref<const Eigen::VectorXd>& g,
+                                   double residual_inf, double tol,
+                                   int iterations, NlpResult* result) {
+  char msg[160];
+  const double viol =
+      MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
+  if (viol > tol) {
+    result->status = NlpStatus::kInfeasible;
+    std::snprintf(msg, sizeof msg,
+                  "root found in %d iterations violates bounds/inequalities "
+                  "by %.3e",
+                  iterations, viol);
+  } else {
+    result->status = NlpStatus::kConverged;
+    std::snprintf(msg, sizeof msg, "converged in %d iterations, |r|_inf = %.3e",
+                  iterations, residual_inf);
+  }
+  result->backend_status = msg;
+  return result->status;
+}
+
+}  // namespace quasiroll
