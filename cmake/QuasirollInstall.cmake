@@ -25,7 +25,9 @@ foreach(_dir core solvers integrators bench)
           DESTINATION ${QUASIROLL_INSTALL_INCLUDEDIR}/${_dir}
           COMPONENT devel
           FILES_MATCHING PATTERN "*.h"
-          PATTERN "cli" EXCLUDE PATTERN "scenes" EXCLUDE PATTERN "suites" EXCLUDE)
+          PATTERN "cli" EXCLUDE PATTERN "scenes" EXCLUDE PATTERN "suites" EXCLUDE
+          # Internal to one backend: never part of the installed API.
+          PATTERN "*_internal.h" EXCLUDE)
 endforeach()
 
 # Export names: quasiroll_core -> quasiroll::core etc. quasiroll_warnings is

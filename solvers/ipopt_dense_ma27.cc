@@ -1,4 +1,4 @@
-#include "quasiroll/solvers/ipopt_dense_ma27.h"
+#include "quasiroll/solvers/ipopt_dense_ma27_internal.h"
 
 #include <HSLLoader.h>
 

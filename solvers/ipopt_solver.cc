@@ -9,7 +9,7 @@
 #include <cstring>
 #include <vector>
 
-#include "quasiroll/solvers/ipopt_dense_ma27.h"
+#include "quasiroll/solvers/ipopt_dense_ma27_internal.h"
 
 namespace quasiroll {
 namespace {
@@ -298,7 +298,7 @@ IpoptSolver::IpoptSolver(IpoptLinearSolver linear_solver)
   // Silent by default; raised per solve from NlpOptions::verbosity.
   opts->SetIntegerValue("print_level", 0);
   if (linear_solver == IpoptLinearSolver::kDenseLdlt) {
-    // The dense LDL^T behind Ipopt's MA27 interface (ipopt_dense_ma27.h);
+    // The dense LDL^T behind Ipopt's MA27 interface (ipopt_dense_ma27_internal.h);
     // MC19 scaling is an HSL routine we do not have, and a dense
     // Bunch-Kaufman factorization does not need it.
     internal::InstallDenseMa27();

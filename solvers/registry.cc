@@ -48,11 +48,13 @@ void RegisterBuiltinNlpSolvers() {
              "solves",
              "interior point", "Ipopt", QUASIROLL_IPOPT_VERSION, 12.25),
         [] { return std::make_unique<IpoptSolver>(); });
-    NlpSolverRegistry::Register(
-        "ipopt-mumps",
+    BackendInfo mumps =
         Info("Ipopt interior point with its stock MUMPS linear solver (serial)",
-             "interior point", "Ipopt", QUASIROLL_IPOPT_VERSION, 88.1),
-        [] { return std::make_unique<IpoptSolver>(IpoptLinearSolver::kMumps); });
+             "interior point", "Ipopt", QUASIROLL_IPOPT_VERSION, 88.1);
+    mumps.thread_safe = false;  // sequential MUMPS keeps global state
+    NlpSolverRegistry::Register("ipopt-mumps", std::move(mumps), [] {
+      return std::make_unique<IpoptSolver>(IpoptLinearSolver::kMumps);
+    });
 #endif
 #ifdef QUASIROLL_HAVE_NLOPT
     NlpSolverRegistry::Register(
