@@ -8,13 +8,13 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
-#include <Eigen/Cholesky>
 #include <cmath>
 #include <cstdlib>
-#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
+
+#include "quasiroll/core/weighted_projection.h"
 
 namespace quasiroll {
 
@@ -48,67 +48,16 @@ struct CvodeProjectionIntegrator::Impl {
     jac_fn_set = false;
   }
 
-  // Sizes the constraint workspaces and loads D (per Integrate call).
-  void Begin(ConstrainedOde& problem) {
-    const int n_new = problem.state_size(), m_new = problem.num_constraints();
-    if (d.size() != n_new || h.size() != m_new) {
-      d.resize(n_new);
-      h.resize(m_new);
-      lambda.resize(m_new);
-      jac.resize(m_new, n_new);
-      jd.resize(m_new, n_new);
-      a.resize(m_new, m_new);
-      z.resize(n_new);
-      f.resize(n_new);
-      je.resize(m_new);
-    }
-    d.setOnes();
-    problem.CorrectionWeights(d);
-    for (int i = 0; i < n_new; ++i)
-      if (!(std::isfinite(d(i)) && d(i) >= 0))
-        throw std::invalid_argument("ConstrainedOde::CorrectionWeights: d[" +
-                                    std::to_string(i) +
-                                    "] must be finite and >= 0");
-  }
-
-  // J(y), A = J D J^T factorised; false (message set) if A is singular.
-  bool Factorize(const Eigen::Ref<const VectorXd>& y) {
-    ode->ConstraintJacobian(y, jac);
-    ++result->jacobian_evaluations;
-    jd.noalias() = jac * d.asDiagonal();
-    a.noalias() = jd * jac.transpose();
-    ldlt.compute(a);
-    bool ok = ldlt.info() == Eigen::Success && a.allFinite();
-    if (ok) {
-      const auto pivots = ldlt.vectorD();
-      // Pivot ratio below ~1e3 eps: singular to working precision.
-      ok = pivots.maxCoeff() > 0 &&
-           pivots.minCoeff() >
-               1e3 * std::numeric_limits<double>::epsilon() * pivots.maxCoeff();
-    }
-    if (!ok) last_message = "J D J^T is singular or not positive definite";
-    return ok;
-  }
-
-  // Newton projection of z onto H = 0; false (message set) on failure.
+  // Newton projection of state onto H = 0 (model.md §8.4); false (message
+  // in last_message) on failure.
   bool Project(Eigen::Ref<VectorXd> state) {
-    if (h.size() == 0) return true;
-    for (int it = 0;; ++it) {
-      ode->Constraints(state, h);
-      const double violation = h.lpNorm<Eigen::Infinity>();
-      if (violation <= projection_tolerance) return true;
-      if (!std::isfinite(violation) || it == max_projection_iterations) {
-        std::ostringstream os;
-        os << "projection: ||H||_inf = " << violation << " > tolerance "
-           << projection_tolerance << " after " << it << " iterations";
-        last_message = os.str();
-        return false;
-      }
-      if (!Factorize(state)) return false;
-      lambda = ldlt.solve(h);
-      state.noalias() -= jd.transpose() * lambda;
-      ++result->projection_iterations;
-    }
+    bool moved = false;
+    if (projection.Project(*ode, state, projection_tolerance,
+                           max_projection_iterations, result,
+                           &moved) == IntegratorStatus::kSuccess)
+      return true;
+    last_message = projection.message();
+    return false;
   }
 
   bool CallRhs(double t, const Eigen::Ref<const VectorXd>& y,
@@ -149,12 +98,18 @@ struct CvodeProjectionIntegrator::Impl {
     s.z = y;
     if (!s.Project(s.z)) return 1;  // recoverable: CVODE shrinks the step
     c = s.z - y;
-    if (err != nullptr && s.h.size() > 0) {
+    if (err != nullptr && s.projection.m() > 0) {
+      // Tangent part of the error estimate: e <- e - D J^T A^{-1} J e.
       Map<VectorXd> e(NV_DATA_S(err), s.n);
-      if (!s.Factorize(s.z)) return 1;
-      s.je.noalias() = s.jac * e;
-      s.lambda = s.ldlt.solve(s.je);
-      e.noalias() -= s.jd.transpose() * s.lambda;
+      if (!s.projection.Factorize(*s.ode, s.z, s.result)) {
+        s.last_message = s.projection.message();
+        return 1;
+      }
+      WeightedProjection& p = s.projection;
+      p.r().noalias() = p.jacobian() * e;
+      p.SolveMultiplier(p.r(), p.lambda());
+      p.Lift(p.lambda(), s.delta);
+      e -= s.delta;
     }
     return 0;
   }
@@ -204,9 +159,8 @@ struct CvodeProjectionIntegrator::Impl {
   std::string last_error, last_message;
 
   // Workspaces.
-  VectorXd d, h, lambda, z, f, je;
-  MatrixXd jac, jd, a;
-  Eigen::LDLT<MatrixXd> ldlt;
+  WeightedProjection projection;
+  VectorXd z, delta;
   std::vector<int> roots_found;
 };
 
@@ -292,8 +246,12 @@ void CvodeProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
   s.rhs_failed = false;
   s.last_error.clear();
   s.last_message.clear();
-  s.Begin(ode);
+  s.projection.Begin(ode);
   const int n = ode.state_size();
+  if (s.z.size() != n) {
+    s.z.resize(n);
+    s.delta.resize(n);
+  }
   auto fail = [&](IntegratorStatus status, const std::string& message) {
     result->status = status;
     result->t_reached = t0;

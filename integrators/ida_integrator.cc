@@ -13,7 +13,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "quasiroll/integrators/constraint_correction.h"
+#include "quasiroll/core/weighted_projection.h"
 
 namespace quasiroll {
 
@@ -110,7 +110,7 @@ struct IdaIntegrator::Impl {
   std::string last_error;
 
   // Workspaces (resized only when sizes change).
-  integrators_internal::ConstraintCorrection correction;
+  WeightedProjection correction;
   VectorXd f, f_pert, x_pert, jt_nu, h;
   MatrixXd jac, dfdx;
   std::vector<int> roots_found;
@@ -421,7 +421,7 @@ void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
         s.settings.max_projection_iterations, result, &moved);
     if (projected != IntegratorStatus::kSuccess) {
       status = projected;
-      result->message = "final projection: " + result->message;
+      result->message = "final projection: " + s.correction.message();
     }
   }
   result->status = status;
@@ -496,7 +496,7 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
         ode, y, s.settings.projection_tolerance,
         s.settings.max_projection_iterations, result, &moved);
     if (status != IntegratorStatus::kSuccess)
-      return fail(status, "initial state: " + result->message);
+      return fail(status, "initial state: " + s.correction.message());
   }
   if (!s.CallRhs(t0, y, s.f)) {
     std::ostringstream os;
@@ -518,7 +518,7 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
   if (m > 0) {
     if (!s.correction.Factorize(ode, y, result))
       return fail(IntegratorStatus::kConstraintFailure,
-                  "initial multipliers: " + result->message);
+                  "initial multipliers: " + s.correction.message());
     s.correction.r().noalias() = s.correction.jacobian() * s.f;
     if (s.settings.dae_index == 1) {
       ode.Constraints(y, s.h);
