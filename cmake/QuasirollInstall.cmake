@@ -1,6 +1,6 @@
 # Install rules and the CMake package (included at the end of the top-level
 # CMakeLists.txt). `cmake --install <build> --prefix <p>` installs
-#   <p>/include/quasiroll/{core,solvers,integrators,bench}/*.h
+#   <p>/include/quasiroll/{core,solvers,integrators,bench}/*.h (not *_internal.h)
 #   <p>/lib/libquasiroll_{core,solvers,integrators,harness}.a
 #   <p>/bin/quasiroll
 #   <p>/share/quasiroll/{bench/scenes,bench/suites,reports}
@@ -25,7 +25,9 @@ foreach(_dir core solvers integrators bench)
           DESTINATION ${QUASIROLL_INSTALL_INCLUDEDIR}/${_dir}
           COMPONENT devel
           FILES_MATCHING PATTERN "*.h"
-          PATTERN "cli" EXCLUDE PATTERN "scenes" EXCLUDE PATTERN "suites" EXCLUDE)
+          PATTERN "cli" EXCLUDE PATTERN "scenes" EXCLUDE PATTERN "suites" EXCLUDE
+          # Internal headers (third-party types, e.g. SUNDIALS) stay in the tree.
+          PATTERN "*_internal.h" EXCLUDE)
 endforeach()
 
 # Export names: quasiroll_core -> quasiroll::core etc. quasiroll_warnings is
