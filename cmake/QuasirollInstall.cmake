@@ -1,6 +1,6 @@
 # Install rules and the CMake package (included at the end of the top-level
 # CMakeLists.txt). `cmake --install <build> --prefix <p>` installs
-#   <p>/include/quasiroll/{core,solvers,integrators,bench}/*.h
+#   <p>/include/quasiroll/{core,solvers,integrators,bench}/*.h (not *_internal.h)
 #   <p>/lib/libquasiroll_{core,solvers,integrators,harness}.a
 #   <p>/bin/quasiroll
 #   <p>/share/quasiroll/{bench/scenes,bench/suites,reports}
@@ -26,7 +26,8 @@ foreach(_dir core solvers integrators bench)
           COMPONENT devel
           FILES_MATCHING PATTERN "*.h"
           PATTERN "cli" EXCLUDE PATTERN "scenes" EXCLUDE PATTERN "suites" EXCLUDE
-          # Internal to one backend: never part of the installed API.
+          # Internal to a backend (third-party types, e.g. SUNDIALS): not
+          # part of the installed API.
           PATTERN "*_internal.h" EXCLUDE)
 endforeach()
 

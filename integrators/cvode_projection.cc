@@ -3,18 +3,12 @@
 #include <cvode/cvode.h>
 #include <cvode/cvode_ls.h>
 #include <cvode/cvode_proj.h>
-#include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunmatrix/sunmatrix_dense.h>
 
-#include <Eigen/Cholesky>
-#include <cmath>
-#include <cstdlib>
-#include <limits>
 #include <sstream>
 #include <stdexcept>
-#include <vector>
+
+#include "quasiroll/core/weighted_projection.h"
+#include "quasiroll/integrators/sundials_support_internal.h"
 
 namespace quasiroll {
 
@@ -23,101 +17,57 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 struct CvodeProjectionIntegrator::Impl {
-  Impl() {
-    if (SUNContext_Create(nullptr, &ctx) != 0 || ctx == nullptr)
-      throw std::runtime_error("cvode-projection: SUNContext_Create failed");
-  }
-  ~Impl() {
-    Free();
-    if (ctx != nullptr) SUNContext_Free(&ctx);
-  }
+  Impl() : context("cvode-projection") {}
+  ~Impl() { Free(); }
   Impl(const Impl&) = delete;
   Impl& operator=(const Impl&) = delete;
 
   void Free() {
     if (mem != nullptr) CVodeFree(&mem);
-    if (ls != nullptr) SUNLinSolFree(ls);
-    if (mat != nullptr) SUNMatDestroy(mat);
-    if (yy != nullptr) N_VDestroy(yy);
-    mem = nullptr;
-    ls = nullptr;
-    mat = nullptr;
-    yy = nullptr;
+    dense.Free();
+    sundials_internal::DestroyVector(&yy);
     n = -1;
-    registered_roots = 0;
+    roots.registered = 0;
     jac_fn_set = false;
   }
 
-  // Sizes the constraint workspaces and loads D (per Integrate call).
-  void Begin(ConstrainedOde& problem) {
-    const int n_new = problem.state_size(), m_new = problem.num_constraints();
-    if (d.size() != n_new || h.size() != m_new) {
-      d.resize(n_new);
-      h.resize(m_new);
-      lambda.resize(m_new);
-      jac.resize(m_new, n_new);
-      jd.resize(m_new, n_new);
-      a.resize(m_new, m_new);
+  // Per-call state, D and the workspaces (sized when n changes).
+  void Begin(ConstrainedOde& problem, IntegratorResult* out) {
+    ode = &problem;
+    result = out;
+    rhs.Reset();
+    errors.last_error.clear();
+    last_message.clear();
+    projection.Begin(problem);
+    const int n_new = problem.state_size();
+    if (z.size() != n_new) {
       z.resize(n_new);
-      f.resize(n_new);
-      je.resize(m_new);
+      delta.resize(n_new);
     }
-    d.setOnes();
-    problem.CorrectionWeights(d);
-    for (int i = 0; i < n_new; ++i)
-      if (!(std::isfinite(d(i)) && d(i) >= 0))
-        throw std::invalid_argument("ConstrainedOde::CorrectionWeights: d[" +
-                                    std::to_string(i) +
-                                    "] must be finite and >= 0");
   }
+  // CVodeReInit when the size is unchanged, else a new CVODE memory; y0 is
+  // the (consistent) initial state. Returns a CVODE flag.
+  int CreateOrReInit(double t0, const Eigen::Ref<const VectorXd>& y0);
+  // dF/dy, tolerances, step controls, projection settings and root
+  // functions; `flag` is CreateOrReInit's. Returns a CVODE flag.
+  int Configure(int flag, double t0, double t1,
+                const Eigen::Ref<const VectorXd>& y0,
+                const IntegratorOptions& options);
+  // Runs CVode from t0 to t1 and sets y and *result (status, counters,
+  // message), then projects the returned state.
+  void Solve(double t0, double t1, Eigen::Ref<VectorXd> y);
+  static IntegratorStatus StatusOf(int flag);
 
-  // J(y), A = J D J^T factorised; false (message set) if A is singular.
-  bool Factorize(const Eigen::Ref<const VectorXd>& y) {
-    ode->ConstraintJacobian(y, jac);
-    ++result->jacobian_evaluations;
-    jd.noalias() = jac * d.asDiagonal();
-    a.noalias() = jd * jac.transpose();
-    ldlt.compute(a);
-    bool ok = ldlt.info() == Eigen::Success && a.allFinite();
-    if (ok) {
-      const auto pivots = ldlt.vectorD();
-      // Pivot ratio below ~1e3 eps: singular to working precision.
-      ok = pivots.maxCoeff() > 0 &&
-           pivots.minCoeff() >
-               1e3 * std::numeric_limits<double>::epsilon() * pivots.maxCoeff();
-    }
-    if (!ok) last_message = "J D J^T is singular or not positive definite";
-    return ok;
-  }
-
-  // Newton projection of z onto H = 0; false (message set) on failure.
+  // Newton projection of state onto H = 0 (model.md §8.4); false (message
+  // in last_message) on failure.
   bool Project(Eigen::Ref<VectorXd> state) {
-    if (h.size() == 0) return true;
-    for (int it = 0;; ++it) {
-      ode->Constraints(state, h);
-      const double violation = h.lpNorm<Eigen::Infinity>();
-      if (violation <= projection_tolerance) return true;
-      if (!std::isfinite(violation) || it == max_projection_iterations) {
-        std::ostringstream os;
-        os << "projection: ||H||_inf = " << violation << " > tolerance "
-           << projection_tolerance << " after " << it << " iterations";
-        last_message = os.str();
-        return false;
-      }
-      if (!Factorize(state)) return false;
-      lambda = ldlt.solve(h);
-      state.noalias() -= jd.transpose() * lambda;
-      ++result->projection_iterations;
-    }
-  }
-
-  bool CallRhs(double t, const Eigen::Ref<const VectorXd>& y,
-               Eigen::Ref<VectorXd> out) {
-    ++result->rhs_evaluations;
-    const bool ok = ode->Rhs(t, y, out);
-    rhs_failed = !ok;
-    if (!ok) rhs_failure_time = t;
-    return ok;
+    bool moved = false;
+    if (projection.Project(*ode, state, projection_tolerance,
+                           max_projection_iterations, result,
+                           &moved) == IntegratorStatus::kSuccess)
+      return true;
+    last_message = projection.message();
+    return false;
   }
 
   static int Rhs(double t, N_Vector y, N_Vector ydot, void* user_data) {
@@ -126,7 +76,7 @@ struct CvodeProjectionIntegrator::Impl {
     Map<VectorXd> out(NV_DATA_S(ydot), s.n);
     // Positive = recoverable: CVODE retries with a smaller step (the point
     // may be a trial point off the path).
-    return s.CallRhs(t, ym, out) && out.allFinite() ? 0 : 1;
+    return s.rhs.Call(*s.ode, t, ym, out, s.result) && out.allFinite() ? 0 : 1;
   }
 
   static int Jacobian(double t, N_Vector y, N_Vector /*fy*/, SUNMatrix jm,
@@ -149,12 +99,18 @@ struct CvodeProjectionIntegrator::Impl {
     s.z = y;
     if (!s.Project(s.z)) return 1;  // recoverable: CVODE shrinks the step
     c = s.z - y;
-    if (err != nullptr && s.h.size() > 0) {
+    if (err != nullptr && s.projection.m() > 0) {
+      // Tangent part of the error estimate: e <- e - D J^T A^{-1} J e.
       Map<VectorXd> e(NV_DATA_S(err), s.n);
-      if (!s.Factorize(s.z)) return 1;
-      s.je.noalias() = s.jac * e;
-      s.lambda = s.ldlt.solve(s.je);
-      e.noalias() -= s.jd.transpose() * s.lambda;
+      if (!s.projection.Factorize(*s.ode, s.z, s.result)) {
+        s.last_message = s.projection.message();
+        return 1;
+      }
+      WeightedProjection& p = s.projection;
+      p.r().noalias() = p.jacobian() * e;
+      p.SolveMultiplier(p.r(), p.lambda());
+      p.Lift(p.lambda(), s.delta);
+      e -= s.delta;
     }
     return 0;
   }
@@ -162,16 +118,9 @@ struct CvodeProjectionIntegrator::Impl {
   static int RootFunction(double t, N_Vector y, double* gout, void* user_data) {
     Impl& s = *static_cast<Impl*>(user_data);
     Map<const VectorXd> ym(NV_DATA_S(y), s.n);
-    Map<VectorXd> g(gout, s.registered_roots);
+    Map<VectorXd> g(gout, s.roots.registered);
     s.ode->Roots(t, ym, g);
     return 0;
-  }
-
-  static void ErrorHandler(int error_code, const char* module,
-                           const char* function, char* msg, void* user_data) {
-    Impl& s = *static_cast<Impl*>(user_data);
-    if (error_code == CV_WARNING) return;
-    s.last_error = std::string(module) + "::" + function + ": " + msg;
   }
 
   // Backend options.
@@ -187,27 +136,24 @@ struct CvodeProjectionIntegrator::Impl {
   double proj_fail_eta = 0.25;
 
   // SUNDIALS objects.
-  SUNContext ctx = nullptr;
+  sundials_internal::Context context;
   void* mem = nullptr;
   N_Vector yy = nullptr;
-  SUNMatrix mat = nullptr;
-  SUNLinearSolver ls = nullptr;
+  sundials_internal::DenseLinearSolver dense;
   int n = -1;
-  int registered_roots = 0;
+  sundials_internal::RootSlots roots;
   bool jac_fn_set = false;
 
   // Per call.
   ConstrainedOde* ode = nullptr;
   IntegratorResult* result = nullptr;
-  bool rhs_failed = false;
-  double rhs_failure_time = 0.0;
-  std::string last_error, last_message;
+  sundials_internal::RhsTracker rhs;
+  sundials_internal::ErrorLog errors{CV_WARNING};
+  std::string last_message;  // why the last projection failed
 
   // Workspaces.
-  VectorXd d, h, lambda, z, f, je;
-  MatrixXd jac, jd, a;
-  Eigen::LDLT<MatrixXd> ldlt;
-  std::vector<int> roots_found;
+  WeightedProjection projection;
+  VectorXd z, delta;
 };
 
 CvodeProjectionIntegrator::CvodeProjectionIntegrator()
@@ -272,14 +218,136 @@ void CvodeProjectionIntegrator::ApplyBackendOptions(
 namespace {
 
 std::string FlagName(int flag) {
-  char* name = CVodeGetReturnFlagName(flag);
-  std::string out =
-      name != nullptr ? name : "CVODE flag " + std::to_string(flag);
-  std::free(name);
-  return out;
+  return sundials_internal::FlagName(CVodeGetReturnFlagName(flag), "CVODE",
+                                     flag);
 }
 
 }  // namespace
+
+int CvodeProjectionIntegrator::Impl::CreateOrReInit(
+    double t0, const Eigen::Ref<const VectorXd>& y0) {
+  const int n_new = static_cast<int>(y0.size());
+  if (mem != nullptr && n == n_new) {
+    Map<VectorXd>(NV_DATA_S(yy), n_new) = y0;
+    return CVodeReInit(mem, t0, yy);
+  }
+  Free();
+  yy = N_VNew_Serial(n_new, context.get());
+  if (!dense.CreateMatrix(n_new, context.get()) || yy == nullptr)
+    throw std::runtime_error("cvode-projection: cannot allocate");
+  const bool solver_created = dense.CreateSolver(yy, context.get());
+  mem = CVodeCreate(CV_BDF, context.get());
+  if (!solver_created || mem == nullptr)
+    throw std::runtime_error("cvode-projection: cannot create CVODE");
+  n = n_new;
+  Map<VectorXd>(NV_DATA_S(yy), n_new) = y0;
+  int flag =
+      CVodeSetErrHandlerFn(mem, &sundials_internal::ErrorLog::Handler, &errors);
+  if (flag == CV_SUCCESS) flag = CVodeInit(mem, &Impl::Rhs, t0, yy);
+  if (flag == CV_SUCCESS) flag = CVodeSetUserData(mem, this);
+  if (flag == CV_SUCCESS)
+    flag = CVodeSetLinearSolver(mem, dense.solver, dense.matrix);
+  if (flag == CV_SUCCESS && ode->num_constraints() > 0)
+    flag = CVodeSetProjFn(mem, &Impl::Projection);
+  return flag;
+}
+
+int CvodeProjectionIntegrator::Impl::Configure(
+    int flag, double t0, double t1, const Eigen::Ref<const VectorXd>& y0,
+    const IntegratorOptions& options) {
+  // dF/dy: the problem's own if it has one (probed once per size), else
+  // CVODE's difference quotients.
+  if (flag == CV_SUCCESS && !jac_fn_set) {
+    Eigen::MatrixXd probe(n, n);
+    if (ode->RhsJacobian(t0, y0, probe)) {
+      flag = CVodeSetJacFn(mem, &Impl::Jacobian);
+      ++result->jacobian_evaluations;
+    }
+    jac_fn_set = true;
+  }
+  if (flag == CV_SUCCESS)
+    flag = CVodeSStolerances(mem, options.rtol, options.atol);
+  static constexpr sundials_internal::StepControlSetters kSetters = {
+      &CVodeSetMaxNumSteps,  &CVodeSetMinStep,        &CVodeSetInitStep,
+      &CVodeSetStopTime,     &CVodeSetMaxOrd,         &CVodeSetMaxNonlinIters,
+      &CVodeSetMaxConvFails, &CVodeSetMaxErrTestFails};
+  flag = sundials_internal::ApplyStepControls(
+      kSetters, mem, options, t1,
+      {max_order, max_nonlin_iters, max_conv_fails, max_err_test_fails}, flag);
+  if (flag == CV_SUCCESS && ode->num_constraints() > 0) {
+    flag = CVodeSetProjErrEst(mem, proj_err_est ? SUNTRUE : SUNFALSE);
+    if (flag == CV_SUCCESS) flag = CVodeSetProjFrequency(mem, proj_frequency);
+    if (flag == CV_SUCCESS) flag = CVodeSetMaxNumProjFails(mem, max_proj_fails);
+    if (flag == CV_SUCCESS) flag = CVodeSetProjFailEta(mem, proj_fail_eta);
+  }
+  if (flag == CV_SUCCESS)
+    flag = roots.Register(&CVodeRootInit, mem, ode->num_roots(),
+                          &Impl::RootFunction);
+  return flag;
+}
+
+IntegratorStatus CvodeProjectionIntegrator::Impl::StatusOf(int flag) {
+  switch (flag) {
+    case CV_TOO_MUCH_WORK:
+    case CV_TOO_MUCH_ACC:
+    case CV_ERR_FAILURE:
+      return IntegratorStatus::kStepSizeTooSmall;
+    case CV_PROJFUNC_FAIL:
+    case CV_REPTD_PROJFUNC_ERR:
+      return IntegratorStatus::kConstraintFailure;
+    case CV_RHSFUNC_FAIL:
+    case CV_FIRST_RHSFUNC_ERR:
+    case CV_REPTD_RHSFUNC_ERR:
+    case CV_UNREC_RHSFUNC_ERR:
+      return IntegratorStatus::kRhsFailure;
+    case CV_ILL_INPUT:
+    case CV_MEM_NULL:
+    case CV_NO_MALLOC:
+    case CV_BAD_T:
+    case CV_TOO_CLOSE:
+      return IntegratorStatus::kInvalidInput;
+    default:  // convergence, linear solver, root function failures
+      return IntegratorStatus::kConvergenceFailure;
+  }
+}
+
+void CvodeProjectionIntegrator::Impl::Solve(double t0, double t1,
+                                            Eigen::Ref<VectorXd> y) {
+  double t_ret = t0;
+  const int flag = CVode(mem, t1, yy, &t_ret, CV_NORMAL);
+  long steps = 0, error_test_failures = 0, jac_evals = 0;
+  CVodeGetNumSteps(mem, &steps);
+  CVodeGetNumErrTestFails(mem, &error_test_failures);
+  CVodeGetNumJacEvals(mem, &jac_evals);
+  result->steps += static_cast<int>(steps);
+  result->rejected_steps += static_cast<int>(error_test_failures);
+  if (!jac_fn_set || jac_evals > 0)
+    result->jacobian_evaluations += static_cast<int>(jac_evals);
+  y = Map<VectorXd>(NV_DATA_S(yy), n);
+  result->t_reached = t_ret;
+
+  IntegratorStatus status = IntegratorStatus::kSuccess;
+  if (flag == CV_ROOT_RETURN) {
+    status = IntegratorStatus::kEvent;
+    const int first = roots.FirstFound(&CVodeGetRootInfo, mem);
+    if (first >= 0) result->root_index = first;
+  } else if (flag < 0) {
+    status = StatusOf(flag);
+    // A failing Rhs aborts CVODE through a recoverable error.
+    if (rhs.failed) status = IntegratorStatus::kRhsFailure;
+    result->message = sundials_internal::FailureMessage(
+        FlagName(flag), t_ret, rhs, last_message, errors.last_error);
+  }
+  // The returned state is a projected step state unless CVODE interpolated
+  // (a root): project it so that H holds to the tolerance in every case.
+  if ((status == IntegratorStatus::kSuccess ||
+       status == IntegratorStatus::kEvent) &&
+      !Project(y)) {
+    status = IntegratorStatus::kConstraintFailure;
+    result->message = "final projection: " + last_message;
+  }
+  result->status = status;
+}
 
 void CvodeProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
                                             double t1,
@@ -287,158 +355,21 @@ void CvodeProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
                                             const IntegratorOptions& options,
                                             IntegratorResult* result) {
   Impl& s = *impl_;
-  s.ode = &ode;
-  s.result = result;
-  s.rhs_failed = false;
-  s.last_error.clear();
-  s.last_message.clear();
-  s.Begin(ode);
-  const int n = ode.state_size();
+  s.Begin(ode, result);
   auto fail = [&](IntegratorStatus status, const std::string& message) {
     result->status = status;
     result->t_reached = t0;
     result->message = message;
   };
-
   // Consistent start: project y onto H = 0.
   if (!s.Project(y))
     return fail(IntegratorStatus::kConstraintFailure,
                 "initial state: " + s.last_message);
-
-  int flag = CV_SUCCESS;
-  if (s.mem != nullptr && s.n == n) {
-    Map<VectorXd>(NV_DATA_S(s.yy), n) = y;
-    flag = CVodeReInit(s.mem, t0, s.yy);
-  } else {
-    s.Free();
-    s.yy = N_VNew_Serial(n, s.ctx);
-    s.mat = SUNDenseMatrix(n, n, s.ctx);
-    if (s.yy == nullptr || s.mat == nullptr)
-      throw std::runtime_error("cvode-projection: cannot allocate");
-    s.ls = SUNLinSol_Dense(s.yy, s.mat, s.ctx);
-    s.mem = CVodeCreate(CV_BDF, s.ctx);
-    if (s.ls == nullptr || s.mem == nullptr)
-      throw std::runtime_error("cvode-projection: cannot create CVODE");
-    s.n = n;
-    Map<VectorXd>(NV_DATA_S(s.yy), n) = y;
-    flag = CVodeSetErrHandlerFn(s.mem, &Impl::ErrorHandler, &s);
-    if (flag == CV_SUCCESS) flag = CVodeInit(s.mem, &Impl::Rhs, t0, s.yy);
-    if (flag == CV_SUCCESS) flag = CVodeSetUserData(s.mem, &s);
-    if (flag == CV_SUCCESS) flag = CVodeSetLinearSolver(s.mem, s.ls, s.mat);
-    if (flag == CV_SUCCESS && ode.num_constraints() > 0)
-      flag = CVodeSetProjFn(s.mem, &Impl::Projection);
-  }
-  // dF/dy: the problem's own if it has one (probed once per size), else
-  // CVODE's difference quotients.
-  if (flag == CV_SUCCESS && !s.jac_fn_set) {
-    Eigen::MatrixXd probe(n, n);
-    if (ode.RhsJacobian(t0, y, probe)) {
-      flag = CVodeSetJacFn(s.mem, &Impl::Jacobian);
-      ++result->jacobian_evaluations;
-    }
-    s.jac_fn_set = true;
-  }
-  const int nr = ode.num_roots();
-  if (flag == CV_SUCCESS)
-    flag = CVodeSStolerances(s.mem, options.rtol, options.atol);
-  if (flag == CV_SUCCESS) flag = CVodeSetMaxNumSteps(s.mem, options.max_steps);
-  if (flag == CV_SUCCESS) flag = CVodeSetMinStep(s.mem, options.min_step);
-  if (flag == CV_SUCCESS) flag = CVodeSetInitStep(s.mem, options.step);
-  if (flag == CV_SUCCESS) flag = CVodeSetStopTime(s.mem, t1);
-  if (flag == CV_SUCCESS) flag = CVodeSetMaxOrd(s.mem, s.max_order);
-  if (flag == CV_SUCCESS)
-    flag = CVodeSetMaxNonlinIters(s.mem, s.max_nonlin_iters);
-  if (flag == CV_SUCCESS) flag = CVodeSetMaxConvFails(s.mem, s.max_conv_fails);
-  if (flag == CV_SUCCESS)
-    flag = CVodeSetMaxErrTestFails(s.mem, s.max_err_test_fails);
-  if (flag == CV_SUCCESS && ode.num_constraints() > 0) {
-    flag = CVodeSetProjErrEst(s.mem, s.proj_err_est ? SUNTRUE : SUNFALSE);
-    if (flag == CV_SUCCESS)
-      flag = CVodeSetProjFrequency(s.mem, s.proj_frequency);
-    if (flag == CV_SUCCESS)
-      flag = CVodeSetMaxNumProjFails(s.mem, s.max_proj_fails);
-    if (flag == CV_SUCCESS) flag = CVodeSetProjFailEta(s.mem, s.proj_fail_eta);
-  }
-  if (flag == CV_SUCCESS && nr != s.registered_roots) {
-    flag = CVodeRootInit(s.mem, nr, nr > 0 ? &Impl::RootFunction : nullptr);
-    s.registered_roots = nr;
-    s.roots_found.resize(static_cast<std::size_t>(nr));
-  }
+  const int flag = s.Configure(s.CreateOrReInit(t0, y), t0, t1, y, options);
   if (flag != CV_SUCCESS)
     return fail(IntegratorStatus::kInvalidInput,
-                "cvode setup: " + FlagName(flag) + " " + s.last_error);
-
-  // --- integrate ---
-  double t_ret = t0;
-  flag = CVode(s.mem, t1, s.yy, &t_ret, CV_NORMAL);
-  long steps = 0, error_test_failures = 0, jac_evals = 0;
-  CVodeGetNumSteps(s.mem, &steps);
-  CVodeGetNumErrTestFails(s.mem, &error_test_failures);
-  CVodeGetNumJacEvals(s.mem, &jac_evals);
-  result->steps += static_cast<int>(steps);
-  result->rejected_steps += static_cast<int>(error_test_failures);
-  if (!s.jac_fn_set || jac_evals > 0)
-    result->jacobian_evaluations += static_cast<int>(jac_evals);
-  y = Map<VectorXd>(NV_DATA_S(s.yy), n);
-  result->t_reached = t_ret;
-
-  IntegratorStatus status = IntegratorStatus::kSuccess;
-  if (flag == CV_ROOT_RETURN) {
-    status = IntegratorStatus::kEvent;
-    CVodeGetRootInfo(s.mem, s.roots_found.data());
-    for (int i = 0; i < nr; ++i) {
-      if (s.roots_found[static_cast<std::size_t>(i)] != 0) {
-        result->root_index = i;
-        break;
-      }
-    }
-  } else if (flag < 0) {
-    switch (flag) {
-      case CV_TOO_MUCH_WORK:
-      case CV_TOO_MUCH_ACC:
-      case CV_ERR_FAILURE:
-        status = IntegratorStatus::kStepSizeTooSmall;
-        break;
-      case CV_PROJFUNC_FAIL:
-      case CV_REPTD_PROJFUNC_ERR:
-        status = IntegratorStatus::kConstraintFailure;
-        break;
-      case CV_RHSFUNC_FAIL:
-      case CV_FIRST_RHSFUNC_ERR:
-      case CV_REPTD_RHSFUNC_ERR:
-      case CV_UNREC_RHSFUNC_ERR:
-        status = IntegratorStatus::kRhsFailure;
-        break;
-      case CV_ILL_INPUT:
-      case CV_MEM_NULL:
-      case CV_NO_MALLOC:
-      case CV_BAD_T:
-      case CV_TOO_CLOSE:
-        status = IntegratorStatus::kInvalidInput;
-        break;
-      default:  // convergence, linear solver, root function failures
-        status = IntegratorStatus::kConvergenceFailure;
-        break;
-    }
-    // A failing Rhs aborts CVODE through a recoverable error.
-    if (s.rhs_failed) status = IntegratorStatus::kRhsFailure;
-    std::ostringstream os;
-    os << FlagName(flag) << " at t = " << t_ret;
-    if (s.rhs_failed)
-      os << " (Rhs returned false at t = " << s.rhs_failure_time << ")";
-    if (!s.last_message.empty()) os << " (" << s.last_message << ")";
-    if (!s.last_error.empty()) os << ": " << s.last_error;
-    result->message = os.str();
-  }
-  // The returned state is a projected step state unless CVODE interpolated
-  // (a root): project it so that H holds to the tolerance in every case.
-  if ((status == IntegratorStatus::kSuccess ||
-       status == IntegratorStatus::kEvent) &&
-      !s.Project(y)) {
-    status = IntegratorStatus::kConstraintFailure;
-    result->message = "final projection: " + s.last_message;
-  }
-  result->status = status;
+                "cvode setup: " + FlagName(flag) + " " + s.errors.last_error);
+  s.Solve(t0, t1, y);
 }
 
 }  // namespace quasiroll

@@ -1,19 +1,15 @@
 #include "quasiroll/integrators/ida_integrator.h"
 
 #include <ida/ida.h>
-#include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunmatrix/sunmatrix_dense.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
 
-#include "quasiroll/integrators/constraint_correction.h"
+#include "quasiroll/core/weighted_projection.h"
+#include "quasiroll/integrators/sundials_support_internal.h"
 
 namespace quasiroll {
 
@@ -22,29 +18,18 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 struct IdaIntegrator::Impl {
-  Impl() {
-    if (SUNContext_Create(nullptr, &ctx) != 0 || ctx == nullptr)
-      throw std::runtime_error("ida: SUNContext_Create failed");
-  }
-  ~Impl() {
-    Free();
-    if (ctx != nullptr) SUNContext_Free(&ctx);
-  }
+  Impl() : context("ida") {}
+  ~Impl() { Free(); }
   Impl(const Impl&) = delete;
   Impl& operator=(const Impl&) = delete;
 
   void Free() {
     if (mem != nullptr) IDAFree(&mem);
-    if (ls != nullptr) SUNLinSolFree(ls);
-    if (mat != nullptr) SUNMatDestroy(mat);
+    dense.Free();
     for (N_Vector* v : {&yy, &yp, &id, &atol})
-      if (*v != nullptr) N_VDestroy(*v);
-    mem = nullptr;
-    ls = nullptr;
-    mat = nullptr;
-    yy = yp = id = atol = nullptr;
+      sundials_internal::DestroyVector(v);
     n = m = -1;
-    registered_roots = 0;
+    roots.registered = 0;
   }
 
   // Creates (or re-initialises, when the sizes are unchanged) the IDA memory
@@ -58,31 +43,22 @@ struct IdaIntegrator::Impl {
                       N_Vector tmp1, N_Vector tmp2, N_Vector tmp3);
   static int RootFunction(double t, N_Vector yy, N_Vector yp, double* gout,
                           void* user_data);
-  static void ErrorHandler(int error_code, const char* module,
-                           const char* function, char* msg, void* user_data);
 
-  // rhs_failed tracks the latest Rhs / Residual call only: IDA recovers from
-  // a failure at a trial point (see Residual), so an earlier failure must not
-  // label a later, unrelated IDA failure as kRhsFailure.
+  // Rhs / Residual calls are tracked (sundials_internal::RhsTracker): IDA
+  // recovers from a failure at a trial point (see Residual).
   bool CallRhs(double t, const Eigen::Ref<const VectorXd>& x,
                Eigen::Ref<VectorXd> f) {
-    ++result->rhs_evaluations;
-    return Track(t, ode->Rhs(t, x, f));
+    return rhs.Call(*ode, t, x, f, result);
   }
-  bool Track(double t, bool ok) {
-    rhs_failed = !ok;
-    if (!ok) rhs_failure_time = t;
-    return ok;
-  }
+  bool Track(double t, bool ok) { return rhs.Track(t, ok); }
 
   // SUNDIALS objects.
-  SUNContext ctx = nullptr;
+  sundials_internal::Context context;
   void* mem = nullptr;
   N_Vector yy = nullptr, yp = nullptr, id = nullptr, atol = nullptr;
-  SUNMatrix mat = nullptr;
-  SUNLinearSolver ls = nullptr;
+  sundials_internal::DenseLinearSolver dense;
   int n = -1, m = -1;
-  int registered_roots = 0;
+  sundials_internal::RootSlots roots;
 
   // Backend options (option_table()).
   struct Settings {
@@ -105,15 +81,13 @@ struct IdaIntegrator::Impl {
   double sigma = 0.0;
   bool residual_form = false;  // ode supplies F(t, y, y') itself
   VectorXd r0, r_pert, yp_pert;
-  bool rhs_failed = false;
-  double rhs_failure_time = 0.0;
-  std::string last_error;
+  sundials_internal::RhsTracker rhs;
+  sundials_internal::ErrorLog errors{IDA_WARNING};
 
   // Workspaces (resized only when sizes change).
-  integrators_internal::ConstraintCorrection correction;
+  WeightedProjection correction;
   VectorXd f, f_pert, x_pert, jt_nu, h;
   MatrixXd jac, dfdx;
-  std::vector<int> roots_found;
 };
 
 int IdaIntegrator::Impl::Prepare(int n_new, int m_new, double t0) {
@@ -125,17 +99,18 @@ int IdaIntegrator::Impl::Prepare(int n_new, int m_new, double t0) {
   std::vector<double> yp0(NV_DATA_S(yp), NV_DATA_S(yp) + NV_LENGTH_S(yp));
   Free();
   const sunindextype size = n_new + m_new;
+  SUNContext ctx = context.get();
   yy = N_VNew_Serial(size, ctx);
   yp = N_VNew_Serial(size, ctx);
   id = N_VNew_Serial(size, ctx);
   atol = N_VNew_Serial(size, ctx);
-  mat = SUNDenseMatrix(size, size, ctx);
+  const bool matrix_created = dense.CreateMatrix(size, ctx);
   if (yy == nullptr || yp == nullptr || id == nullptr || atol == nullptr ||
-      mat == nullptr)
+      !matrix_created)
     throw std::runtime_error("ida: cannot allocate vectors / matrix");
-  ls = SUNLinSol_Dense(yy, mat, ctx);
+  const bool solver_created = dense.CreateSolver(yy, ctx);
   mem = IDACreate(ctx);
-  if (ls == nullptr || mem == nullptr)
+  if (!solver_created || mem == nullptr)
     throw std::runtime_error("ida: cannot create linear solver / IDA memory");
   std::copy(y0.begin(), y0.end(), NV_DATA_S(yy));
   std::copy(yp0.begin(), yp0.end(), NV_DATA_S(yp));
@@ -143,10 +118,12 @@ int IdaIntegrator::Impl::Prepare(int n_new, int m_new, double t0) {
     NV_Ith_S(id, i) = i < n_new ? 1.0 : 0.0;  // 1 differential, 0 algebraic
   n = n_new;
   m = m_new;
-  int flag = IDASetErrHandlerFn(mem, &Impl::ErrorHandler, this);
+  int flag =
+      IDASetErrHandlerFn(mem, &sundials_internal::ErrorLog::Handler, &errors);
   if (flag == IDA_SUCCESS) flag = IDAInit(mem, &Impl::Residual, t0, yy, yp);
   if (flag == IDA_SUCCESS) flag = IDASetUserData(mem, this);
-  if (flag == IDA_SUCCESS) flag = IDASetLinearSolver(mem, ls, mat);
+  if (flag == IDA_SUCCESS)
+    flag = IDASetLinearSolver(mem, dense.solver, dense.matrix);
   if (flag == IDA_SUCCESS) flag = IDASetJacFn(mem, &Impl::Jacobian);
   if (flag == IDA_SUCCESS) flag = IDASetId(mem, id);
   if (flag == IDA_SUCCESS) flag = IDASetSuppressAlg(mem, SUNTRUE);
@@ -263,17 +240,9 @@ int IdaIntegrator::Impl::RootFunction(double t, N_Vector yy, N_Vector /*yp*/,
                                       double* gout, void* user_data) {
   Impl& s = *static_cast<Impl*>(user_data);
   Map<const VectorXd> x(NV_DATA_S(yy), s.n);
-  Map<VectorXd> g(gout, s.registered_roots);
+  Map<VectorXd> g(gout, s.roots.registered);
   s.ode->Roots(t, x, g);
   return 0;
-}
-
-void IdaIntegrator::Impl::ErrorHandler(int error_code, const char* module,
-                                       const char* function, char* msg,
-                                       void* user_data) {
-  Impl& s = *static_cast<Impl*>(user_data);
-  if (error_code == IDA_WARNING) return;  // e.g. "t + h = t": not a failure
-  s.last_error = std::string(module) + "::" + function + ": " + msg;
 }
 
 IdaIntegrator::IdaIntegrator() : impl_(std::make_unique<Impl>()) {}
@@ -336,10 +305,7 @@ IdaIntegrator::~IdaIntegrator() = default;
 namespace {
 
 std::string FlagName(int flag) {
-  char* name = IDAGetReturnFlagName(flag);
-  std::string out = name != nullptr ? name : "IDA flag " + std::to_string(flag);
-  std::free(name);
-  return out;
+  return sundials_internal::FlagName(IDAGetReturnFlagName(flag), "IDA", flag);
 }
 
 }  // namespace
@@ -351,7 +317,6 @@ void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
                            const IntegratorOptions& /*options*/,
                            IntegratorResult* result) {
   const int n = s.n, m = s.m;
-  const int nr = s.registered_roots;
   bool moved = false;
   Map<VectorXd> yy_now(NV_DATA_S(s.yy), n + m);
   // --- integrate ---
@@ -369,13 +334,8 @@ void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
   IntegratorStatus status = IntegratorStatus::kSuccess;
   if (flag == IDA_ROOT_RETURN) {
     status = IntegratorStatus::kEvent;
-    IDAGetRootInfo(s.mem, s.roots_found.data());
-    for (int i = 0; i < nr; ++i) {
-      if (s.roots_found[i] != 0) {
-        result->root_index = i;
-        break;
-      }
-    }
+    const int first = s.roots.FirstFound(&IDAGetRootInfo, s.mem);
+    if (first >= 0) result->root_index = first;
   } else if (flag < 0) {
     switch (flag) {
       case IDA_TOO_MUCH_WORK:  // max_steps reached
@@ -403,13 +363,9 @@ void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
         break;
     }
     // A failing Rhs aborts IDA through the residual / Jacobian callbacks.
-    if (s.rhs_failed) status = IntegratorStatus::kRhsFailure;
-    std::ostringstream os;
-    os << FlagName(flag) << " at t = " << t_ret;
-    if (s.rhs_failed)
-      os << " (Rhs returned false at t = " << s.rhs_failure_time << ")";
-    if (!s.last_error.empty()) os << ": " << s.last_error;
-    result->message = os.str();
+    if (s.rhs.failed) status = IntegratorStatus::kRhsFailure;
+    result->message = sundials_internal::FailureMessage(
+        FlagName(flag), t_ret, s.rhs, "", s.errors.last_error);
   }
 
   // --- polish: IDA enforces H = 0 only to its Newton tolerance ---
@@ -421,10 +377,49 @@ void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
         s.settings.max_projection_iterations, result, &moved);
     if (projected != IntegratorStatus::kSuccess) {
       status = projected;
-      result->message = "final projection: " + result->message;
+      result->message = "final projection: " + s.correction.message();
     }
   }
   result->status = status;
+}
+
+// The residual form F(t, y, y') = 0 of the problem itself: y' from
+// ConsistentDerivative, differential ids from the problem, atol on all of y.
+void IdaIntegrator::IntegrateResidualForm(Impl& s, ConstrainedOde& ode,
+                                          double t0, double t1,
+                                          Eigen::Ref<Eigen::VectorXd> y,
+                                          const IntegratorOptions& options,
+                                          IntegratorResult* result) {
+  const int n = ode.state_size();
+  if (s.r0.size() != n) {
+    s.r0.resize(n);
+    s.r_pert.resize(n);
+    s.yp_pert.resize(n);
+  }
+  if (s.yy == nullptr || NV_LENGTH_S(s.yy) != n) {
+    s.Free();
+    s.yy = N_VNew_Serial(n, s.context.get());
+    s.yp = N_VNew_Serial(n, s.context.get());
+    if (s.yy == nullptr || s.yp == nullptr)
+      throw std::runtime_error("ida: cannot allocate vectors");
+  }
+  Map<VectorXd> yy0(NV_DATA_S(s.yy), n), yp0(NV_DATA_S(s.yp), n);
+  yy0 = y;
+  if (!ode.ConsistentDerivative(t0, y, yp0)) {
+    result->status = IntegratorStatus::kInvalidInput;
+    result->t_reached = t0;
+    result->message = "residual form: ConsistentDerivative() gave no y' at t0";
+    return;
+  }
+  int flag = s.Prepare(n, 0, t0);
+  if (flag == IDA_SUCCESS) {
+    VectorXd ids(n);
+    ode.DifferentialIds(ids);
+    for (int i = 0; i < n; ++i) NV_Ith_S(s.id, i) = ids(i) != 0 ? 1.0 : 0.0;
+    flag = IDASetId(s.mem, s.id);
+  }
+  for (int i = 0; i < n; ++i) NV_Ith_S(s.atol, i) = options.atol;
+  ConfigureAndSolve(s, ode, flag, t0, t1, y, options, result);
 }
 
 void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
@@ -440,8 +435,8 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
   s.result = result;
   s.dae_index = s.settings.dae_index;
   s.sigma = s.settings.sigma;
-  s.rhs_failed = false;
-  s.last_error.clear();
+  s.rhs.Reset();
+  s.errors.last_error.clear();
   s.correction.Begin(ode);
   if (s.f.size() != n) {
     s.f.resize(n);
@@ -460,43 +455,17 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
     result->message = message;
   };
 
+  if (s.residual_form)
+    return IntegrateResidualForm(s, ode, t0, t1, y, options, result);
+
   // --- consistent initial values (x, nu, x') ---
   bool moved = false;
-  if (s.residual_form) {
-    if (s.r0.size() != n) {
-      s.r0.resize(n);
-      s.r_pert.resize(n);
-      s.yp_pert.resize(n);
-    }
-    if (s.yy == nullptr || NV_LENGTH_S(s.yy) != n) {
-      s.Free();
-      s.yy = N_VNew_Serial(n, s.ctx);
-      s.yp = N_VNew_Serial(n, s.ctx);
-      if (s.yy == nullptr || s.yp == nullptr)
-        throw std::runtime_error("ida: cannot allocate vectors");
-    }
-    Map<VectorXd> yy0(NV_DATA_S(s.yy), n), yp0(NV_DATA_S(s.yp), n);
-    yy0 = y;
-    if (!ode.ConsistentDerivative(t0, y, yp0))
-      return fail(IntegratorStatus::kInvalidInput,
-                  "residual form: ConsistentDerivative() gave no y' at t0");
-    int flag = s.Prepare(n, 0, t0);
-    if (flag == IDA_SUCCESS) {
-      VectorXd ids(n);
-      ode.DifferentialIds(ids);
-      for (int i = 0; i < n; ++i) NV_Ith_S(s.id, i) = ids(i) != 0 ? 1.0 : 0.0;
-      flag = IDASetId(s.mem, s.id);
-    }
-    for (int i = 0; i < n; ++i) NV_Ith_S(s.atol, i) = options.atol;
-    ConfigureAndSolve(s, ode, flag, t0, t1, y, options, result);
-    return;
-  }
   if (s.settings.dae_index == 2 && m > 0) {
     const IntegratorStatus status = s.correction.Project(
         ode, y, s.settings.projection_tolerance,
         s.settings.max_projection_iterations, result, &moved);
     if (status != IntegratorStatus::kSuccess)
-      return fail(status, "initial state: " + result->message);
+      return fail(status, "initial state: " + s.correction.message());
   }
   if (!s.CallRhs(t0, y, s.f)) {
     std::ostringstream os;
@@ -506,8 +475,8 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
   if (s.yy == nullptr || NV_LENGTH_S(s.yy) != n + m) {
     // Temporary holders so that Prepare() can copy the initial values.
     s.Free();
-    s.yy = N_VNew_Serial(n + m, s.ctx);
-    s.yp = N_VNew_Serial(n + m, s.ctx);
+    s.yy = N_VNew_Serial(n + m, s.context.get());
+    s.yp = N_VNew_Serial(n + m, s.context.get());
     if (s.yy == nullptr || s.yp == nullptr)
       throw std::runtime_error("ida: cannot allocate vectors");
   }
@@ -518,7 +487,7 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
   if (m > 0) {
     if (!s.correction.Factorize(ode, y, result))
       return fail(IntegratorStatus::kConstraintFailure,
-                  "initial multipliers: " + result->message);
+                  "initial multipliers: " + s.correction.message());
     s.correction.r().noalias() = s.correction.jacobian() * s.f;
     if (s.settings.dae_index == 1) {
       ode.Constraints(y, s.h);
@@ -556,31 +525,27 @@ void IdaIntegrator::ConfigureAndSolve(Impl& s, ConstrainedOde& ode, int flag,
                                       Eigen::Ref<Eigen::VectorXd> y,
                                       const IntegratorOptions& options,
                                       IntegratorResult* result) {
-  const int nr = ode.num_roots();
   if (flag == IDA_SUCCESS) flag = IDASVtolerances(s.mem, options.rtol, s.atol);
-  if (flag == IDA_SUCCESS) flag = IDASetMaxNumSteps(s.mem, options.max_steps);
-  if (flag == IDA_SUCCESS) flag = IDASetMinStep(s.mem, options.min_step);
-  if (flag == IDA_SUCCESS) flag = IDASetInitStep(s.mem, options.step);
-  if (flag == IDA_SUCCESS) flag = IDASetStopTime(s.mem, t1);
-  if (flag == IDA_SUCCESS) flag = IDASetMaxOrd(s.mem, s.settings.max_order);
-  if (flag == IDA_SUCCESS)
-    flag = IDASetMaxNonlinIters(s.mem, s.settings.max_nonlin_iters);
-  if (flag == IDA_SUCCESS)
-    flag = IDASetMaxConvFails(s.mem, s.settings.max_conv_fails);
-  if (flag == IDA_SUCCESS)
-    flag = IDASetMaxErrTestFails(s.mem, s.settings.max_err_test_fails);
+  static constexpr sundials_internal::StepControlSetters kSetters = {
+      &IDASetMaxNumSteps,  &IDASetMinStep,        &IDASetInitStep,
+      &IDASetStopTime,     &IDASetMaxOrd,         &IDASetMaxNonlinIters,
+      &IDASetMaxConvFails, &IDASetMaxErrTestFails};
+  flag = sundials_internal::ApplyStepControls(
+      kSetters, s.mem, options, t1,
+      {s.settings.max_order, s.settings.max_nonlin_iters,
+       s.settings.max_conv_fails, s.settings.max_err_test_fails},
+      flag);
   if (flag == IDA_SUCCESS && !s.residual_form)
     flag =
         IDASetSuppressAlg(s.mem, s.settings.suppress_alg ? SUNTRUE : SUNFALSE);
-  if (flag == IDA_SUCCESS && nr != s.registered_roots) {
-    flag = IDARootInit(s.mem, nr, nr > 0 ? &Impl::RootFunction : nullptr);
-    s.registered_roots = nr;
-    s.roots_found.resize(nr);
-  }
+  if (flag == IDA_SUCCESS)
+    flag = s.roots.Register(&IDARootInit, s.mem, ode.num_roots(),
+                            &Impl::RootFunction);
   if (flag != IDA_SUCCESS) {
     result->status = IntegratorStatus::kInvalidInput;
     result->t_reached = t0;
-    result->message = "ida setup: " + FlagName(flag) + " " + s.last_error;
+    result->message =
+        "ida setup: " + FlagName(flag) + " " + s.errors.last_error;
     return;
   }
   Finish(s, ode, t1, y, options, result);

@@ -70,6 +70,10 @@ class IdaIntegrator final : public Integrator {
                                 Eigen::Ref<Eigen::VectorXd> y,
                                 const IntegratorOptions& options,
                                 IntegratorResult* result);
+  static void IntegrateResidualForm(Impl& s, ConstrainedOde& ode, double t0,
+                                    double t1, Eigen::Ref<Eigen::VectorXd> y,
+                                    const IntegratorOptions& options,
+                                    IntegratorResult* result);
   static void Finish(Impl& s, ConstrainedOde& ode, double t1,
                      Eigen::Ref<Eigen::VectorXd> y,
                      const IntegratorOptions& options,

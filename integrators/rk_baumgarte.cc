@@ -10,8 +10,10 @@ IntegratorStatus RkBaumgarteIntegrator::CorrectedField::Field(
   if (status != IntegratorStatus::kSuccess) return status;
   if (correction.m() == 0) return IntegratorStatus::kSuccess;
   ode->Constraints(y, correction.h());
-  if (!correction.Factorize(*ode, y, result))
+  if (!correction.Factorize(*ode, y, result)) {
+    result->message = correction.message();
     return IntegratorStatus::kConstraintFailure;
+  }
   // r = J F + sigma H;  f <- F - D J^T (J D J^T)^{-1} r
   correction.r().noalias() = correction.jacobian() * f;
   correction.r() += sigma * correction.h();

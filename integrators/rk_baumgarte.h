@@ -14,7 +14,7 @@
 #include <string>
 
 #include "quasiroll/core/dae.h"
-#include "quasiroll/integrators/constraint_correction.h"
+#include "quasiroll/core/weighted_projection.h"
 #include "quasiroll/integrators/runge_kutta.h"
 
 namespace quasiroll {
@@ -34,7 +34,7 @@ class RkBaumgarteIntegrator final : public Integrator {
                            IntegratorResult* result) override;
     ConstrainedOde* ode = nullptr;
     double sigma = 0.0;
-    integrators_internal::ConstraintCorrection correction;
+    WeightedProjection correction;
     Eigen::VectorXd delta;
   };
 

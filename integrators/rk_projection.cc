@@ -11,7 +11,11 @@ IntegratorStatus RkProjectionIntegrator::System::Field(
 IntegratorStatus RkProjectionIntegrator::System::PostStep(
     double /*t*/, Eigen::Ref<Eigen::VectorXd> y, IntegratorResult* result,
     bool* moved) {
-  return correction.Project(*ode, y, tolerance, max_iterations, result, moved);
+  const IntegratorStatus status =
+      correction.Project(*ode, y, tolerance, max_iterations, result, moved);
+  if (status != IntegratorStatus::kSuccess)
+    result->message = correction.message();
+  return status;
 }
 
 OptionTable RkProjectionIntegrator::option_table() const {

@@ -20,7 +20,7 @@
 #include <string>
 
 #include "quasiroll/core/dae.h"
-#include "quasiroll/integrators/constraint_correction.h"
+#include "quasiroll/core/weighted_projection.h"
 #include "quasiroll/integrators/runge_kutta.h"
 
 namespace quasiroll {
@@ -43,7 +43,7 @@ class RkProjectionIntegrator final : public Integrator {
     ConstrainedOde* ode = nullptr;
     double tolerance = 0.0;
     int max_iterations = 0;
-    integrators_internal::ConstraintCorrection correction;
+    WeightedProjection correction;
   };
 
   void DoIntegrate(ConstrainedOde& ode, double t0, double t1,

@@ -253,9 +253,7 @@ IntegratorStatus RungeKuttaDriver::LocateRoot(
     status = system.PostStep(t + theta * h, y_new_, result, &moved);
     if (status != IntegratorStatus::kSuccess) return status;
     ode.Roots(t + theta * h, y_new_, g_trial_);
-    bool fired = false;
-    for (int i = 0; i < nr && !fired; ++i) fired = Fired(i, g_trial_);
-    if (fired) {
+    if (AnyFired(g_trial_)) {
       hi = theta;
       g_hi_ = g_trial_;
       y_hi_ = y_new_;
@@ -313,6 +311,137 @@ double RungeKuttaDriver::InitialStep(RkSystem& system,
   return std::min({100.0 * h0, h1, span});
 }
 
+bool RungeKuttaDriver::PlanSteps(const ButcherTableau& tab,
+                                 const IntegratorOptions& options, RunState* s,
+                                 IntegratorResult* result) const {
+  s->adaptive = tab.embedded_order > 0;
+  s->fixed_steps = 1;
+  s->h = s->span;
+  if (!s->adaptive) {
+    if (options.step > 0.0 && options.step < s->span) {
+      // Relative slack so that e.g. 0.05 / 0.01 = 5.000000000000001 gives 5.
+      const double ratio = s->span / options.step * (1.0 - 1e-10);
+      if (ratio >= static_cast<double>(options.max_steps)) {
+        std::ostringstream os;
+        os << "RK4 needs " << std::ceil(ratio) << " steps of " << options.step
+           << " > max_steps = " << options.max_steps;
+        result->message = os.str();
+        return false;
+      }
+      s->fixed_steps = std::max(1, static_cast<int>(std::ceil(ratio)));
+    }
+  } else if (options.step > 0.0) {
+    s->h = std::min(options.step, s->span);
+  }
+  s->exponent =
+      s->adaptive ? -1.0 / (std::min(tab.order, tab.embedded_order) + 1) : 0.0;
+  return true;
+}
+
+bool RungeKuttaDriver::NextTrial(const IntegratorOptions& options,
+                                 const RunState& s, double* t_new,
+                                 double* h_try,
+                                 IntegratorResult* result) const {
+  if (!s.adaptive) {
+    *t_new = s.accepted + 1 == s.fixed_steps
+                 ? s.t1
+                 : s.t0 + (s.accepted + 1) * options.step;
+    *h_try = *t_new - s.t;
+    return true;
+  }
+  if (s.accepted >= options.max_steps) {
+    std::ostringstream os;
+    os << "max_steps = " << options.max_steps << " reached at t = " << s.t;
+    result->message = os.str();
+    return false;
+  }
+  if (s.h < options.min_step && s.h < s.t1 - s.t) {
+    std::ostringstream os;
+    os << "step size " << s.h << " < min_step = " << options.min_step
+       << " at t = " << s.t;
+    result->message = os.str();
+    return false;
+  }
+  if (s.h >= s.t1 - s.t) {
+    *h_try = s.t1 - s.t;
+    *t_new = s.t1;
+  } else {
+    *h_try = s.h;
+    *t_new = s.t + s.h;
+  }
+  return true;
+}
+
+bool RungeKuttaDriver::RetrySmaller(double h_try, IntegratorStatus failure,
+                                    const IntegratorOptions& options,
+                                    const RkSettings& settings, RunState* s,
+                                    IntegratorResult* result) const {
+  if (!s->adaptive || failure != IntegratorStatus::kConstraintFailure)
+    return false;
+  const double h_new = h_try * settings.stage_failure_shrink;
+  if (h_new < options.min_step) {
+    std::ostringstream os;
+    os << result->message
+       << " (step rejected and shrunk below min_step = " << options.min_step
+       << " at t = " << s->t << ")";
+    result->message = os.str();
+    return false;
+  }
+  ++result->rejected_steps;
+  result->message.clear();  // handled: the step is retried
+  s->h = h_new;
+  s->last_rejected = true;
+  return true;
+}
+
+RungeKuttaDriver::ErrorTest RungeKuttaDriver::TestErrorAndAdapt(
+    double h_try, double t_new, const IntegratorOptions& options,
+    const RkSettings& settings, RunState* s, IntegratorResult* result) const {
+  const int n = static_cast<int>(y_.size());
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double scale =
+        options.atol +
+        options.rtol * std::max(std::abs(y_(i)), std::abs(y_new_(i)));
+    const double e = err_(i) / scale;
+    sum += e * e;
+  }
+  const double err = std::sqrt(sum / n);
+  if (!(err <= 1.0)) {
+    ++result->rejected_steps;
+    const double factor =
+        std::isfinite(err)
+            ? std::max(settings.max_shrink,
+                       settings.safety * std::pow(err, s->exponent))
+            : settings.max_shrink;
+    s->h = h_try * factor;
+    s->last_rejected = true;
+    if (s->h < options.min_step) {
+      std::ostringstream os;
+      os << "step size " << s->h << " < min_step = " << options.min_step
+         << " at t = " << s->t << " (error norm " << err << ")";
+      result->message = os.str();
+      return ErrorTest::kStepTooSmall;
+    }
+    return ErrorTest::kRejected;
+  }
+  double factor = err > 0.0
+                      ? std::clamp(settings.safety * std::pow(err, s->exponent),
+                                   settings.max_shrink, settings.max_growth)
+                      : settings.max_growth;
+  if (s->last_rejected) factor = std::min(1.0, factor);
+  s->last_rejected = false;
+  if (t_new != s->t1) s->h = h_try * factor;
+  return ErrorTest::kAccepted;
+}
+
+bool RungeKuttaDriver::AnyFired(const Eigen::VectorXd& g) const {
+  bool fired = false;
+  const int nr = static_cast<int>(g_old_.size());
+  for (int i = 0; i < nr && !fired; ++i) fired = Fired(i, g);
+  return fired;
+}
+
 void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
                            double t1, Eigen::Ref<Eigen::VectorXd> y,
                            const IntegratorOptions& options,
@@ -323,175 +452,78 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
   const int nr = ode.num_roots();
   Resize(n, tab.stages, nr);
   y_ = y;
-  double t = t0;
+  RunState s;
+  s.t0 = t0;
+  s.t1 = t1;
+  s.t = t0;
+  s.span = t1 - t0;
   auto finish = [&](IntegratorStatus status) {
     y = y_;
     result->status = status;
-    result->t_reached = t;
+    result->t_reached = s.t;
   };
+  if (!PlanSteps(tab, options, &s, result))
+    return finish(IntegratorStatus::kStepSizeTooSmall);
 
-  const bool adaptive = tab.embedded_order > 0;
-  int accepted = 0;
-  bool last_rejected = false;
-  const double span = t1 - t0;
-  int fixed_steps = 1;
-  double h = span;
-  if (!adaptive) {
-    if (options.step > 0.0 && options.step < span) {
-      // Relative slack so that e.g. 0.05 / 0.01 = 5.000000000000001 gives 5.
-      const double ratio = span / options.step * (1.0 - 1e-10);
-      if (ratio >= static_cast<double>(options.max_steps)) {
-        std::ostringstream os;
-        os << "RK4 needs " << std::ceil(ratio) << " steps of " << options.step
-           << " > max_steps = " << options.max_steps;
-        result->message = os.str();
-        finish(IntegratorStatus::kStepSizeTooSmall);
-        return;
-      }
-      fixed_steps = std::max(1, static_cast<int>(std::ceil(ratio)));
-    }
-  } else if (options.step > 0.0) {
-    h = std::min(options.step, span);
-  }
-  const double exponent =
-      adaptive ? -1.0 / (std::min(tab.order, tab.embedded_order) + 1) : 0.0;
-
-  if (nr > 0) ode.Roots(t, y_, g_old_);
-  IntegratorStatus status = system.Field(t, y_, k_.col(0), result);
+  if (nr > 0) ode.Roots(s.t, y_, g_old_);
+  IntegratorStatus status = system.Field(s.t, y_, k_.col(0), result);
   if (status != IntegratorStatus::kSuccess) return finish(status);
-  if (adaptive && !(options.step > 0.0))
-    h = InitialStep(system, tab, t0, span, options, result);
-
-  // An adaptive trial step whose correction failed (J D J^T singular at a
-  // stage, a projection that did not converge): reject it and retry smaller.
-  // Returns false when the step would fall below min_step (then the failure
-  // stands).
-  auto retry_smaller = [&](double h_try, IntegratorStatus failure) {
-    if (!adaptive || failure != IntegratorStatus::kConstraintFailure)
-      return false;
-    const double h_new = h_try * settings.stage_failure_shrink;
-    if (h_new < options.min_step) {
-      std::ostringstream os;
-      os << result->message
-         << " (step rejected and shrunk below min_step = " << options.min_step
-         << " at t = " << t << ")";
-      result->message = os.str();
-      return false;
-    }
-    ++result->rejected_steps;
-    result->message.clear();  // handled: the step is retried
-    h = h_new;
-    last_rejected = true;
-    return true;
-  };
+  if (s.adaptive && !(options.step > 0.0))
+    s.h = InitialStep(system, tab, t0, s.span, options, result);
 
   while (true) {
     double t_new = 0.0, h_try = 0.0;
-    if (!adaptive) {
-      t_new =
-          accepted + 1 == fixed_steps ? t1 : t0 + (accepted + 1) * options.step;
-      h_try = t_new - t;
-    } else {
-      if (accepted >= options.max_steps) {
-        std::ostringstream os;
-        os << "max_steps = " << options.max_steps << " reached at t = " << t;
-        result->message = os.str();
-        return finish(IntegratorStatus::kStepSizeTooSmall);
-      }
-      if (h < options.min_step && h < t1 - t) {
-        std::ostringstream os;
-        os << "step size " << h << " < min_step = " << options.min_step
-           << " at t = " << t;
-        result->message = os.str();
-        return finish(IntegratorStatus::kStepSizeTooSmall);
-      }
-      if (h >= t1 - t) {
-        h_try = t1 - t;
-        t_new = t1;
-      } else {
-        h_try = h;
-        t_new = t + h;
-      }
-    }
+    if (!NextTrial(options, s, &t_new, &h_try, result))
+      return finish(IntegratorStatus::kStepSizeTooSmall);
 
-    status = Step(system, tab, t, h_try, result);
+    // A trial step whose correction failed (J D J^T singular at a stage, a
+    // projection that did not converge) is rejected and retried smaller
+    // unless that falls below min_step (then the failure stands).
+    status = Step(system, tab, s.t, h_try, result);
     if (status != IntegratorStatus::kSuccess) {
-      if (retry_smaller(h_try, status)) continue;
+      if (RetrySmaller(h_try, status, options, settings, &s, result)) continue;
       return finish(status);
     }
-
-    if (adaptive) {
-      double sum = 0.0;
-      for (int i = 0; i < n; ++i) {
-        const double scale =
-            options.atol +
-            options.rtol * std::max(std::abs(y_(i)), std::abs(y_new_(i)));
-        const double e = err_(i) / scale;
-        sum += e * e;
-      }
-      const double err = std::sqrt(sum / n);
-      if (!(err <= 1.0)) {
-        ++result->rejected_steps;
-        const double factor =
-            std::isfinite(err)
-                ? std::max(settings.max_shrink,
-                           settings.safety * std::pow(err, exponent))
-                : settings.max_shrink;
-        h = h_try * factor;
-        last_rejected = true;
-        if (h < options.min_step) {
-          std::ostringstream os;
-          os << "step size " << h << " < min_step = " << options.min_step
-             << " at t = " << t << " (error norm " << err << ")";
-          result->message = os.str();
-          return finish(IntegratorStatus::kStepSizeTooSmall);
-        }
-        continue;
-      }
-      double factor =
-          err > 0.0 ? std::clamp(settings.safety * std::pow(err, exponent),
-                                 settings.max_shrink, settings.max_growth)
-                    : settings.max_growth;
-      if (last_rejected) factor = std::min(1.0, factor);
-      last_rejected = false;
-      if (t_new != t1) h = h_try * factor;
+    if (s.adaptive) {
+      const ErrorTest test =
+          TestErrorAndAdapt(h_try, t_new, options, settings, &s, result);
+      if (test == ErrorTest::kRejected) continue;
+      if (test == ErrorTest::kStepTooSmall)
+        return finish(IntegratorStatus::kStepSizeTooSmall);
     }
-
     bool moved = false;
     status = system.PostStep(t_new, y_new_, result, &moved);
     if (status != IntegratorStatus::kSuccess) {
-      if (retry_smaller(h_try, status)) continue;
+      if (RetrySmaller(h_try, status, options, settings, &s, result)) continue;
       return finish(status);
     }
 
     if (nr > 0) {
       ode.Roots(t_new, y_new_, g_new_);
-      bool fired = false;
-      for (int i = 0; i < nr && !fired; ++i) fired = Fired(i, g_new_);
-      if (fired) {
+      if (AnyFired(g_new_)) {
         double t_root = t_new;
         int index = -1;
         status =
-            LocateRoot(system, ode, tab, t, h_try, result, &t_root, &index);
+            LocateRoot(system, ode, tab, s.t, h_try, result, &t_root, &index);
         if (status != IntegratorStatus::kSuccess) return finish(status);
         ++result->steps;
         y_.swap(y_new_);
-        t = t_root >= t_new ? t_new : t_root;
+        s.t = t_root >= t_new ? t_new : t_root;
         result->root_index = index;
         return finish(IntegratorStatus::kEvent);
       }
       g_old_.swap(g_new_);
     }
 
-    ++accepted;
+    ++s.accepted;
     ++result->steps;
     y_.swap(y_new_);
-    t = t_new;
-    if (t == t1) break;
+    s.t = t_new;
+    if (s.t == t1) break;
     if (tab.fsal && !moved) {
       k_.col(0) = k_.col(tab.stages - 1);
     } else {
-      status = system.Field(t, y_, k_.col(0), result);
+      status = system.Field(s.t, y_, k_.col(0), result);
       if (status != IntegratorStatus::kSuccess) return finish(status);
     }
   }

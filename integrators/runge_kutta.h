@@ -113,8 +113,45 @@ class RungeKuttaDriver {
   // Stage 0 must already be in k_.col(0).
   IntegratorStatus Step(RkSystem& system, const ButcherTableau& tab, double t,
                         double h, IntegratorResult* result);
+  // State of one Run(): the interval, the last accepted time and the step
+  // size control.
+  struct RunState {
+    double t0 = 0.0, t1 = 0.0, span = 0.0;
+    double t = 0.0;  // time of y_, the last accepted state
+    double h = 0.0;  // next trial step (adaptive)
+    bool adaptive = false;
+    int fixed_steps = 1;  // RK4: steps over [t0, t1]
+    int accepted = 0;
+    bool last_rejected = false;
+    double exponent = 0.0;  // -1 / (q + 1), q the embedded order
+  };
+  enum class ErrorTest { kAccepted, kRejected, kStepTooSmall };
+
+  // Fixed step count (RK4) or first trial step (embedded pairs, options.step
+  // given). False (message set) when RK4 would need more than max_steps.
+  bool PlanSteps(const ButcherTableau& tab, const IntegratorOptions& options,
+                 RunState* s, IntegratorResult* result) const;
+  // End time and size of the next trial step. False (message set) when
+  // max_steps or min_step stop an adaptive integration.
+  bool NextTrial(const IntegratorOptions& options, const RunState& s,
+                 double* t_new, double* h_try, IntegratorResult* result) const;
+  // A trial step of an adaptive pair whose correction failed with
+  // kConstraintFailure: true if it is rejected and retried with
+  // h_try * stage_failure_shrink; false if the failure stands (another
+  // status, RK4, or the new step below min_step; message extended).
+  bool RetrySmaller(double h_try, IntegratorStatus failure,
+                    const IntegratorOptions& options,
+                    const RkSettings& settings, RunState* s,
+                    IntegratorResult* result) const;
+  // Error test of the embedded pair on err_ and the next step size.
+  ErrorTest TestErrorAndAdapt(double h_try, double t_new,
+                              const IntegratorOptions& options,
+                              const RkSettings& settings, RunState* s,
+                              IntegratorResult* result) const;
   // Sign change of root component i between g_old_ and g.
   bool Fired(int i, const Eigen::VectorXd& g) const;
+  // Whether any root component changed sign between g_old_ and g.
+  bool AnyFired(const Eigen::VectorXd& g) const;
   // Locates the first root in (t, t + h], where y_ is the state at t and the
   // full step fired. Leaves the state at the root in y_new_ and sets *t_root,
   // *index.

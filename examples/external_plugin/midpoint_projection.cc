@@ -1,9 +1,8 @@
 #include "midpoint_projection.h"
 
+#include <algorithm>
 #include <cmath>
-#include <limits>
 #include <sstream>
-#include <stdexcept>
 
 namespace example {
 
@@ -39,34 +38,13 @@ void MidpointProjectionIntegrator::ApplyBackendOptions(
 IntegratorStatus MidpointProjectionIntegrator::Project(
     ConstrainedOde& ode, Eigen::VectorXd& y,
     const IntegratorOptions& /*options*/, IntegratorResult* result) {
-  if (ode.num_constraints() == 0) return IntegratorStatus::kSuccess;
-  for (int it = 0;; ++it) {
-    ode.Constraints(y, h_);
-    const double violation = h_.lpNorm<Eigen::Infinity>();
-    if (violation <= projection_tolerance_) return IntegratorStatus::kSuccess;
-    if (!std::isfinite(violation) || it == max_projection_iterations_) {
-      std::ostringstream os;
-      os << "projection: ||H||_inf = " << violation << " after " << it
-         << " iterations";
-      result->message = os.str();
-      return IntegratorStatus::kConstraintFailure;
-    }
-    ode.ConstraintJacobian(y, jac_);
-    ++result->jacobian_evaluations;
-    jd_.noalias() = jac_ * d_.asDiagonal();
-    a_.noalias() = jd_ * jac_.transpose();
-    ldlt_.compute(a_);
-    const auto pivots = ldlt_.vectorD();
-    if (ldlt_.info() != Eigen::Success || !a_.allFinite() ||
-        !(pivots.minCoeff() >
-          1e3 * std::numeric_limits<double>::epsilon() * pivots.maxCoeff())) {
-      result->message = "projection: J D J^T is singular";
-      return IntegratorStatus::kConstraintFailure;
-    }
-    lambda_ = ldlt_.solve(h_);
-    y.noalias() -= jd_.transpose() * lambda_;
-    ++result->projection_iterations;
-  }
+  bool moved = false;
+  const IntegratorStatus status =
+      projection_.Project(ode, y, projection_tolerance_,
+                          max_projection_iterations_, result, &moved);
+  if (status != IntegratorStatus::kSuccess)
+    result->message = projection_.message();
+  return status;
 }
 
 IntegratorStatus MidpointProjectionIntegrator::Step(
@@ -104,23 +82,12 @@ void MidpointProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
                                                Eigen::Ref<Eigen::VectorXd> y,
                                                const IntegratorOptions& options,
                                                IntegratorResult* result) {
-  const int n = ode.state_size(), m = ode.num_constraints(),
-            nr = ode.num_roots();
-  for (Eigen::VectorXd* v : {&d_, &y0_, &y1_, &y_mid_, &y_hi_, &k_})
-    v->resize(n);
-  h_.resize(m);
-  lambda_.resize(m);
-  jac_.resize(m, n);
-  jd_.resize(m, n);
-  a_.resize(m, m);
+  const int n = ode.state_size(), nr = ode.num_roots();
+  for (Eigen::VectorXd* v : {&y0_, &y1_, &y_mid_, &y_hi_, &k_}) v->resize(n);
   g_old_.resize(nr);
   g_new_.resize(nr);
-  d_.setOnes();
-  ode.CorrectionWeights(d_);
-  for (int i = 0; i < n; ++i)
-    if (!(std::isfinite(d_(i)) && d_(i) >= 0))  // misuse: a broken problem
-      throw std::invalid_argument("CorrectionWeights: d[" + std::to_string(i) +
-                                  "] must be finite and >= 0");
+  // Loads D; throws std::invalid_argument on a broken problem (misuse).
+  projection_.Begin(ode);
 
   auto finish = [&](IntegratorStatus status, double t) {
     result->status = status;

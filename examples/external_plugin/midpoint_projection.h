@@ -4,7 +4,8 @@
 //   y <- y - D J^T (J D J^T)^{-1} H(y)   until ||H||_inf <=
 //   projection_tolerance
 // (at most max_projection_iterations corrections, else kConstraintFailure),
-// using only the public ConstrainedOde interface (core/dae.h).
+// done by the public helper quasiroll::WeightedProjection
+// (core/weighted_projection.h) on the ConstrainedOde interface (core/dae.h).
 //
 // Step: options.step / substeps (step 0 = one step over [t0, t1]); the last
 // step ends exactly on t1; more than max_steps steps -> kStepSizeTooSmall.
@@ -15,11 +16,11 @@
 // from the last accepted state) and y is the (projected) state at the root.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <string>
 
 #include <quasiroll/core/dae.h>
+#include <quasiroll/core/weighted_projection.h>
 
 namespace example {
 
@@ -53,10 +54,9 @@ class MidpointProjectionIntegrator final : public quasiroll::Integrator {
   double projection_tolerance_ = 1e-12;
   int max_projection_iterations_ = 10;
   int substeps_ = 1;
-  Eigen::VectorXd d_, y0_, y1_, y_mid_, y_hi_, k_, h_, lambda_;
+  quasiroll::WeightedProjection projection_;
+  Eigen::VectorXd y0_, y1_, y_mid_, y_hi_, k_;
   Eigen::VectorXd g_old_, g_new_;
-  Eigen::MatrixXd jac_, jd_, a_;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt_;
 };
 
 }  // namespace example

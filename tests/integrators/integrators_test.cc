@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "quasiroll/core/dae.h"
-#include "quasiroll/integrators/constraint_correction.h"
+#include "quasiroll/core/weighted_projection.h"
 #include "quasiroll/integrators/runge_kutta.h"
 #include "tests/integrators/test_problems.h"
 
@@ -530,7 +530,7 @@ TEST_P(AllBackendsTest, RobotSizedProblem) {
     Eigen::VectorXd y = ode.Initial();
     if (integrator.name() == "rk-baumgarte") {
       // Baumgarte does not project: start it consistent, as a simulation does.
-      integrators_internal::ConstraintCorrection correction;
+      WeightedProjection correction;
       correction.Begin(ode);
       IntegratorResult ignored;
       bool moved = false;

@@ -1,13 +1,13 @@
-#include "quasiroll/integrators/constraint_correction.h"
+#include "quasiroll/core/weighted_projection.h"
 
 #include <cmath>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
 
-namespace quasiroll::integrators_internal {
+namespace quasiroll {
 
-void ConstraintCorrection::Begin(const ConstrainedOde& ode) {
+void WeightedProjection::Begin(const ConstrainedOde& ode) {
   const int n = ode.state_size(), m = ode.num_constraints();
   if (n != n_ || m != m_) {
     n_ = n;
@@ -33,9 +33,9 @@ void ConstraintCorrection::Begin(const ConstrainedOde& ode) {
   }
 }
 
-bool ConstraintCorrection::Factorize(const ConstrainedOde& ode,
-                                     const Eigen::Ref<const Eigen::VectorXd>& y,
-                                     IntegratorResult* result) {
+bool WeightedProjection::Factorize(const ConstrainedOde& ode,
+                                   const Eigen::Ref<const Eigen::VectorXd>& y,
+                                   IntegratorResult* result) {
   if (m_ == 0) return true;
   ode.ConstraintJacobian(y, jac_);
   ++result->jacobian_evaluations;
@@ -55,20 +55,20 @@ bool ConstraintCorrection::Factorize(const ConstrainedOde& ode,
   if (!ok) {
     std::ostringstream os;
     os << "J D J^T is singular or not positive definite (m = " << m_ << ")";
-    result->message = os.str();
+    message_ = os.str();
   }
   return ok;
 }
 
-void ConstraintCorrection::SolveMultiplier(
+void WeightedProjection::SolveMultiplier(
     const Eigen::Ref<const Eigen::VectorXd>& r,
     Eigen::Ref<Eigen::VectorXd> lambda) const {
   if (m_ == 0) return;
   lambda = ldlt_.solve(r);
 }
 
-void ConstraintCorrection::Lift(const Eigen::Ref<const Eigen::VectorXd>& lambda,
-                                Eigen::Ref<Eigen::VectorXd> delta) const {
+void WeightedProjection::Lift(const Eigen::Ref<const Eigen::VectorXd>& lambda,
+                              Eigen::Ref<Eigen::VectorXd> delta) const {
   if (m_ == 0) {
     delta.setZero();
     return;
@@ -76,11 +76,11 @@ void ConstraintCorrection::Lift(const Eigen::Ref<const Eigen::VectorXd>& lambda,
   delta.noalias() = jd_.transpose() * lambda;
 }
 
-IntegratorStatus ConstraintCorrection::Project(const ConstrainedOde& ode,
-                                               Eigen::Ref<Eigen::VectorXd> y,
-                                               double tol, int max_iterations,
-                                               IntegratorResult* result,
-                                               bool* moved) {
+IntegratorStatus WeightedProjection::Project(const ConstrainedOde& ode,
+                                             Eigen::Ref<Eigen::VectorXd> y,
+                                             double tol, int max_iterations,
+                                             IntegratorResult* result,
+                                             bool* moved) {
   *moved = false;
   if (m_ == 0) return IntegratorStatus::kSuccess;
   for (int it = 0;; ++it) {
@@ -91,11 +91,11 @@ IntegratorStatus ConstraintCorrection::Project(const ConstrainedOde& ode,
       std::ostringstream os;
       os << "projection: ||H||_inf = " << violation << " > tolerance " << tol
          << " after " << it << " iterations";
-      result->message = os.str();
+      message_ = os.str();
       return IntegratorStatus::kConstraintFailure;
     }
     if (!Factorize(ode, y, result)) {
-      result->message = "projection: " + result->message;
+      message_ = "projection: " + message_;
       return IntegratorStatus::kConstraintFailure;
     }
     lambda_ = ldlt_.solve(h_);
@@ -106,4 +106,4 @@ IntegratorStatus ConstraintCorrection::Project(const ConstrainedOde& ode,
   }
 }
 
-}  // namespace quasiroll::integrators_internal
+}  // namespace quasiroll

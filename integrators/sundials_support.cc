@@ -1,0 +1,90 @@
+#include <cstdlib>
+#include <sstream>
+#include <stdexcept>
+
+#include "quasiroll/integrators/sundials_support_internal.h"
+
+namespace quasiroll::sundials_internal {
+
+Context::Context(const char* backend) {
+  if (SUNContext_Create(nullptr, &ctx_) != 0 || ctx_ == nullptr)
+    throw std::runtime_error(std::string(backend) +
+                             ": SUNContext_Create failed");
+}
+
+Context::~Context() {
+  if (ctx_ != nullptr) SUNContext_Free(&ctx_);
+}
+
+void DestroyVector(N_Vector* v) {
+  if (*v != nullptr) N_VDestroy(*v);
+  *v = nullptr;
+}
+
+bool DenseLinearSolver::CreateMatrix(sunindextype size, SUNContext ctx) {
+  matrix = SUNDenseMatrix(size, size, ctx);
+  return matrix != nullptr;
+}
+
+bool DenseLinearSolver::CreateSolver(N_Vector y, SUNContext ctx) {
+  solver = SUNLinSol_Dense(y, matrix, ctx);
+  return solver != nullptr;
+}
+
+void DenseLinearSolver::Free() {
+  if (solver != nullptr) SUNLinSolFree(solver);
+  if (matrix != nullptr) SUNMatDestroy(matrix);
+  solver = nullptr;
+  matrix = nullptr;
+}
+
+void ErrorLog::Handler(int error_code, const char* module, const char* function,
+                       char* msg, void* eh_data) {
+  ErrorLog& log = *static_cast<ErrorLog*>(eh_data);
+  if (error_code == log.warning_code) return;
+  log.last_error = std::string(module) + "::" + function + ": " + msg;
+}
+
+int RootSlots::FirstFound(int (*get_root_info)(void*, int*), void* mem) {
+  get_root_info(mem, found.data());
+  for (int i = 0; i < registered; ++i)
+    if (found[static_cast<std::size_t>(i)] != 0) return i;
+  return -1;
+}
+
+int ApplyStepControls(const StepControlSetters& set, void* mem,
+                      const IntegratorOptions& options, double t1,
+                      const StepControls& controls, int flag) {
+  if (flag == 0) flag = set.max_num_steps(mem, options.max_steps);
+  if (flag == 0) flag = set.min_step(mem, options.min_step);
+  if (flag == 0) flag = set.init_step(mem, options.step);
+  if (flag == 0) flag = set.stop_time(mem, t1);
+  if (flag == 0) flag = set.max_ord(mem, controls.max_order);
+  if (flag == 0) flag = set.max_nonlin_iters(mem, controls.max_nonlin_iters);
+  if (flag == 0) flag = set.max_conv_fails(mem, controls.max_conv_fails);
+  if (flag == 0)
+    flag = set.max_err_test_fails(mem, controls.max_err_test_fails);
+  return flag;
+}
+
+std::string FlagName(char* name, const char* solver, int flag) {
+  std::string out = name != nullptr
+                        ? name
+                        : std::string(solver) + " flag " + std::to_string(flag);
+  std::free(name);
+  return out;
+}
+
+std::string FailureMessage(const std::string& flag_name, double t,
+                           const RhsTracker& rhs, const std::string& detail,
+                           const std::string& last_error) {
+  std::ostringstream os;
+  os << flag_name << " at t = " << t;
+  if (rhs.failed)
+    os << " (Rhs returned false at t = " << rhs.failure_time << ")";
+  if (!detail.empty()) os << " (" << detail << ")";
+  if (!last_error.empty()) os << ": " << last_error;
+  return os.str();
+}
+
+}  // namespace quasiroll::sundials_internal

@@ -1,0 +1,138 @@
+// SUNDIALS plumbing shared by the `ida` and `cvode-projection` backends:
+// context, dense matrix + linear solver, error handler, flag names, Rhs
+// failure tracking, root registration and the step controls both solvers
+// take through identically shaped Set functions.
+//
+// Internal header: it includes SUNDIALS headers, so only the SUNDIALS
+// backends' .cc files and sundials_support.cc include it, and
+// cmake/QuasirollInstall.cmake does not install *_internal.h (installed
+// headers carry no third-party headers).
+#pragma once
+
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "quasiroll/core/dae.h"
+
+namespace quasiroll::sundials_internal {
+
+// Owns a SUNContext. Throws std::runtime_error "<backend>: SUNContext_Create
+// failed".
+class Context {
+ public:
+  explicit Context(const char* backend);
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+  SUNContext get() const { return ctx_; }
+
+ private:
+  SUNContext ctx_ = nullptr;
+};
+
+// N_VDestroy(*v) if set, then *v = nullptr.
+void DestroyVector(N_Vector* v);
+
+// A dense size x size SUNMatrix and the dense SUNLinearSolver on it.
+struct DenseLinearSolver {
+  SUNMatrix matrix = nullptr;
+  SUNLinearSolver solver = nullptr;
+  // Creates the matrix (false if that fails; then no solver is attempted).
+  bool CreateMatrix(sunindextype size, SUNContext ctx);
+  // Creates the solver for `y`-shaped vectors (false if that fails).
+  bool CreateSolver(N_Vector y, SUNContext ctx);
+  void Free();
+};
+
+// Error handler (CVodeSetErrHandlerFn / IDASetErrHandlerFn, with this object
+// as eh_data): keeps the last error as "module::function: msg"; warnings
+// (e.g. "t + h = t") are not failures and are dropped.
+struct ErrorLog {
+  explicit ErrorLog(int warning) : warning_code(warning) {}
+  static void Handler(int error_code, const char* module, const char* function,
+                      char* msg, void* eh_data);
+  int warning_code;
+  std::string last_error;
+};
+
+// The latest Rhs / residual call only: the solvers recover from a failure at
+// a trial point, so an earlier failure must not label a later, unrelated
+// solver failure as kRhsFailure.
+struct RhsTracker {
+  bool failed = false;
+  double failure_time = 0.0;
+  void Reset() { failed = false; }
+  bool Track(double t, bool ok) {
+    failed = !ok;
+    if (!ok) failure_time = t;
+    return ok;
+  }
+  // ode.Rhs(t, y, f), counted in result->rhs_evaluations, tracked.
+  bool Call(ConstrainedOde& ode, double t,
+            const Eigen::Ref<const Eigen::VectorXd>& y,
+            Eigen::Ref<Eigen::VectorXd> f, IntegratorResult* result) {
+    ++result->rhs_evaluations;
+    return Track(t, ode.Rhs(t, y, f));
+  }
+};
+
+// Root functions registered with the solver and the root info buffer.
+struct RootSlots {
+  int registered = 0;
+  std::vector<int> found;
+  // XRootInit(mem, nr, fn or nullptr) when nr changed since the last call;
+  // returns its flag (0 when nothing was to be done).
+  template <typename RootFn>
+  int Register(int (*root_init)(void*, int, RootFn), void* mem, int nr,
+               RootFn fn) {
+    if (nr == registered) return 0;
+    const int flag = root_init(mem, nr, nr > 0 ? fn : nullptr);
+    registered = nr;
+    found.resize(static_cast<std::size_t>(nr));
+    return flag;
+  }
+  // XGetRootInfo into `found`; the first component that fired (-1 if none).
+  int FirstFound(int (*get_root_info)(void*, int*), void* mem);
+};
+
+// The step controls of IntegratorOptions and the backend options both solvers
+// share, applied through the solver's Set functions (same signatures in
+// CVODE and IDA) in one fixed order. `flag` is the status of the preceding
+// set-up; nothing is called once a flag is non-zero.
+struct StepControlSetters {
+  int (*max_num_steps)(void*, long);
+  int (*min_step)(void*, sunrealtype);
+  int (*init_step)(void*, sunrealtype);
+  int (*stop_time)(void*, sunrealtype);
+  int (*max_ord)(void*, int);
+  int (*max_nonlin_iters)(void*, int);
+  int (*max_conv_fails)(void*, int);
+  int (*max_err_test_fails)(void*, int);
+};
+struct StepControls {
+  int max_order = 5;
+  int max_nonlin_iters = 3;
+  int max_conv_fails = 10;
+  int max_err_test_fails = 10;
+};
+int ApplyStepControls(const StepControlSetters& set, void* mem,
+                      const IntegratorOptions& options, double t1,
+                      const StepControls& controls, int flag);
+
+// The name of a return flag from XGetReturnFlagName (which allocates; freed
+// here), or "<solver> flag <n>".
+std::string FlagName(char* name, const char* solver, int flag);
+
+// "<flag name> at t = <t>[ (Rhs returned false at t = ..)][ (<detail>)]
+// [: <last error>]", the message of a failed solve.
+std::string FailureMessage(const std::string& flag_name, double t,
+                           const RhsTracker& rhs, const std::string& detail,
+                           const std::string& last_error);
+
+}  // namespace quasiroll::sundials_internal
