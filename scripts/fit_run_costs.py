@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Calibrates the a-priori run cost of bench/cluster/shard.cc from a measured suite.
+"""Calibrates the a-priori run cost of bench/harness/shard.cc from a measured suite.
 
     /usr/bin/python3 scripts/fit_run_costs.py DIR
 
@@ -16,7 +16,7 @@ per-run overhead outside the timed loop (elapsed between consecutive
 runs/<id>.csv files minus repeats * wall_s: initial configuration, metrics,
 files); p is the least-squares slope of log(wall_s / (holds * s)) against
 log(1e-8 / tol) over the adaptive rows of other tolerances. Prints the C++
-tables for bench/cluster/shard.cc and the model's accuracy against the elapsed
+tables for bench/harness/shard.cc and the model's accuracy against the elapsed
 times.
 """
 import math

@@ -14,7 +14,7 @@ Per-run cost (seconds of one core of the machine that measured SAMPLE):
     between consecutive runs/<id>.csv files; the first run after the
     references: from the last reference file), i.e. the run, its repeats,
     initial configuration, metrics and files;
-  * any other run: its a-priori estimate (plan.csv, bench/cluster/shard.h) times the
+  * any other run: its a-priori estimate (plan.csv, bench/harness/shard.h) times the
     median of measured/estimated over the slice's runs of the same group,
     NLP, integrator and coupling (else same NLP, integrator and coupling;
     else all): the model calibrated on this suite, including which runs
@@ -32,7 +32,7 @@ references as independent tasks except that a run needs its reference):
            first, to whichever worker is free (as bench/cluster/mpi_main.cc);
   mpi+0    the same if rank 0 computed as well (K workers), for comparison;
   array    a Slurm array of N = K tasks (bench --shard I/N, the partition of
-           bench/cluster/shard.cc reproduced here): each task computes the
+           bench/harness/shard.cc reproduced here): each task computes the
            references of its runs, then its runs; wall = the longest task,
            every task starting at once (no queue wait);
   bound    max(total work / K, longest reference + run chain).
@@ -143,7 +143,7 @@ def simulate_dynamic(plan, run_cost, ref_cost, workers):
 
 
 def shard_partition(plan, count):
-    """bench/cluster/shard.cc AssignShards: reference stretches in order of first
+    """bench/harness/shard.cc AssignShards: reference stretches in order of first
     appearance, cut at cost midpoints."""
     order, seen = [], {}
     for k, r in enumerate(plan):

@@ -15,7 +15,7 @@
 #include "quasiroll/bench/cli/cli_support.h"
 #include "quasiroll/bench/harness/harness.h"
 #include "quasiroll/bench/cluster/merge.h"
-#include "quasiroll/bench/cluster/shard.h"
+#include "quasiroll/bench/harness/shard.h"
 #include "quasiroll/bench/harness/suite.h"
 
 namespace quasiroll::cli {

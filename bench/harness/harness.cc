@@ -23,8 +23,9 @@
 #include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/harness/failure_causes.h"
 #include "quasiroll/bench/harness/metrics.h"
+#include "quasiroll/core/quasi_static_validity.h"
 #include "quasiroll/bench/io/run_output.h"
-#include "quasiroll/bench/cluster/shard.h"
+#include "quasiroll/bench/harness/shard.h"
 #include "quasiroll/core/nlp.h"
 
 namespace quasiroll::bench {

@@ -29,7 +29,7 @@ struct HarnessOptions {
   // one line per finished run), 0 never, 1 lines, 2 updating line.
   int progress = -1;
   std::FILE* log = stderr;
-  // --shard I/N (bench/cluster/shard.h): run only slice shard_index of shard_count;
+  // --shard I/N (bench/harness/shard.h): run only slice shard_index of shard_count;
   // shard_count 0 = no sharding. runs.csv and meta.json then go to
   // DIR/shards/<I>-of-<N>/ so that the N shards may share DIR.
   int shard_index = 0;

@@ -64,24 +64,5 @@ struct TimingStats {
 // Median = middle value, or the mean of the two middle values.
 TimingStats ComputeTimingStats(std::vector<double> wall_seconds);
 
-// ------------------------------------------ quasi-static validity ----
-
-// Principal moments of inertia [kg m^2] the validity metric assumes: scenes
-// carry only the mass, so the robot is taken as a uniform solid box spanning
-// its wheel footprint — length a + b (wheelbase), width `track`, height
-// z_h + rho (platform above the ground) — I = m/12 (W^2 + H^2, L^2 + H^2,
-// L^2 + W^2) about the platform axes (x forward, y left, z up).
-Vec3 EstimatedInertia(const Scene& scene);
-
-// Quasi-static validity (docs/model.md §8.8): the max
-// over the samples of
-//   (m |a_com| + |I_w alpha + omega x I_w omega| / L0) / sum_i |F_i|
-// with a_com, alpha from central differences of the recorded COM and angular
-// velocities (one-sided at the ends and next to samples without velocities,
-// e.g. a failed solve), I_w = R diag(EstimatedInertia) R^T, L0 = a + b (the
-// quasi-static problem's moment scale) and |F_i| = |(n_i, t_lon_i, t_lat_i)|.
-// NaN with fewer than two samples with finite velocities and forces.
-double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
-                               const Scene& scene);
 
 }  // namespace quasiroll::bench

@@ -15,7 +15,7 @@
 #include <thread>
 #include <variant>
 
-#include "quasiroll/bench/harness/metrics.h"
+#include "quasiroll/core/quasi_static_validity.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/plugin_loader.h"
@@ -307,7 +307,7 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.Key("wall_s").Value(r.wall_seconds);
   j.Key("kkt_residual").Value(r.kkt_residual);
   j.Key("qs_inertia_ratio")
-      .Value(bench::QuasiStaticInertiaRatio(r.samples, scene));
+      .Value(QuasiStaticInertiaRatio(r.samples, scene));
   j.Key("scene").BeginObject();
   j.Key("name").Value(scene.name);
   j.Key("file").Value(scene.source_path);

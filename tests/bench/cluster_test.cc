@@ -16,7 +16,7 @@
 
 #include "quasiroll/bench/harness/harness.h"
 #include "quasiroll/bench/cluster/merge.h"
-#include "quasiroll/bench/cluster/shard.h"
+#include "quasiroll/bench/harness/shard.h"
 #include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/dae.h"
 

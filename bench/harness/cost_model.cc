@@ -1,4 +1,4 @@
-#include "quasiroll/bench/cluster/cost_model.h"
+#include "quasiroll/bench/harness/cost_model.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "quasiroll/bench/cluster/shard.h"
+#include "quasiroll/bench/harness/shard.h"
 
 #include <algorithm>
 #include <cmath>

@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "quasiroll/bench/cluster/cost_model.h"
+#include "quasiroll/bench/harness/cost_model.h"
 #include "quasiroll/bench/harness/suite.h"
 
 namespace quasiroll::bench {

@@ -1,0 +1,60 @@
+#include "quasiroll/core/quasi_static_validity.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "quasiroll/core/so3.h"
+
+namespace quasiroll {
+
+Vec3 EstimatedInertia(const Scene& scene) {
+  const RobotGeometry& g = scene.geometry;
+  const double l = g.wheelbase(), w = g.track, h = g.z_h + g.rho();
+  const double k = scene.mass / 12.0;
+  return Vec3(k * (w * w + h * h), k * (l * l + h * h), k * (l * l + w * w));
+}
+
+double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
+                               const Scene& scene) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto usable = [](const TrajectorySample& s) {
+    if (!s.velocity.allFinite() || !s.angular_velocity.allFinite())
+      return false;
+    for (const ContactSample& c : s.contacts)
+      if (!std::isfinite(c.normal_force) || !std::isfinite(c.traction_lon) ||
+          !std::isfinite(c.traction_lat))
+        return false;
+    return true;
+  };
+  std::vector<std::size_t> ok;
+  for (std::size_t k = 0; k < run.size(); ++k)
+    if (usable(run[k])) ok.push_back(k);
+  if (ok.size() < 2) return nan;
+  const Vec3 inertia = EstimatedInertia(scene);
+  const double l0 = scene.geometry.wheelbase();
+  double worst = 0.0;
+  for (std::size_t j = 0; j < ok.size(); ++j) {
+    const TrajectorySample& s = run[ok[j]];
+    // Central difference over the usable neighbours (one-sided at the ends).
+    const TrajectorySample& lo = run[ok[j == 0 ? 0 : j - 1]];
+    const TrajectorySample& hi = run[ok[j + 1 == ok.size() ? j : j + 1]];
+    const double span = hi.t - lo.t;
+    if (!(span > 0)) continue;
+    const Vec3 a = (hi.velocity - lo.velocity) / span;
+    const Vec3 alpha = (hi.angular_velocity - lo.angular_velocity) / span;
+    const Mat3 r = RotationFromRpy(s.rpy(0), s.rpy(1), s.rpy(2));
+    const Mat3 iw = r * inertia.asDiagonal() * r.transpose();
+    const Vec3 w = s.angular_velocity;
+    const Vec3 torque = iw * alpha + w.cross(iw * w);
+    double load = 0.0;
+    for (const ContactSample& c : s.contacts)
+      load += Vec3(c.normal_force, c.traction_lon, c.traction_lat).norm();
+    if (!(load > 0)) continue;
+    worst =
+        std::max(worst, (scene.mass * a.norm() + torque.norm() / l0) / load);
+  }
+  return worst;
+}
+
+}  // namespace quasiroll
