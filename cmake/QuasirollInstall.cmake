@@ -1,12 +1,14 @@
 # Install rules and the CMake package (included at the end of the top-level
 # CMakeLists.txt). `cmake --install <build> --prefix <p>` installs
-#   <p>/include/quasiroll/{core,solvers,integrators,bench}/*.h (not *_internal.h)
-#   <p>/lib/libquasiroll_{core,solvers,integrators,harness}.a
+#   <p>/include/quasiroll/{core,solvers,integrators,bench,conformance}/*.h
+#     (not *_internal.h)
+#   <p>/lib/libquasiroll_{core,solvers,integrators,harness,conformance}.a
 #   <p>/bin/quasiroll
 #   <p>/share/quasiroll/{bench/scenes,bench/suites,reports}
 #   <p>/lib/cmake/quasiroll/quasirollConfig{,Version}.cmake + targets
 # so that find_package(quasiroll) gives quasiroll::core, ::solvers,
-# ::integrators, ::harness and the executable quasiroll::quasiroll.
+# ::integrators, ::harness, ::conformance (if QUASIROLL_WITH_CONFORMANCE) and
+# the executable quasiroll::quasiroll.
 #
 # The libraries stay static (the default): their private third-party
 # dependencies are exported as $<LINK_ONLY:...> and quasirollConfig.cmake
@@ -30,6 +32,17 @@ foreach(_dir core solvers integrators bench)
           # part of the installed API.
           PATTERN "*_internal.h" EXCLUDE)
 endforeach()
+set(_quasiroll_install_targets quasiroll_core quasiroll_solvers quasiroll_integrators
+    quasiroll_harness quasiroll_warnings quasiroll)
+if(QUASIROLL_WITH_CONFORMANCE)
+  # The kit's sources are in tests/conformance (next to the tests that use
+  # them); its headers are <quasiroll/conformance/...>.
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/tests/conformance/
+          DESTINATION ${QUASIROLL_INSTALL_INCLUDEDIR}/conformance
+          COMPONENT devel FILES_MATCHING PATTERN "*.h")
+  set_target_properties(quasiroll_conformance PROPERTIES EXPORT_NAME conformance)
+  list(APPEND _quasiroll_install_targets quasiroll_conformance)
+endif()
 
 # Export names: quasiroll_core -> quasiroll::core etc. quasiroll_warnings is
 # an INTERFACE target that only carries warning flags; the static libraries
@@ -41,8 +54,7 @@ set_target_properties(quasiroll_integrators PROPERTIES EXPORT_NAME integrators)
 set_target_properties(quasiroll_harness PROPERTIES EXPORT_NAME harness)
 set_target_properties(quasiroll_warnings PROPERTIES EXPORT_NAME internal_warnings)
 
-install(TARGETS quasiroll_core quasiroll_solvers quasiroll_integrators
-                quasiroll_harness quasiroll_warnings quasiroll
+install(TARGETS ${_quasiroll_install_targets}
         EXPORT quasirollTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT devel
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT runtime

@@ -5,7 +5,8 @@
 // Row i of g is an equality when g_lb(i) == g_ub(i). Infinite bounds use
 // +-std::numeric_limits<double>::infinity(). Nothing here knows about robots:
 // the quasi-static problem (quasi_static.h) is one client, the
-// Hock-Schittkowski reference problems (nlp_reference_problems.h) are others.
+// Hock-Schittkowski reference problems of the conformance kit
+// (conformance/nlp_reference_problems.h) are others.
 //
 // Style follows Drake's solvers/: the public non-virtual NlpSolver::Solve()
 // validates inputs and options (misuse -> std::invalid_argument), calls the

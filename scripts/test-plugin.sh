@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs quasiroll into a temporary prefix, builds the out-of-tree example
-# plugin (examples/external_plugin) against the installed package and runs it.
+# plugin (examples/external_plugin) against the installed package and runs it
+# and its conformance-kit test (plugin_conformance_test).
 #   scripts/test-plugin.sh [BUILD_DIR] [-- plugin_demo args]
 # BUILD_DIR defaults to build-pkg (configured and built here if missing, with
 # tests and micro-benchmarks off). Exits non-zero on any failure.
@@ -39,3 +40,5 @@ if grep -q '^QUASIROLL_REFERENCE_BLAS_DIR:PATH=/' "$build/CMakeCache.txt" &&
   echo "test-plugin: plugin_demo loads the reference BLAS and LAPACK, no ATLAS"
 fi
 "$tmp/build/plugin_demo" "$@"
+# The plugins through the installed conformance kit (docs/plugins.md).
+"$tmp/build/plugin_conformance_test"

@@ -7,8 +7,8 @@
 #include <memory>
 #include <string>
 
+#include "quasiroll/conformance/nlp_reference_problems.h"
 #include "quasiroll/core/nlp.h"
-#include "quasiroll/core/nlp_reference_problems.h"
 
 namespace quasiroll {
 namespace {

@@ -1,6 +1,6 @@
 // Checks the example plugins from outside the quasiroll tree:
 //   1. the NLP backend against the shared reference problems
-//      (core/nlp_reference_problems.h) and the NlpSolver contract;
+//      (conformance/nlp_reference_problems.h) and the NlpSolver contract;
 //   2. the integrator on a constrained ODE with a known solution (accuracy,
 //      order, H = 0, events, failure statuses);
 //   3. a short paper-scene simulation with both plugins (zoh and coupled),
@@ -24,9 +24,9 @@
 #include <string>
 #include <vector>
 
+#include <quasiroll/conformance/nlp_reference_problems.h>
 #include <quasiroll/core/dae.h>
 #include <quasiroll/core/nlp.h>
-#include <quasiroll/core/nlp_reference_problems.h>
 #include <quasiroll/core/scene.h>
 #include <quasiroll/core/simulator.h>
 

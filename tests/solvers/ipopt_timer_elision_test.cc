@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "quasiroll/conformance/nlp_reference_problems.h"
 #include "quasiroll/core/nlp.h"
-#include "quasiroll/core/nlp_reference_problems.h"
 
 namespace quasiroll {
 namespace {

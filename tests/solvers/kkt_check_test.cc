@@ -10,8 +10,8 @@
 #include <limits>
 #include <string>
 
+#include "quasiroll/conformance/nlp_reference_problems.h"
 #include "quasiroll/core/nlp.h"
-#include "quasiroll/core/nlp_reference_problems.h"
 
 namespace quasiroll {
 namespace {

@@ -1,6 +1,6 @@
 // Every registered NLP backend on the reference problems of
-// core/nlp_reference_problems.h, plus input validation, NaN handling, warm
-// starts, object reuse and the registry.
+// conformance/nlp_reference_problems.h, plus input validation, NaN handling,
+// warm starts, object reuse and the registry.
 #include <dlfcn.h>
 #include <gtest/gtest.h>
 #include <link.h>
@@ -19,9 +19,9 @@
 #include <tuple>
 #include <vector>
 
+#include "quasiroll/conformance/nlp_reference_problems.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/nlp_polish.h"
-#include "quasiroll/core/nlp_reference_problems.h"
 #ifdef QUASIROLL_HAVE_IPOPT
 #include "quasiroll/solvers/ipopt_solver.h"
 #endif

@@ -1,4 +1,4 @@
-#include "quasiroll/core/nlp_reference_problems.h"
+#include "quasiroll/conformance/nlp_reference_problems.h"
 
 #include <cmath>
 #include <limits>
