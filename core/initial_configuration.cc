@@ -55,109 +55,122 @@ bool ContactResidual(const KinematicModel& model, const Placement& pl,
   return res->allFinite();
 }
 
-}  // namespace
+// Phases of SolveInitialConfiguration, in order. Each throws GeometryError
+// with the message the caller would have seen before the split.
 
-Configuration SolveInitialConfiguration(
-    const KinematicModel& model, double x0, double y0, double yaw0,
-    const std::array<double, 6>& joint_angles,
-    InitialConfigurationReport* report) {
-  const Placement pl{x0, y0, yaw0, joint_angles};
-  const Terrain& terrain = model.terrain();
-  const RobotGeometry& g = model.geometry();
+// A placement off the terrain has no height to start from.
+void RequirePlacementOnTerrain(const Terrain& terrain, double x0, double y0) {
   if (!terrain.Contains(x0, y0)) {
     std::ostringstream os;
     os << "initial: placement (" << x0 << ", " << y0
        << ") is outside the terrain (" << terrain.Describe() << ")";
     throw GeometryError(os.str());
   }
+}
 
-  // Initial guess of model.md §3.
+// Initial guess of model.md §3: a level platform at nominal height above the
+// terrain at (x0, y0), each wheel touching with its lowest point.
+Vec15 InitialGuess(const KinematicModel& model, const Placement& pl) {
+  const RobotGeometry& g = model.geometry();
   Vec15 q;
-  q(0) = terrain.Height(x0, y0) + g.z_h + g.rho();
+  q(0) = model.terrain().Height(pl.x0, pl.y0) + g.z_h + g.rho();
   q(1) = q(2) = 0.0;
-  {
-    const Mat3 R = RotationFromRpy(0.0, 0.0, yaw0);
-    const Vec3 p(x0, y0, q(0));
-    for (int i = 0; i < 3; ++i) {
-      Mat3 R_GW;
-      Vec3 p_W;
-      WheelPose(model, pl, R, p, i, &R_GW, &p_W);
-      const Vec3 d = R_GW.transpose() * Vec3(0, 0, -1);
-      const double u = std::atan2(d.y(), d.x());
-      const double v = std::asin(std::clamp(d.z(), -1.0, 1.0));
-      const Vec3 c =
-          p_W + R_GW * TorusForms(g.major_radius, g.tube_radius, u, v).point;
-      q.segment<4>(3 + 4 * i) << u, v, c.x(), c.y();
-    }
+  const Mat3 R = RotationFromRpy(0.0, 0.0, pl.yaw0);
+  const Vec3 p(pl.x0, pl.y0, q(0));
+  for (int i = 0; i < 3; ++i) {
+    Mat3 R_GW;
+    Vec3 p_W;
+    WheelPose(model, pl, R, p, i, &R_GW, &p_W);
+    const Vec3 d = R_GW.transpose() * Vec3(0, 0, -1);
+    const double u = std::atan2(d.y(), d.x());
+    const double v = std::asin(std::clamp(d.z(), -1.0, 1.0));
+    const Vec3 c =
+        p_W + R_GW * TorusForms(g.major_radius, g.tube_radius, u, v).point;
+    q.segment<4>(3 + 4 * i) << u, v, c.x(), c.y();
   }
+  return q;
+}
 
-  // Variable scales: lengths in units of rho, tread angle v in units of
-  // r/rho so that a unit scaled step moves the contact by about rho.
+// Variable scales: lengths in units of rho, tread angle v in units of
+// r/rho so that a unit scaled step moves the contact by about rho.
+Vec15 VariableScales(const RobotGeometry& g) {
   Vec15 scale;
   scale(0) = g.rho();
   scale(1) = scale(2) = 1.0;
   for (int i = 0; i < 3; ++i) {
     scale.segment<4>(3 + 4 * i) << 1.0, 1.0, g.rho(), g.rho();
   }
+  return scale;
+}
 
-  Vec15 res, trial_res, q_trial;
-  if (!ContactResidual(model, pl, q, &res))
+// Central-difference Jacobian in scaled variables (15 x 15, cheap; error
+// O(h^2) only slows convergence, the residual itself is exact).
+Mat15 ScaledContactJacobian(const KinematicModel& model, const Placement& pl,
+                            const Vec15& q, const Vec15& scale) {
+  Mat15 jac;
+  for (int c = 0; c < 15; ++c) {
+    const double h = 1e-6 * scale(c);
+    Vec15 qp = q, qm = q, rp, rm;
+    qp(c) += h;
+    qm(c) -= h;
+    if (!ContactResidual(model, pl, qp, &rp) ||
+        !ContactResidual(model, pl, qm, &rm))
+      throw GeometryError("initial: contact search left the terrain domain");
+    jac.col(c) = (rp - rm) / (2 * h) * scale(c);
+  }
+  return jac;
+}
+
+// Damped Newton on the contact residual from q: backtracking line search on
+// ||res||_2, stops at round-off level or on a singular Jacobian. Updates q and
+// res; returns the number of Newton iterations taken.
+int SolveContacts(const KinematicModel& model, const Placement& pl,
+                  const Vec15& scale, Vec15* q, Vec15* res) {
+  Vec15 trial_res, q_trial;
+  if (!ContactResidual(model, pl, *q, res))
     throw GeometryError(
         "initial: a wheel's first contact guess is outside the terrain");
   int it = 0;
   const int kMaxIterations = 60;
   for (; it < kMaxIterations &&
-         res.lpNorm<Eigen::Infinity>() > 0.01 * kResidualTolerance;
+         res->lpNorm<Eigen::Infinity>() > 0.01 * kResidualTolerance;
        ++it) {
-    // Central-difference Jacobian in scaled variables (15 x 15, cheap; error
-    // O(h^2) only slows convergence, the residual itself is exact).
-    Mat15 jac;
-    for (int c = 0; c < 15; ++c) {
-      const double h = 1e-6 * scale(c);
-      Vec15 qp = q, qm = q, rp, rm;
-      qp(c) += h;
-      qm(c) -= h;
-      if (!ContactResidual(model, pl, qp, &rp) ||
-          !ContactResidual(model, pl, qm, &rm))
-        throw GeometryError("initial: contact search left the terrain domain");
-      jac.col(c) = (rp - rm) / (2 * h) * scale(c);
-    }
+    const Mat15 jac = ScaledContactJacobian(model, pl, *q, scale);
     Eigen::FullPivLU<Mat15> lu(jac);
     if (lu.rank() < 15) break;
-    const Vec15 step = -(lu.solve(res)).cwiseProduct(scale);
+    const Vec15 step = -(lu.solve(*res)).cwiseProduct(scale);
     double t = 1.0;
     bool accepted = false;
     for (int ls = 0; ls < 30; ++ls, t *= 0.5) {
-      q_trial = q + t * step;
+      q_trial = *q + t * step;
       if (ContactResidual(model, pl, q_trial, &trial_res) &&
-          trial_res.norm() < (1.0 - 1e-4 * t) * res.norm()) {
+          trial_res.norm() < (1.0 - 1e-4 * t) * res->norm()) {
         accepted = true;
         break;
       }
     }
     if (!accepted) {
       // Accept a full step once residual is at round-off level.
-      if (res.lpNorm<Eigen::Infinity>() <= kResidualTolerance) break;
+      if (res->lpNorm<Eigen::Infinity>() <= kResidualTolerance) break;
       throw GeometryError(
           "initial: contact search stalled (no descent) at residual " +
-          std::to_string(res.lpNorm<Eigen::Infinity>()));
+          std::to_string(res->lpNorm<Eigen::Infinity>()));
     }
-    q = q_trial;
-    res = trial_res;
+    *q = q_trial;
+    *res = trial_res;
   }
-  const double residual = res.lpNorm<Eigen::Infinity>();
-  if (!(residual <= kResidualTolerance)) {
-    std::ostringstream os;
-    os << "initial: no consistent contact found for placement (" << x0 << ", "
-       << y0 << ", yaw " << yaw0 << "): contact residual " << residual
-       << " after " << it << " Newton iterations";
-    throw GeometryError(os.str());
-  }
+  return it;
+}
 
-  // Assemble Theta0: contact angles psi from model.md §1.6.
+// Assemble Theta0 from the solved contact variables: contact angles psi from
+// model.md §1.6. A wheel whose normal points along the ground normal touches
+// with its inner side, which the contact model does not describe.
+Configuration AssembleConfiguration(const KinematicModel& model,
+                                    const Placement& pl, const Vec15& q) {
+  const RobotGeometry& g = model.geometry();
   Configuration theta;
-  const Mat3 R = RotationFromRpy(q(1), q(2), yaw0);
-  const Vec3 p(x0, y0, q(0));
+  const Mat3 R = RotationFromRpy(q(1), q(2), pl.yaw0);
+  const Vec3 p(pl.x0, pl.y0, q(0));
   for (int i = 0; i < 3; ++i) {
     const int k = 3 + 4 * i;
     Mat3 R_GW;
@@ -165,8 +178,8 @@ Configuration SolveInitialConfiguration(
     WheelPose(model, pl, R, p, i, &R_GW, &p_W);
     const SurfaceForms wheel =
         TorusForms(g.major_radius, g.tube_radius, q(k), q(k + 1));
-    const SurfaceForms ground =
-        TerrainForms(terrain.Evaluate(q(k + 2), q(k + 3)), q(k + 2), q(k + 3));
+    const SurfaceForms ground = TerrainForms(
+        model.terrain().Evaluate(q(k + 2), q(k + 3)), q(k + 2), q(k + 3));
     const Vec3 x_w = R_GW * wheel.frame.col(0);
     const Vec3 n_w = R_GW * wheel.frame.col(2);
     if (!(n_w.dot(ground.frame.col(2)) < 0)) {
@@ -179,8 +192,14 @@ Configuration SolveInitialConfiguration(
     theta.segment<5>(ConfigIndex::Eta(i)) << q(k), q(k + 1), q(k + 2), q(k + 3),
         psi;
   }
-  for (int j = 0; j < 6; ++j) theta(ConfigIndex::kTheta + j) = joint_angles[j];
+  for (int j = 0; j < 6; ++j) theta(ConfigIndex::kTheta + j) = pl.joints[j];
+  return theta;
+}
 
+// The contact solve closes the loop by construction; a residual here means
+// the model and the contact equations disagree. Returns ||H||_inf.
+double CheckLoopClosure(const KinematicModel& model,
+                        const Configuration& theta) {
   LoopClosure h;
   model.Constraints(theta, &h);
   const double h_norm = h.lpNorm<Eigen::Infinity>();
@@ -190,6 +209,33 @@ Configuration SolveInitialConfiguration(
        << " > 1e-10 after contact solve (internal inconsistency)";
     throw GeometryError(os.str());
   }
+  return h_norm;
+}
+
+}  // namespace
+
+Configuration SolveInitialConfiguration(
+    const KinematicModel& model, double x0, double y0, double yaw0,
+    const std::array<double, 6>& joint_angles,
+    InitialConfigurationReport* report) {
+  const Placement pl{x0, y0, yaw0, joint_angles};
+  RequirePlacementOnTerrain(model.terrain(), x0, y0);
+
+  Vec15 q = InitialGuess(model, pl);
+  const Vec15 scale = VariableScales(model.geometry());
+  Vec15 res;
+  const int it = SolveContacts(model, pl, scale, &q, &res);
+  const double residual = res.lpNorm<Eigen::Infinity>();
+  if (!(residual <= kResidualTolerance)) {
+    std::ostringstream os;
+    os << "initial: no consistent contact found for placement (" << x0 << ", "
+       << y0 << ", yaw " << yaw0 << "): contact residual " << residual
+       << " after " << it << " Newton iterations";
+    throw GeometryError(os.str());
+  }
+
+  const Configuration theta = AssembleConfiguration(model, pl, q);
+  const double h_norm = CheckLoopClosure(model, theta);
   const ValidityReport validity = CheckValidity(model, theta, true);
   if (!validity.ok()) {
     throw GeometryError("initial: invalid single-point contact: " +

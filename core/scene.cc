@@ -68,6 +68,137 @@ Interval ToInterval(const std::pair<double, double>& p) {
   return Interval{p.first, p.second};
 }
 
+// One reader per terrain type: each checks the keys its type allows and fills
+// the fields of `spec` that type uses, so the dispatcher below stays a table.
+
+void ReadInclineTerrain(const YAML::Node& node, const std::string& path,
+                        TerrainSpec* spec) {
+  CheckKeys(node, path, {"type", "slope_deg", "azimuth_deg", "height"});
+  double slope_deg = 0.0, azimuth_deg = 0.0;
+  ReadOptionalDouble(node, path, "slope_deg", &slope_deg,
+                     Bounds{}.Gt(-89.0).Lt(89.0));
+  ReadOptionalDouble(node, path, "azimuth_deg", &azimuth_deg);
+  ReadOptionalDouble(node, path, "height", &spec->height);
+  // The file speaks degrees (readable by hand); the terrain wants radians.
+  spec->slope_rad = slope_deg * kDeg;
+  spec->azimuth_rad = azimuth_deg * kDeg;
+}
+
+// An explicit list of bumps, each fully specified.
+void ReadGaussianBumps(const YAML::Node& bumps, const std::string& path,
+                       TerrainSpec* spec) {
+  ForEachMapping(bumps, JoinKey(path, "bumps"), "bumps",
+                 [&](const YAML::Node& b, const std::string& p) {
+                   CheckKeys(b, p, {"amplitude", "x", "y", "sigma"});
+                   GaussianBump bump;
+                   bump.amplitude = ReadDouble(Require(b, p, "amplitude"),
+                                               JoinKey(p, "amplitude"));
+                   bump.x = ReadDouble(Require(b, p, "x"), JoinKey(p, "x"));
+                   bump.y = ReadDouble(Require(b, p, "y"), JoinKey(p, "y"));
+                   bump.sigma =
+                       ReadDouble(Require(b, p, "sigma"), JoinKey(p, "sigma"),
+                                  Bounds::Positive());
+                   spec->bumps.push_back(bump);
+                 });
+}
+
+// A seeded random field of bumps: only seed and count are required, the
+// ranges default so that a short spec gives a realistic terrain.
+TerrainSpec::Random ReadRandomGaussians(const YAML::Node& random,
+                                        const std::string& path) {
+  const std::string p = JoinKey(path, "random");
+  if (!random.IsMap()) {
+    Fail(p, "expected a mapping, got " + DescribeNode(random));
+  }
+  CheckKeys(random, p, {"seed", "count", "amplitude", "sigma", "x", "y"});
+  TerrainSpec::Random r;
+  r.seed = ReadUint64(Require(random, p, "seed"), JoinKey(p, "seed"));
+  r.count = static_cast<int>(
+      ReadInt(Require(random, p, "count"), JoinKey(p, "count"), 1, 100000));
+  // Defaults: roughly the statistics of the reference terrain R1.
+  r.amplitude = {-0.04, 0.04};
+  r.sigma = {0.25, 0.45};
+  r.x = {-0.5, 2.5};
+  r.y = {-1.2, 1.2};
+  if (auto n = Child(random, "amplitude")) {
+    r.amplitude = ToInterval(ReadInterval(*n, JoinKey(p, "amplitude")));
+  }
+  if (auto n = Child(random, "sigma")) {
+    r.sigma =
+        ToInterval(ReadInterval(*n, JoinKey(p, "sigma"), Bounds::Positive()));
+  }
+  if (auto n = Child(random, "x")) {
+    r.x = ToInterval(ReadInterval(*n, JoinKey(p, "x")));
+  }
+  if (auto n = Child(random, "y")) {
+    r.y = ToInterval(ReadInterval(*n, JoinKey(p, "y")));
+  }
+  return r;
+}
+
+// Exactly one of 'bumps' and 'random': a mix would leave it unclear which
+// bumps the terrain has.
+void ReadGaussiansTerrain(const YAML::Node& node, const std::string& path,
+                          TerrainSpec* spec) {
+  CheckKeys(node, path, {"type", "bumps", "random"});
+  const std::optional<YAML::Node> bumps = Child(node, "bumps");
+  const std::optional<YAML::Node> random = Child(node, "random");
+  if (bumps && random) {
+    Fail(JoinKey(path, "random"),
+         "not allowed together with " + JoinKey(path, "bumps"));
+  }
+  if (!bumps && !random) {
+    Fail(path, "gaussians needs either 'bumps' or 'random', got neither");
+  }
+  if (bumps) {
+    ReadGaussianBumps(*bumps, path, spec);
+  } else {
+    spec->random = ReadRandomGaussians(*random, path);
+  }
+}
+
+// Either a list of 'components' or one component inline on the terrain node;
+// inline component keys next to 'components' would be silently ignored, so
+// they are an error.
+void ReadSinusoidTerrain(const YAML::Node& node, const std::string& path,
+                         TerrainSpec* spec) {
+  CheckKeys(node, path,
+            {"type", "height", "amplitude", "wavelength_x", "wavelength_y",
+             "phase_x", "phase_y", "components"});
+  ReadOptionalDouble(node, path, "height", &spec->height);
+  if (std::optional<YAML::Node> comps = Child(node, "components")) {
+    for (const char* k :
+         {"amplitude", "wavelength_x", "wavelength_y", "phase_x", "phase_y"}) {
+      if (Child(node, k)) {
+        Fail(JoinKey(path, k),
+             "not allowed together with " + JoinKey(path, "components"));
+      }
+    }
+    ForEachMapping(*comps, JoinKey(path, "components"), "components",
+                   [&](const YAML::Node& c, const std::string& p) {
+                     CheckKeys(c, p,
+                               {"amplitude", "wavelength_x", "wavelength_y",
+                                "phase_x", "phase_y"});
+                     spec->components.push_back(ReadComponent(c, p));
+                   });
+  } else {
+    if (!node.IsMap()) Fail(JoinKey(path, "amplitude"), "required key missing");
+    spec->components.push_back(ReadComponent(node, path));
+  }
+}
+
+// The file is resolved against the scene's directory so that scenes can be
+// moved together with their heightmaps.
+void ReadHeightmapTerrain(const YAML::Node& node, const std::string& path,
+                          const std::string& base_dir, TerrainSpec* spec) {
+  CheckKeys(node, path, {"type", "file"});
+  if (!node.IsMap()) Fail(JoinKey(path, "file"), "required key missing");
+  const std::string file =
+      ReadString(Require(node, path, "file"), JoinKey(path, "file"));
+  if (file.empty()) Fail(JoinKey(path, "file"), "must not be empty, got \"\"");
+  spec->file = ResolvePath(file, base_dir);
+}
+
 }  // namespace
 
 TerrainSpec ReadTerrainSpec(const YAML::Node& node, const std::string& path,
@@ -87,116 +218,18 @@ TerrainSpec ReadTerrainSpec(const YAML::Node& node, const std::string& path,
       CheckKeys(node, path, {"type", "height"});
       ReadOptionalDouble(node, path, "height", &spec.height);
       break;
-
-    case TerrainSpec::Type::kIncline: {
-      CheckKeys(node, path, {"type", "slope_deg", "azimuth_deg", "height"});
-      double slope_deg = 0.0, azimuth_deg = 0.0;
-      ReadOptionalDouble(node, path, "slope_deg", &slope_deg,
-                         Bounds{}.Gt(-89.0).Lt(89.0));
-      ReadOptionalDouble(node, path, "azimuth_deg", &azimuth_deg);
-      ReadOptionalDouble(node, path, "height", &spec.height);
-      spec.slope_rad = slope_deg * kDeg;
-      spec.azimuth_rad = azimuth_deg * kDeg;
+    case TerrainSpec::Type::kIncline:
+      ReadInclineTerrain(node, path, &spec);
       break;
-    }
-
-    case TerrainSpec::Type::kGaussians: {
-      CheckKeys(node, path, {"type", "bumps", "random"});
-      const std::optional<YAML::Node> bumps = Child(node, "bumps");
-      const std::optional<YAML::Node> random = Child(node, "random");
-      if (bumps && random) {
-        Fail(JoinKey(path, "random"),
-             "not allowed together with " + JoinKey(path, "bumps"));
-      }
-      if (!bumps && !random) {
-        Fail(path, "gaussians needs either 'bumps' or 'random', got neither");
-      }
-      if (bumps) {
-        ForEachMapping(
-            *bumps, JoinKey(path, "bumps"), "bumps",
-            [&](const YAML::Node& b, const std::string& p) {
-              CheckKeys(b, p, {"amplitude", "x", "y", "sigma"});
-              GaussianBump bump;
-              bump.amplitude = ReadDouble(Require(b, p, "amplitude"),
-                                          JoinKey(p, "amplitude"));
-              bump.x = ReadDouble(Require(b, p, "x"), JoinKey(p, "x"));
-              bump.y = ReadDouble(Require(b, p, "y"), JoinKey(p, "y"));
-              bump.sigma = ReadDouble(Require(b, p, "sigma"),
-                                      JoinKey(p, "sigma"), Bounds::Positive());
-              spec.bumps.push_back(bump);
-            });
-      } else {
-        const std::string p = JoinKey(path, "random");
-        if (!random->IsMap()) {
-          Fail(p, "expected a mapping, got " + DescribeNode(*random));
-        }
-        CheckKeys(*random, p,
-                  {"seed", "count", "amplitude", "sigma", "x", "y"});
-        TerrainSpec::Random r;
-        r.seed = ReadUint64(Require(*random, p, "seed"), JoinKey(p, "seed"));
-        r.count = static_cast<int>(ReadInt(Require(*random, p, "count"),
-                                           JoinKey(p, "count"), 1, 100000));
-        // Defaults: roughly the statistics of the reference terrain R1.
-        r.amplitude = {-0.04, 0.04};
-        r.sigma = {0.25, 0.45};
-        r.x = {-0.5, 2.5};
-        r.y = {-1.2, 1.2};
-        if (auto n = Child(*random, "amplitude")) {
-          r.amplitude = ToInterval(ReadInterval(*n, JoinKey(p, "amplitude")));
-        }
-        if (auto n = Child(*random, "sigma")) {
-          r.sigma = ToInterval(
-              ReadInterval(*n, JoinKey(p, "sigma"), Bounds::Positive()));
-        }
-        if (auto n = Child(*random, "x")) {
-          r.x = ToInterval(ReadInterval(*n, JoinKey(p, "x")));
-        }
-        if (auto n = Child(*random, "y")) {
-          r.y = ToInterval(ReadInterval(*n, JoinKey(p, "y")));
-        }
-        spec.random = r;
-      }
+    case TerrainSpec::Type::kGaussians:
+      ReadGaussiansTerrain(node, path, &spec);
       break;
-    }
-
-    case TerrainSpec::Type::kSinusoid: {
-      CheckKeys(node, path,
-                {"type", "height", "amplitude", "wavelength_x", "wavelength_y",
-                 "phase_x", "phase_y", "components"});
-      ReadOptionalDouble(node, path, "height", &spec.height);
-      if (std::optional<YAML::Node> comps = Child(node, "components")) {
-        for (const char* k : {"amplitude", "wavelength_x", "wavelength_y",
-                              "phase_x", "phase_y"}) {
-          if (Child(node, k)) {
-            Fail(JoinKey(path, k),
-                 "not allowed together with " + JoinKey(path, "components"));
-          }
-        }
-        ForEachMapping(*comps, JoinKey(path, "components"), "components",
-                       [&](const YAML::Node& c, const std::string& p) {
-                         CheckKeys(c, p,
-                                   {"amplitude", "wavelength_x", "wavelength_y",
-                                    "phase_x", "phase_y"});
-                         spec.components.push_back(ReadComponent(c, p));
-                       });
-      } else {
-        if (!node.IsMap())
-          Fail(JoinKey(path, "amplitude"), "required key missing");
-        spec.components.push_back(ReadComponent(node, path));
-      }
+    case TerrainSpec::Type::kSinusoid:
+      ReadSinusoidTerrain(node, path, &spec);
       break;
-    }
-
-    case TerrainSpec::Type::kHeightmap: {
-      CheckKeys(node, path, {"type", "file"});
-      if (!node.IsMap()) Fail(JoinKey(path, "file"), "required key missing");
-      const std::string file =
-          ReadString(Require(node, path, "file"), JoinKey(path, "file"));
-      if (file.empty())
-        Fail(JoinKey(path, "file"), "must not be empty, got \"\"");
-      spec.file = ResolvePath(file, base_dir);
+    case TerrainSpec::Type::kHeightmap:
+      ReadHeightmapTerrain(node, path, base_dir, &spec);
       break;
-    }
   }
   return spec;
 }

@@ -1,6 +1,7 @@
 #include "quasiroll/bench/cluster/merge.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -10,9 +11,9 @@
 #include <stdexcept>
 
 #include "quasiroll/bench/harness/harness.h"
+#include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/io/run_output.h"
-#include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/scene.h"
 
 namespace quasiroll::bench {
@@ -365,17 +366,11 @@ double NumberOr(const std::string* raw, double fallback) {
   return end == raw->c_str() ? fallback : v;
 }
 
-}  // namespace
+// ------------------------------------------------- MergeOutputs phases ----
 
-MergeSummary MergeOutputs(const MergeOptions& options) {
-  if (options.inputs.empty()) throw SceneError("merge: no input directory");
-  const std::vector<Meta> metas = CollectMetas(options.inputs);
-  CheckAgreement(metas);
-  MergeSummary summary;
-  summary.metas = static_cast<int>(metas.size());
-
-  // The suite, checked against the inputs' hash.
-  const std::string suite_hash = metas[0].Str("suite_hash");
+// The suite file: --suite, else the absolute path the first input recorded.
+std::string ResolveSuitePath(const MergeOptions& options,
+                             const std::vector<Meta>& metas) {
   std::string suite_path = options.suite;
   if (suite_path.empty()) {
     const std::string* suite_obj = metas[0].Get("suite");
@@ -386,76 +381,99 @@ MergeSummary MergeOutputs(const MergeOptions& options) {
       throw SceneError("merge: " + metas[0].path +
                        " names no suite file; pass --suite FILE");
   }
-  {
-    bool ok = false;
-    const std::string text = ReadText(suite_path, &ok);
-    if (!ok)
-      throw SceneError("merge: cannot read the suite file " + suite_path +
-                       " (pass --suite FILE)");
-    const std::string hash = Hex64(Fnv1a64(text));
-    if (hash != suite_hash)
-      throw SceneError("merge: the suite file " + suite_path + " has hash " +
-                       hash + ", the inputs were run with suite_hash " +
-                       suite_hash + " (pass --suite FILE with that suite)");
-  }
-  const Suite suite = LoadSuite(suite_path);
-  HarnessOptions selection;
-  selection.filter = metas[0].Str("filter");
-  const SuitePlan plan = PlanSuite(suite, selection);
+  return suite_path;
+}
 
+// The grid is re-expanded from the suite file, so it must be the very file the
+// inputs ran (a changed file could give other run ids or another order).
+void CheckSuiteHash(const std::string& suite_path,
+                    const std::string& suite_hash) {
+  bool ok = false;
+  const std::string text = ReadText(suite_path, &ok);
+  if (!ok)
+    throw SceneError("merge: cannot read the suite file " + suite_path +
+                     " (pass --suite FILE)");
+  const std::string hash = Hex64(Fnv1a64(text));
+  if (hash != suite_hash)
+    throw SceneError("merge: the suite file " + suite_path + " has hash " +
+                     hash + ", the inputs were run with suite_hash " +
+                     suite_hash + " (pass --suite FILE with that suite)");
+}
+
+void WarnIncompleteInputs(const std::vector<Meta>& metas, std::FILE* log) {
   for (const Meta& m : metas)
-    if (!m.complete() && options.log)
-      std::fprintf(options.log,
+    if (!m.complete() && log)
+      std::fprintf(log,
                    "merge: warning: %s is not complete (interrupted?); its "
                    "finished runs are used\n",
                    m.path.c_str());
+}
 
-  // Rows, in grid order: the first input holding a finished row wins.
+// The finished rows of the selected runs, in grid order.
+struct MergedRows {
   std::string header;
-  std::vector<FoundRow> rows(plan.selected.size());
+  std::vector<std::string> columns;  // of header
+  std::vector<FoundRow> rows;        // per selected run
+};
+
+// A second finished row of a run (another input, not a link to the kept one):
+// counted, and compared with the kept row outside the timing and host columns,
+// which legitimately differ between machines. Only the first differing column
+// is reported.
+void CompareDuplicateRow(const FoundRow& kept, const FoundRow& other,
+                         const std::vector<std::string>& columns,
+                         const std::string& id, std::FILE* log,
+                         MergeSummary* summary) {
+  ++summary->duplicates;
+  const auto a = ParseCsvLine(kept.row), b = ParseCsvLine(other.row);
+  const auto& skip = TimingAndHostColumns();
+  for (std::size_t c = 0; c < columns.size() && c < a.size(); ++c) {
+    if (std::find(skip.begin(), skip.end(), columns[c]) != skip.end()) continue;
+    if (c >= b.size() || a[c] != b[c]) {
+      ++summary->differing;
+      if (log)
+        std::fprintf(log,
+                     "merge: warning: run %s differs between %s and %s in "
+                     "column %s (%s vs %s); keeping the first\n",
+                     id.c_str(), kept.dir.c_str(), other.dir.c_str(),
+                     columns[c].c_str(), a[c].c_str(),
+                     c < b.size() ? b[c].c_str() : "");
+      break;
+    }
+  }
+}
+
+// Rows, in grid order: the first input holding a finished row wins. All
+// inputs must share one runs.csv header; every selected run must be found.
+MergedRows CollectRows(const MergeOptions& options, const SuitePlan& plan,
+                       MergeSummary* summary) {
+  MergedRows m;
+  m.rows.resize(plan.selected.size());
   std::vector<std::string> missing;
-  std::vector<std::string> columns;
   for (std::size_t i = 0; i < plan.selected.size(); ++i) {
     const std::string& id = plan.selected[i]->run_id;
     bool found = false;
     for (const std::string& in : options.inputs) {
       FoundRow f;
       if (!FindRow(in, id, &f)) continue;
-      if (header.empty()) {
-        header = f.header;
-        columns = ParseCsvLine(header);
-      } else if (f.header != header) {
+      if (m.header.empty()) {
+        m.header = f.header;
+        m.columns = ParseCsvLine(m.header);
+      } else if (f.header != m.header) {
         throw SceneError("merge: " + (f.dir / "runs" / (id + ".csv")).string() +
                          " has other columns than " +
-                         (rows[0].dir / "runs").string() +
+                         (m.rows[0].dir / "runs").string() +
                          "/*.csv (made by another quasiroll version?)");
       }
       if (!found) {
-        rows[i] = f;
+        m.rows[i] = f;
         found = true;
         continue;
       }
-      if (SameFile(rows[i].dir / "runs" / (id + ".csv"),
+      if (SameFile(m.rows[i].dir / "runs" / (id + ".csv"),
                    f.dir / "runs" / (id + ".csv")))
         continue;
-      ++summary.duplicates;
-      const auto a = ParseCsvLine(rows[i].row), b = ParseCsvLine(f.row);
-      const auto& skip = TimingAndHostColumns();
-      for (std::size_t c = 0; c < columns.size() && c < a.size(); ++c) {
-        if (std::find(skip.begin(), skip.end(), columns[c]) != skip.end())
-          continue;
-        if (c >= b.size() || a[c] != b[c]) {
-          ++summary.differing;
-          if (options.log)
-            std::fprintf(options.log,
-                         "merge: warning: run %s differs between %s and %s in "
-                         "column %s (%s vs %s); keeping the first\n",
-                         id.c_str(), rows[i].dir.c_str(), f.dir.c_str(),
-                         columns[c].c_str(), a[c].c_str(),
-                         c < b.size() ? b[c].c_str() : "");
-          break;
-        }
-      }
+      CompareDuplicateRow(m.rows[i], f, m.columns, id, options.log, summary);
     }
     if (!found) missing.push_back(id);
   }
@@ -466,17 +484,23 @@ MergeSummary MergeOutputs(const MergeOptions& options) {
         " selected runs have no finished row in the inputs (first: " +
         missing[0] +
         "); run the shards that hold them again with --resume, then merge");
+  return m;
+}
 
-  // Files.
-  const fs::path out(options.out);
+// OUT/trajectories, OUT/runs (linked from the winning inputs), the union of
+// references and terrains, and OUT/runs.csv; counts failures and hosts.
+void WriteMergedRuns(const fs::path& out, const SuitePlan& plan,
+                     const MergedRows& m, const MergeOptions& options,
+                     MergeSummary* summary) {
   fs::create_directories(out);
+  const auto& columns = m.columns;
   const auto& status_it = std::find(columns.begin(), columns.end(), "status");
   const auto& host_it = std::find(columns.begin(), columns.end(), "host");
   std::set<std::string> hosts;
-  std::string csv = header + "\n";
-  for (std::size_t i = 0; i < rows.size(); ++i) {
+  std::string csv = m.header + "\n";
+  for (std::size_t i = 0; i < m.rows.size(); ++i) {
     const std::string& id = plan.selected[i]->run_id;
-    const FoundRow& f = rows[i];
+    const FoundRow& f = m.rows[i];
     LinkOrCopy(f.dir / "trajectories" / (id + ".csv"),
                out / "trajectories" / (id + ".csv"));
     LinkOrCopy(f.dir / "runs" / (id + ".csv"), out / "runs" / (id + ".csv"));
@@ -486,76 +510,61 @@ MergeSummary MergeOutputs(const MergeOptions& options) {
       const std::size_t c = static_cast<std::size_t>(it - columns.begin());
       return it != columns.end() && c < fields.size() ? fields[c] : "";
     };
-    if (col(status_it) != "success") ++summary.failures;
+    if (col(status_it) != "success") ++summary->failures;
     if (host_it != columns.end()) hosts.insert(col(host_it));
   }
   UnionDirectory(options.inputs, out, "references");
   UnionDirectory(options.inputs, out, "terrains");
   AtomicWriteFile((out / "runs.csv").string(), csv);
-  summary.runs = static_cast<int>(rows.size());
-  summary.hosts.assign(hosts.begin(), hosts.end());
+  summary->runs = static_cast<int>(m.rows.size());
+  summary->hosts.assign(hosts.begin(), hosts.end());
+}
 
-  // meta.json: the members of a complete input (else the first), with the
-  // invocation keys recomputed for the merged whole, and "merge".
-  const Meta* tmpl = &metas[0];
-  for (const Meta& m : metas)
-    if (m.complete()) {
-      tmpl = &m;
-      break;
-    }
+// Invocation keys of the merged whole: the earliest start, the latest end,
+// and sums of the per-input wall time and run counts.
+struct MergedInvocation {
   std::string start_time, end_time;
   double wall = 0;
   long long executed = 0, resumed = 0;
+};
+
+MergedInvocation SumInvocations(const std::vector<Meta>& metas) {
+  MergedInvocation inv;
   for (const Meta& m : metas) {
     const std::string* s = m.Get("start_time");
     const std::string* e = m.Get("end_time");
-    if (s && (start_time.empty() || *s < start_time)) start_time = *s;
-    if (e && (end_time.empty() || *e > end_time)) end_time = *e;
-    wall += NumberOr(m.Get("wall_s"), 0);
-    executed += static_cast<long long>(NumberOr(m.Get("runs_executed"), 0));
-    resumed += static_cast<long long>(NumberOr(m.Get("runs_resumed"), 0));
+    if (s && (inv.start_time.empty() || *s < inv.start_time))
+      inv.start_time = *s;
+    if (e && (inv.end_time.empty() || *e > inv.end_time)) inv.end_time = *e;
+    inv.wall += NumberOr(m.Get("wall_s"), 0);
+    inv.executed += static_cast<long long>(NumberOr(m.Get("runs_executed"), 0));
+    inv.resumed += static_cast<long long>(NumberOr(m.Get("runs_resumed"), 0));
   }
-  if (end_time.empty()) end_time = JsonQuote(IsoTimeNow());
+  if (inv.end_time.empty()) inv.end_time = JsonQuote(IsoTimeNow());
+  return inv;
+}
+
+// The template's options with "out" = the merged directory ("" if the
+// template has no options).
+std::string MergedOptionsJson(const Meta& tmpl, const std::string& out) {
   std::string options_raw;
-  if (const std::string* o = tmpl->Get("options")) {
-    // The template's options with "out" = the merged directory.
+  if (const std::string* o = tmpl.Get("options")) {
     options_raw = "{";
     bool first = true;
     for (const auto& [k, v] : JsonMembers(*o)) {
       if (!first) options_raw += ",";
       first = false;
-      options_raw +=
-          JsonQuote(k) + ":" + (k == "out" ? JsonQuote(options.out) : v);
+      options_raw += JsonQuote(k) + ":" + (k == "out" ? JsonQuote(out) : v);
     }
     options_raw += "}";
   }
-  std::map<std::string, std::string> replaced = {
-      {"options", options_raw},
-      {"start_time", start_time.empty() ? "null" : start_time},
-      {"end_time", end_time},
-      {"wall_s", JsonWriter().Value(wall).str()},
-      {"runs_selected", std::to_string(rows.size())},
-      {"runs_executed", std::to_string(executed)},
-      {"runs_resumed", std::to_string(resumed)},
-      {"failures", std::to_string(summary.failures)},
-      {"complete", "true"}};
-  if (options_raw.empty()) replaced.erase("options");
-  std::string meta = "{";
-  std::set<std::string> emitted;
-  auto emit = [&](const std::string& k, const std::string& v) {
-    if (meta.size() > 1) meta += ",";
-    meta += JsonQuote(k) + ":" + v;
-    emitted.insert(k);
-  };
-  for (const auto& [k, v] : tmpl->members) {
-    if (k == "shard" || k == "merge" || k == "mpi") continue;
-    const auto it = replaced.find(k);
-    emit(k, it == replaced.end() ? v : it->second);
-  }
-  for (const char* k :
-       {"start_time", "end_time", "wall_s", "runs_selected", "runs_executed",
-        "runs_resumed", "failures", "complete"})
-    if (!emitted.count(k) && replaced.count(k)) emit(k, replaced[k]);
+  return options_raw;
+}
+
+// The "merge" member: which inputs went in (with their invocation keys, so a
+// merged directory still tells where each part ran) and the duplicate counts.
+std::string MergeRecordJson(const std::vector<Meta>& metas,
+                            const MergeSummary& summary) {
   std::string merge = "{\"inputs\":[";
   for (std::size_t k = 0; k < metas.size(); ++k) {
     const Meta& m = metas[k];
@@ -575,9 +584,77 @@ MergeSummary MergeOutputs(const MergeOptions& options) {
   for (std::size_t k = 0; k < summary.hosts.size(); ++k)
     merge += (k ? "," : "") + JsonQuote(summary.hosts[k]);
   merge += "]}";
-  emit("merge", merge);
+  return merge;
+}
+
+// meta.json: the members of a complete input (else the first), with the
+// invocation keys recomputed for the merged whole, and "merge". Shard and
+// mpi keys describe one input only, so they are dropped.
+void WriteMergedMeta(const fs::path& out, const std::vector<Meta>& metas,
+                     const MergeOptions& options, const MergeSummary& summary,
+                     std::size_t runs_selected) {
+  const Meta* tmpl = &metas[0];
+  for (const Meta& m : metas)
+    if (m.complete()) {
+      tmpl = &m;
+      break;
+    }
+  const MergedInvocation inv = SumInvocations(metas);
+  const std::string options_raw = MergedOptionsJson(*tmpl, options.out);
+  std::map<std::string, std::string> replaced = {
+      {"options", options_raw},
+      {"start_time", inv.start_time.empty() ? "null" : inv.start_time},
+      {"end_time", inv.end_time},
+      {"wall_s", JsonWriter().Value(inv.wall).str()},
+      {"runs_selected", std::to_string(runs_selected)},
+      {"runs_executed", std::to_string(inv.executed)},
+      {"runs_resumed", std::to_string(inv.resumed)},
+      {"failures", std::to_string(summary.failures)},
+      {"complete", "true"}};
+  if (options_raw.empty()) replaced.erase("options");
+  std::string meta = "{";
+  std::set<std::string> emitted;
+  auto emit = [&](const std::string& k, const std::string& v) {
+    if (meta.size() > 1) meta += ",";
+    meta += JsonQuote(k) + ":" + v;
+    emitted.insert(k);
+  };
+  for (const auto& [k, v] : tmpl->members) {
+    if (k == "shard" || k == "merge" || k == "mpi") continue;
+    const auto it = replaced.find(k);
+    emit(k, it == replaced.end() ? v : it->second);
+  }
+  for (const char* k :
+       {"start_time", "end_time", "wall_s", "runs_selected", "runs_executed",
+        "runs_resumed", "failures", "complete"})
+    if (!emitted.count(k) && replaced.count(k)) emit(k, replaced[k]);
+  emit("merge", MergeRecordJson(metas, summary));
   meta += "}\n";
   AtomicWriteFile((out / "meta.json").string(), meta);
+}
+
+}  // namespace
+
+MergeSummary MergeOutputs(const MergeOptions& options) {
+  if (options.inputs.empty()) throw SceneError("merge: no input directory");
+  const std::vector<Meta> metas = CollectMetas(options.inputs);
+  CheckAgreement(metas);
+  MergeSummary summary;
+  summary.metas = static_cast<int>(metas.size());
+
+  // The suite, checked against the inputs' hash, gives the grid to merge.
+  const std::string suite_path = ResolveSuitePath(options, metas);
+  CheckSuiteHash(suite_path, metas[0].Str("suite_hash"));
+  const Suite suite = LoadSuite(suite_path);
+  HarnessOptions selection;
+  selection.filter = metas[0].Str("filter");
+  const SuitePlan plan = PlanSuite(suite, selection);
+  WarnIncompleteInputs(metas, options.log);
+
+  const MergedRows rows = CollectRows(options, plan, &summary);
+  const fs::path out(options.out);
+  WriteMergedRuns(out, plan, rows, options, &summary);
+  WriteMergedMeta(out, metas, options, summary, rows.rows.size());
   return summary;
 }
 

@@ -11,8 +11,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/harness/metrics.h"
+#include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/so3.h"
@@ -528,6 +528,173 @@ std::vector<TrajectorySample> ParseTrajectoryCsv(const std::string& text) {
   return out;
 }
 
+namespace {
+
+// Side results of computing a reference that go to the cache's json only
+// (not into Reference); NaN / "" when not computed, as for an analytic case.
+struct ReferenceRunInfo {
+  std::string check_status;
+  double check_t_reached = std::numeric_limits<double>::quiet_NaN();
+  double check_wall = std::numeric_limits<double>::quiet_NaN();
+  double mu_min_wall = std::numeric_limits<double>::quiet_NaN();
+};
+
+// Fills *ref from the cache files if they hold this key; true on a complete
+// hit. On a miss *ref may keep fields read before the miss was detected; the
+// compute path overwrites what it sets, as it always has.
+bool LoadCachedReference(const std::string& csv_path,
+                         const std::string& json_path, const Scene& scene,
+                         const TerrainSpec& terrain, AnalyticCase ac,
+                         Reference* ref) {
+  bool ok_csv = false, ok_json = false;
+  const std::string json = ReadFile(json_path, &ok_json);
+  // The key (not just the hash) must match: a hash collision is a miss.
+  if (!ok_json || JsonStringField(json, "key") != ref->key) return false;
+  const std::string csv = ReadFile(csv_path, &ok_csv);
+  if (!ok_csv) return false;
+  try {
+    ref->samples = ParseTrajectoryCsv(csv);
+    ref->kind = JsonStringField(json, "kind");
+    ref->status = JsonStringField(json, "status");
+    ref->stop_reason = JsonStringField(json, "stop_reason");
+    ref->method = JsonStringField(json, "method");
+    ref->check_method = JsonStringField(json, "check_method");
+    bool has_mu = false, has_err = false;
+    ref->mu_min_max = JsonNumberField(json, "ref_mu_min", &has_mu);
+    ref->err_est = JsonNumberField(json, "ref_err_est", &has_err);
+    if (ac != AnalyticCase::kNone) ref->analytic.emplace(scene, terrain, ac);
+    // A cache written before these fields existed is recomputed.
+    if (has_mu && has_err) return true;
+    ref->samples.clear();
+  } catch (const std::runtime_error&) {
+    ref->samples.clear();  // corrupt cache: recompute
+  }
+  return false;
+}
+
+// The closed-form solution sampled on the reference output grid.
+SimulationResult ComputeAnalyticReference(const Scene& scene,
+                                          const TerrainSpec& terrain,
+                                          const ReferenceSettings& settings,
+                                          AnalyticCase ac, Reference* ref) {
+  SimulationResult result;
+  ref->analytic.emplace(scene, terrain, ac);
+  ref->kind = std::string("analytic:") + ToString(ac);
+  const double dt = scene.dt / settings.dt_divisor;
+  const int n = static_cast<int>(std::llround(scene.t_end / dt));
+  for (int k = 0; k <= n; ++k)
+    result.samples.push_back(ref->analytic->Sample(k * dt));
+  result.status = "success";
+  result.t_reached = n * dt;
+  ref->method = std::string("closed form (") + ToString(ac) + ")";
+  return result;
+}
+
+// The options ComputeNumericalReference used, for DescribeReferenceMethod.
+SimulationOptions NumericalReferenceOptions(const Scene& scene,
+                                            const ReferenceSettings& settings,
+                                            const std::string& method) {
+  SimulationOptions used;
+  used.nlp = settings.Nlp();
+  used.dae = ReferenceSettings::Integrator();
+  used.coupling = Coupling::kCoupled;
+  used.dt = scene.dt / settings.dt_divisor;
+  used.dae_options = {{"rk_method", method}};
+  used.integrator.step = used.dt / settings.substeps;
+  used.integrator.rtol = 1e-10;
+  used.integrator.atol = 1e-12;
+  used.quasi_static.residual_tolerance = settings.residual_tolerance;
+  return used;
+}
+
+// mu_min along the path (every 2nd scene-dt sample, refined around the
+// maximum) and, for a reference that stopped, at the state where it stopped
+// (in coupled mode a stage state between samples), so that a reference
+// stopped by friction has ref_mu_min >= mu.
+double ReferenceMinimumFriction(const Scene& scene,
+                                const ReferenceSettings& settings,
+                                const SimulationResult& result) {
+  double mu_min_max =
+      PathMinimumFriction(scene, result.samples, 2 * settings.dt_divisor);
+  if (!result.success() && result.stop_configuration.allFinite()) {
+    std::vector<TrajectorySample> stop(1);
+    stop[0].theta = result.stop_configuration;
+    mu_min_max = std::fmax(mu_min_max, PathMinimumFriction(scene, stop));
+  }
+  return mu_min_max;
+}
+
+// The check reference: another method family on the same output grid; the
+// estimate is their largest position difference over common times. A failed
+// check leaves err_est NaN and records why in info->check_status.
+void RunCheckReference(const Scene& scene, const ReferenceSettings& settings,
+                       const std::string& method,
+                       const SimulationResult& result, Reference* ref,
+                       ReferenceRunInfo* info) {
+  const SimulationOptions co = CheckReferenceOptions(scene, settings, method);
+  ref->check_method = DescribeReferenceMethod(co);
+  try {
+    const SimulationResult check = Simulator(scene, co).Run();
+    info->check_status = check.status;
+    info->check_t_reached = check.t_reached;
+    info->check_wall = check.wall_seconds;
+    ref->err_est =
+        CompareTrajectories(result.samples, check.samples, false).pos_max;
+  } catch (const std::exception& e) {
+    info->check_status = std::string("error: ") + e.what();
+  }
+}
+
+// Numerical reference plus its quality estimates (mu_min, check reference).
+SimulationResult ComputeCheckedNumericalReference(
+    const Scene& scene, const ReferenceSettings& settings, Reference* ref,
+    ReferenceRunInfo* info) {
+  std::string method;
+  SimulationResult result = ComputeNumericalReference(scene, settings, &method);
+  ref->kind = method == "rk4" ? "numerical" : "numerical:" + method;
+  ref->method = DescribeReferenceMethod(
+      NumericalReferenceOptions(scene, settings, method));
+  const auto mu_start = std::chrono::steady_clock::now();
+  ref->mu_min_max = ReferenceMinimumFriction(scene, settings, result);
+  info->mu_min_wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - mu_start)
+          .count();
+  RunCheckReference(scene, settings, method, result, ref, info);
+  return result;
+}
+
+// The csv first, the json last: a json marks the pair complete, so an
+// interrupted write is a cache miss rather than a truncated reference.
+void WriteReferenceCache(const std::string& csv_path,
+                         const std::string& json_path, const Reference& ref,
+                         const SimulationResult& result,
+                         const ReferenceRunInfo& info, const std::string& csv) {
+  JsonWriter w;
+  w.BeginObject();
+  w.Key("hash").Value(ref.hash);
+  w.Key("kind").Value(ref.kind);
+  w.Key("scene").Value(ref.scene);
+  w.Key("status").Value(ref.status);
+  w.Key("stop_reason").Value(ref.stop_reason);
+  w.Key("t_reached").Value(result.t_reached);
+  w.Key("samples").Value(static_cast<int>(result.samples.size()));
+  w.Key("wall_s").Value(result.wall_seconds);
+  w.Key("method").Value(ref.method);
+  w.Key("ref_mu_min").Value(ref.mu_min_max);
+  w.Key("ref_mu_min_wall_s").Value(info.mu_min_wall);
+  w.Key("ref_err_est").Value(ref.err_est);
+  w.Key("check_method").Value(ref.check_method);
+  w.Key("check_status").Value(info.check_status);
+  w.Key("check_t_reached").Value(info.check_t_reached);
+  w.Key("check_wall_s").Value(info.check_wall);
+  w.Key("key").Value(ref.key);
+  w.EndObject();
+  AtomicWriteFile(csv_path, csv);
+  AtomicWriteFile(json_path, w.str() + "\n");  // written last: marks complete
+}
+
+}  // namespace
+
 Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
                                  const TerrainSpec& terrain,
                                  const std::string& heightmap_digest,
@@ -542,95 +709,16 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
   const std::string csv_path = dir + "/references/" + ref.hash + ".csv";
   const std::string json_path = dir + "/references/" + ref.hash + ".json";
 
-  if (!dir.empty()) {
-    bool ok_csv = false, ok_json = false;
-    const std::string json = ReadFile(json_path, &ok_json);
-    if (ok_json && JsonStringField(json, "key") == ref.key) {
-      const std::string csv = ReadFile(csv_path, &ok_csv);
-      if (ok_csv) {
-        try {
-          ref.samples = ParseTrajectoryCsv(csv);
-          ref.kind = JsonStringField(json, "kind");
-          ref.status = JsonStringField(json, "status");
-          ref.stop_reason = JsonStringField(json, "stop_reason");
-          ref.method = JsonStringField(json, "method");
-          ref.check_method = JsonStringField(json, "check_method");
-          bool has_mu = false, has_err = false;
-          ref.mu_min_max = JsonNumberField(json, "ref_mu_min", &has_mu);
-          ref.err_est = JsonNumberField(json, "ref_err_est", &has_err);
-          if (ac != AnalyticCase::kNone)
-            ref.analytic.emplace(scene, terrain, ac);
-          // A cache written before these fields existed is recomputed.
-          if (has_mu && has_err) return ref;
-          ref.samples.clear();
-        } catch (const std::runtime_error&) {
-          ref.samples.clear();  // corrupt cache: recompute
-        }
-      }
-    }
+  if (!dir.empty() &&
+      LoadCachedReference(csv_path, json_path, scene, terrain, ac, &ref)) {
+    return ref;
   }
 
-  SimulationResult result;
-  std::string check_status;
-  double check_t_reached = std::numeric_limits<double>::quiet_NaN();
-  double check_wall = std::numeric_limits<double>::quiet_NaN();
-  double mu_min_wall = std::numeric_limits<double>::quiet_NaN();
-  if (ac != AnalyticCase::kNone) {
-    ref.analytic.emplace(scene, terrain, ac);
-    ref.kind = std::string("analytic:") + ToString(ac);
-    const double dt = scene.dt / settings.dt_divisor;
-    const int n = static_cast<int>(std::llround(scene.t_end / dt));
-    for (int k = 0; k <= n; ++k)
-      result.samples.push_back(ref.analytic->Sample(k * dt));
-    result.status = "success";
-    result.t_reached = n * dt;
-    ref.method = std::string("closed form (") + ToString(ac) + ")";
-  } else {
-    std::string method;
-    result = ComputeNumericalReference(scene, settings, &method);
-    ref.kind = method == "rk4" ? "numerical" : "numerical:" + method;
-    SimulationOptions used;
-    used.nlp = settings.Nlp();
-    used.dae = ReferenceSettings::Integrator();
-    used.coupling = Coupling::kCoupled;
-    used.dt = scene.dt / settings.dt_divisor;
-    used.dae_options = {{"rk_method", method}};
-    used.integrator.step = used.dt / settings.substeps;
-    used.integrator.rtol = 1e-10;
-    used.integrator.atol = 1e-12;
-    used.quasi_static.residual_tolerance = settings.residual_tolerance;
-    ref.method = DescribeReferenceMethod(used);
-    // mu_min along the path (every 2nd scene-dt sample, refined around the
-    // maximum) and, for a reference that stopped, at the state where it
-    // stopped (in coupled mode a stage state between samples), so that a
-    // reference stopped by friction has ref_mu_min >= mu.
-    const auto mu_start = std::chrono::steady_clock::now();
-    ref.mu_min_max =
-        PathMinimumFriction(scene, result.samples, 2 * settings.dt_divisor);
-    if (!result.success() && result.stop_configuration.allFinite()) {
-      std::vector<TrajectorySample> stop(1);
-      stop[0].theta = result.stop_configuration;
-      ref.mu_min_max =
-          std::fmax(ref.mu_min_max, PathMinimumFriction(scene, stop));
-    }
-    mu_min_wall = std::chrono::duration<double>(
-                      std::chrono::steady_clock::now() - mu_start)
-                      .count();
-    // The check reference: another method family on the same output grid;
-    // the estimate is their largest position difference over common times.
-    const SimulationOptions co = CheckReferenceOptions(scene, settings, method);
-    ref.check_method = DescribeReferenceMethod(co);
-    try {
-      const SimulationResult check = Simulator(scene, co).Run();
-      check_status = check.status;
-      check_t_reached = check.t_reached;
-      check_wall = check.wall_seconds;
-      ref.err_est =
-          CompareTrajectories(result.samples, check.samples, false).pos_max;
-    } catch (const std::exception& e) {
-      check_status = std::string("error: ") + e.what();
-    }
-  }
+  ReferenceRunInfo info;
+  const SimulationResult result =
+      ac != AnalyticCase::kNone
+          ? ComputeAnalyticReference(scene, terrain, settings, ac, &ref)
+          : ComputeCheckedNumericalReference(scene, settings, &ref, &info);
   ref.status = result.status;
   ref.stop_reason = result.stop_reason;
   const std::string csv = TrajectoryCsv(result);
@@ -638,28 +726,7 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
   // and a fresh reference give bit-identical metrics.
   ref.samples = ParseTrajectoryCsv(csv);
   if (!dir.empty()) {
-    JsonWriter w;
-    w.BeginObject();
-    w.Key("hash").Value(ref.hash);
-    w.Key("kind").Value(ref.kind);
-    w.Key("scene").Value(ref.scene);
-    w.Key("status").Value(ref.status);
-    w.Key("stop_reason").Value(ref.stop_reason);
-    w.Key("t_reached").Value(result.t_reached);
-    w.Key("samples").Value(static_cast<int>(result.samples.size()));
-    w.Key("wall_s").Value(result.wall_seconds);
-    w.Key("method").Value(ref.method);
-    w.Key("ref_mu_min").Value(ref.mu_min_max);
-    w.Key("ref_mu_min_wall_s").Value(mu_min_wall);
-    w.Key("ref_err_est").Value(ref.err_est);
-    w.Key("check_method").Value(ref.check_method);
-    w.Key("check_status").Value(check_status);
-    w.Key("check_t_reached").Value(check_t_reached);
-    w.Key("check_wall_s").Value(check_wall);
-    w.Key("key").Value(ref.key);
-    w.EndObject();
-    AtomicWriteFile(csv_path, csv);
-    AtomicWriteFile(json_path, w.str() + "\n");  // written last: marks complete
+    WriteReferenceCache(csv_path, json_path, ref, result, info, csv);
   }
   return ref;
 }

@@ -543,8 +543,117 @@ void ResolveRunOptions(const YAML::Node& group_node, const std::string& path,
   }
 }
 
-void ExpandGroup(const YAML::Node& node, const std::string& path,
-                 const std::string& group, Suite* suite, OptionTables* tables) {
+// The group's own keys, read once: the value lists of the grid axes plus the
+// per-group settings. An empty dts / epss / mus means "the scene's value".
+struct GroupSpec {
+  std::vector<int> scene_idx;
+  std::vector<std::string> nlps, daes, couplings, rks;
+  std::vector<double> tols;
+  double atol_ratio = 1e-2;
+  std::vector<double> nlp_tols, sigmas;
+  std::vector<std::int64_t> dae_indices, substeps, contact_checks;
+  std::vector<double> roughness;
+  std::vector<double> dts, epss, mus;
+  std::vector<std::uint64_t> seeds;
+  double t_end_override = 0;
+  int repeats = 1;
+  std::vector<Axis> generic_axes;  // scene_fields, nlp_options, dae_options
+  RunBounds bounds;
+};
+
+// Scenes of the group (default: all of the suite's), as suite indices in the
+// order the group names them.
+std::vector<int> ReadGroupScenes(const YAML::Node& node,
+                                 const std::string& path, const Suite& suite) {
+  std::vector<int> scene_idx;
+  if (auto n = Child(node, "scenes")) {
+    std::vector<std::string> names;
+    for (const SuiteScene& s : suite.scenes) names.push_back(s.name);
+    for (const std::string& s : ReadNameAxis(node, path, "scenes", names, {})) {
+      for (std::size_t i = 0; i < names.size(); ++i)
+        if (names[i] == s) scene_idx.push_back(static_cast<int>(i));
+    }
+  } else {
+    for (std::size_t i = 0; i < suite.scenes.size(); ++i)
+      scene_idx.push_back(static_cast<int>(i));
+  }
+  if (scene_idx.empty()) Fail(JoinKey(path, "scenes"), "no scenes, got none");
+  return scene_idx;
+}
+
+// Method axes with fixed defaults (backends, tolerances, integrator knobs).
+void ReadMethodAxes(const YAML::Node& node, const std::string& path,
+                    GroupSpec* g) {
+  g->nlps = ReadNameAxis(node, path, "nlp", NlpSolverRegistry::Names(),
+                         {NlpSolverRegistry::WithRole(BackendRole::kDefault)});
+  g->daes = ReadNameAxis(node, path, "dae", IntegratorRegistry::Names(),
+                         {IntegratorRegistry::WithRole(BackendRole::kDefault)});
+  g->couplings =
+      ReadNameAxis(node, path, "coupling", {"zoh", "coupled"}, {"zoh"});
+  g->rks =
+      ReadNameAxis(node, path, "rk_method", {"rk4", "dp54", "bs32"}, {"rk4"});
+  g->tols = ReadDoubleAxis(node, path, "tol", Bounds::Positive(), {1e-8});
+  yaml::ReadOptionalDouble(node, path, "atol_ratio", &g->atol_ratio,
+                           Bounds::Positive());
+  g->nlp_tols =
+      ReadDoubleAxis(node, path, "nlp_tol", Bounds::Positive(), {1e-12});
+  g->sigmas = ReadDoubleAxis(node, path, "sigma", Bounds::NonNegative(), {5.0});
+  g->dae_indices = ReadIntAxis(node, path, "dae_index", 1, 2, {2});
+  g->substeps = ReadIntAxis(node, path, "substeps", 1, 100000, {1});
+  g->contact_checks = ReadIntAxis(node, path, "contact_check", 0, 1000000, {0});
+  g->roughness =
+      ReadDoubleAxis(node, path, "roughness", Bounds::NonNegative(), {1.0});
+}
+
+// Axes and settings whose default depends on the scene (empty = scene's),
+// then the repeat count. Duplicate seeds are rejected like any axis's.
+void ReadSceneDefaultedAxes(const YAML::Node& node, const std::string& path,
+                            GroupSpec* g) {
+  g->dts = ReadDoubleAxis(node, path, "dt", Bounds::Positive(), {});
+  g->epss = ReadDoubleAxis(node, path, "eps", Bounds::Positive(), {});
+  g->mus = ReadDoubleAxis(node, path, "mu", Bounds::Positive(), {});
+  if (auto n = Child(node, "seed")) {
+    const std::string p = JoinKey(path, "seed");
+    g->seeds = ReadAxis<std::uint64_t>(
+        *n, p, [](const YAML::Node& x, const std::string& xp) {
+          return yaml::ReadUint64(x, xp);
+        });
+    std::vector<std::string> canon;
+    for (auto s : g->seeds) canon.push_back(std::to_string(s));
+    if (n->IsSequence()) CheckNoDuplicates(canon, p);
+  }
+  yaml::ReadOptionalDouble(node, path, "t_end", &g->t_end_override,
+                           Bounds::Positive());
+  if (auto n = Child(node, "repeats"))
+    g->repeats =
+        static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "repeats"), 1, 1000));
+}
+
+// Generic axes in file order: scene fields, then backend options (validated
+// against the option tables of every backend of the group).
+void ReadGenericAxes(const YAML::Node& node, const std::string& path,
+                     const Suite& suite, OptionTables* tables, GroupSpec* g) {
+  g->generic_axes = ReadSceneFieldAxes(node, path, g->scene_idx, suite);
+  for (Axis& a : ReadOptionAxes(
+           node, path, "nlp_options", g->nlps,
+           [tables](const std::string& b) -> const OptionTable& {
+             return tables->Nlp(b);
+           },
+           "NLP backend"))
+    g->generic_axes.push_back(std::move(a));
+  for (Axis& a : ReadOptionAxes(
+           node, path, "dae_options", g->daes,
+           [tables](const std::string& b) -> const OptionTable& {
+             return tables->Dae(b);
+           },
+           "integrator"))
+    g->generic_axes.push_back(std::move(a));
+}
+
+// Reads and checks every key of a group. The order of the reads is the order
+// in which errors are reported, so it is part of the behaviour.
+GroupSpec ReadGroupSpec(const YAML::Node& node, const std::string& path,
+                        const Suite& suite, OptionTables* tables) {
   yaml::CheckKeys(node, path,
                   {"description",  "scenes",        "nlp",         "dae",
                    "coupling",     "rk_method",     "dt",          "tol",
@@ -554,210 +663,159 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
                    "scene_fields", "nlp_options",   "dae_options", "bounds"});
   if (auto n = Child(node, "description"))
     yaml::ReadString(*n, JoinKey(path, "description"));
-
-  // Scenes of the group (default: all of the suite's).
-  std::vector<int> scene_idx;
-  if (auto n = Child(node, "scenes")) {
-    std::vector<std::string> names;
-    for (const SuiteScene& s : suite->scenes) names.push_back(s.name);
-    for (const std::string& s : ReadNameAxis(node, path, "scenes", names, {})) {
-      for (std::size_t i = 0; i < names.size(); ++i)
-        if (names[i] == s) scene_idx.push_back(static_cast<int>(i));
-    }
-  } else {
-    for (std::size_t i = 0; i < suite->scenes.size(); ++i)
-      scene_idx.push_back(static_cast<int>(i));
-  }
-  if (scene_idx.empty()) Fail(JoinKey(path, "scenes"), "no scenes, got none");
-
-  const std::vector<std::string> nlps =
-      ReadNameAxis(node, path, "nlp", NlpSolverRegistry::Names(),
-                   {NlpSolverRegistry::WithRole(BackendRole::kDefault)});
-  const std::vector<std::string> daes =
-      ReadNameAxis(node, path, "dae", IntegratorRegistry::Names(),
-                   {IntegratorRegistry::WithRole(BackendRole::kDefault)});
-  const std::vector<std::string> couplings =
-      ReadNameAxis(node, path, "coupling", {"zoh", "coupled"}, {"zoh"});
-  const std::vector<std::string> rks =
-      ReadNameAxis(node, path, "rk_method", {"rk4", "dp54", "bs32"}, {"rk4"});
-  const std::vector<double> tols =
-      ReadDoubleAxis(node, path, "tol", Bounds::Positive(), {1e-8});
-  double atol_ratio = 1e-2;
-  yaml::ReadOptionalDouble(node, path, "atol_ratio", &atol_ratio,
-                           Bounds::Positive());
-  const std::vector<double> nlp_tols =
-      ReadDoubleAxis(node, path, "nlp_tol", Bounds::Positive(), {1e-12});
-  const std::vector<double> sigmas =
-      ReadDoubleAxis(node, path, "sigma", Bounds::NonNegative(), {5.0});
-  const std::vector<std::int64_t> dae_indices =
-      ReadIntAxis(node, path, "dae_index", 1, 2, {2});
-  const std::vector<std::int64_t> substeps =
-      ReadIntAxis(node, path, "substeps", 1, 100000, {1});
-  const std::vector<std::int64_t> contact_checks =
-      ReadIntAxis(node, path, "contact_check", 0, 1000000, {0});
-  const std::vector<double> roughness =
-      ReadDoubleAxis(node, path, "roughness", Bounds::NonNegative(), {1.0});
-  // Optional axes whose default depends on the scene: empty = scene's.
-  const std::vector<double> dts =
-      ReadDoubleAxis(node, path, "dt", Bounds::Positive(), {});
-  const std::vector<double> epss =
-      ReadDoubleAxis(node, path, "eps", Bounds::Positive(), {});
-  const std::vector<double> mus =
-      ReadDoubleAxis(node, path, "mu", Bounds::Positive(), {});
-  std::vector<std::uint64_t> seeds;
-  if (auto n = Child(node, "seed")) {
-    const std::string p = JoinKey(path, "seed");
-    seeds = ReadAxis<std::uint64_t>(
-        *n, p, [](const YAML::Node& x, const std::string& xp) {
-          return yaml::ReadUint64(x, xp);
-        });
-    std::vector<std::string> canon;
-    for (auto s : seeds) canon.push_back(std::to_string(s));
-    if (n->IsSequence()) CheckNoDuplicates(canon, p);
-  }
-  double t_end_override = 0;
-  yaml::ReadOptionalDouble(node, path, "t_end", &t_end_override,
-                           Bounds::Positive());
-  int repeats = 1;
-  if (auto n = Child(node, "repeats"))
-    repeats =
-        static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "repeats"), 1, 1000));
-  std::vector<Axis> generic_axes =
-      ReadSceneFieldAxes(node, path, scene_idx, *suite);
-  for (Axis& a : ReadOptionAxes(
-           node, path, "nlp_options", nlps,
-           [tables](const std::string& b) -> const OptionTable& {
-             return tables->Nlp(b);
-           },
-           "NLP backend"))
-    generic_axes.push_back(std::move(a));
-  for (Axis& a : ReadOptionAxes(
-           node, path, "dae_options", daes,
-           [tables](const std::string& b) -> const OptionTable& {
-             return tables->Dae(b);
-           },
-           "integrator"))
-    generic_axes.push_back(std::move(a));
-  RunBounds bounds = suite->bounds;
+  GroupSpec g;
+  g.scene_idx = ReadGroupScenes(node, path, suite);
+  ReadMethodAxes(node, path, &g);
+  ReadSceneDefaultedAxes(node, path, &g);
+  ReadGenericAxes(node, path, suite, tables, &g);
+  g.bounds = suite.bounds;
   if (auto n = Child(node, "bounds"))
-    bounds = ReadBounds(*n, JoinKey(path, "bounds"), bounds);
+    g.bounds = ReadBounds(*n, JoinKey(path, "bounds"), g.bounds);
+  return g;
+}
 
-  for (int si : scene_idx) {
+// The group's scene-defaulted axes resolved for one scene.
+struct SceneAxes {
+  double t_end = 0;
+  std::vector<double> dts, eps, mu;
+  std::vector<std::optional<std::uint64_t>> seeds;
+};
+
+// Resolves the scene-defaulted axes for `sc` and rejects settings the scene
+// cannot take (a seed without a random terrain, roughness without gaussians,
+// a step longer than the run).
+SceneAxes ResolveSceneAxes(const std::string& path, const GroupSpec& g,
+                           const SuiteScene& sc, const std::string& scene_ref) {
+  if (!g.seeds.empty() && !sc.random_terrain())
+    Fail(JoinKey(path, "seed"), scene_ref +
+                                    " has no random gaussian terrain, got " +
+                                    std::to_string(g.seeds.front()));
+  for (double r : g.roughness)
+    if (r != 1.0 && !sc.gaussian_terrain())
+      Fail(JoinKey(path, "roughness"),
+           scene_ref + " has no gaussian terrain (roughness must be 1), got " +
+               Num(r));
+  SceneAxes s;
+  s.t_end = g.t_end_override > 0 ? g.t_end_override : sc.scene.t_end;
+  s.dts = g.dts.empty() ? std::vector<double>{sc.scene.dt} : g.dts;
+  for (std::size_t i = 0; i < s.dts.size(); ++i)
+    if (s.dts[i] > s.t_end)
+      Fail(g.dts.empty() ? JoinKey(path, "t_end")
+                         : JoinIndex(JoinKey(path, "dt"), i),
+           "dt must be <= t_end (" + Num(s.t_end) + ") of " + scene_ref +
+               ", got " + Num(s.dts[i]));
+  s.eps = g.epss.empty() ? std::vector<double>{sc.scene.epsilon} : g.epss;
+  s.mu = g.mus.empty() ? std::vector<double>{sc.scene.mu} : g.mus;
+  if (!g.seeds.empty()) {
+    for (auto seed : g.seeds) s.seeds.emplace_back(seed);
+  } else if (sc.random_terrain()) {
+    s.seeds.emplace_back(sc.terrain.random->seed);
+  } else {
+    s.seeds.emplace_back(std::nullopt);
+  }
+  return s;
+}
+
+// Axes in grid order (docs/harness.md): the order of the original nested
+// loops, then the generic axes in file order. The order fixes run indices and
+// so is part of the output.
+std::vector<Axis> GridAxes(const GroupSpec& g, const SceneAxes& s) {
+  std::vector<Axis> axes;
+  axes.push_back(MakeAxis("mu", s.mu, [](RunSpec* r, double v) { r->mu = v; }));
+  axes.push_back(MakeAxis(
+      "seed", s.seeds,
+      [](RunSpec* r, const std::optional<std::uint64_t>& v) { r->seed = v; }));
+  axes.push_back(MakeAxis("roughness", g.roughness,
+                          [](RunSpec* r, double v) { r->roughness = v; }));
+  axes.push_back(
+      MakeAxis("eps", s.eps, [](RunSpec* r, double v) { r->eps = v; }));
+  axes.push_back(MakeAxis(
+      "nlp", g.nlps, [](RunSpec* r, const std::string& v) { r->nlp = v; }));
+  axes.push_back(MakeAxis(
+      "dae", g.daes, [](RunSpec* r, const std::string& v) { r->dae = v; }));
+  axes.push_back(
+      MakeAxis("coupling", g.couplings, [](RunSpec* r, const std::string& v) {
+        r->coupling = CouplingFromString(v);
+      }));
+  axes.push_back(
+      MakeAxis("rk_method", g.rks,
+               [](RunSpec* r, const std::string& v) { r->rk_method = v; }));
+  axes.push_back(MakeAxis(
+      "dae_index", g.dae_indices,
+      [](RunSpec* r, std::int64_t v) { r->dae_index = static_cast<int>(v); }));
+  axes.push_back(
+      MakeAxis("sigma", g.sigmas, [](RunSpec* r, double v) { r->sigma = v; }));
+  const double atol_ratio = g.atol_ratio;
+  axes.push_back(MakeAxis("tol", g.tols, [atol_ratio](RunSpec* r, double v) {
+    r->tol = v;
+    r->atol = v * atol_ratio;
+  }));
+  axes.push_back(MakeAxis("nlp_tol", g.nlp_tols,
+                          [](RunSpec* r, double v) { r->nlp_tol = v; }));
+  axes.push_back(
+      MakeAxis("dt", s.dts, [](RunSpec* r, double v) { r->dt = v; }));
+  axes.push_back(MakeAxis(
+      "substeps", g.substeps,
+      [](RunSpec* r, std::int64_t v) { r->substeps = static_cast<int>(v); }));
+  axes.push_back(MakeAxis("contact_check", g.contact_checks,
+                          [](RunSpec* r, std::int64_t v) {
+                            r->contact_check = static_cast<int>(v);
+                          }));
+  for (const Axis& a : g.generic_axes) axes.push_back(a);
+  return axes;
+}
+
+// Appends one run per point of the grid spanned by `axes` to suite->runs,
+// each completed (options, key, id) and checked.
+void AppendGridRuns(const YAML::Node& node, const std::string& path,
+                    const RunSpec& base, const std::string& scene_ref,
+                    const std::vector<Axis>& axes, Suite* suite,
+                    OptionTables* tables) {
+  std::vector<std::size_t> at(axes.size(), 0);
+  for (bool more = true; more;) {
+    RunSpec r = base;
+    for (std::size_t k = 0; k < axes.size(); ++k)
+      axes[k].values[at[k]].apply(&r);
+    r.index = static_cast<int>(suite->runs.size());
+    ResolveRunOptions(node, path, tables->Dae(r.dae), &r);
+    r.key = CanonicalRunKey(r);
+    r.run_id = base.group + "-" + base.scene + "-" + r.nlp + "-" + r.dae + "-" +
+               ToString(r.coupling) + "-" + Hex64(Fnv1a64(r.key)).substr(0, 8);
+    std::string why;
+    if (!r.Options().IsValid(&why))
+      Fail(path, "invalid method options (" + why + ") for " + scene_ref +
+                     ", got " + r.key);
+    suite->runs.push_back(std::move(r));
+    // Odometer step: the last axis varies fastest.
+    more = false;
+    for (std::size_t k = axes.size(); k-- > 0;) {
+      if (++at[k] < axes[k].values.size()) {
+        more = true;
+        break;
+      }
+      at[k] = 0;
+    }
+  }
+}
+
+// Expands one group of the suite file into runs: reads the group, then for
+// each of its scenes resolves the scene-dependent axes and appends the grid.
+void ExpandGroup(const YAML::Node& node, const std::string& path,
+                 const std::string& group, Suite* suite, OptionTables* tables) {
+  const GroupSpec g = ReadGroupSpec(node, path, *suite, tables);
+  for (int si : g.scene_idx) {
     const SuiteScene& sc = suite->scenes[si];
     const std::string scene_ref = "scene \"" + sc.name + "\"";
-    if (!seeds.empty() && !sc.random_terrain())
-      Fail(JoinKey(path, "seed"), scene_ref +
-                                      " has no random gaussian terrain, got " +
-                                      std::to_string(seeds.front()));
-    for (double r : roughness)
-      if (r != 1.0 && !sc.gaussian_terrain())
-        Fail(JoinKey(path, "roughness"),
-             scene_ref +
-                 " has no gaussian terrain (roughness must be 1), got " +
-                 Num(r));
-    const double t_end = t_end_override > 0 ? t_end_override : sc.scene.t_end;
-    std::vector<double> sc_dts =
-        dts.empty() ? std::vector<double>{sc.scene.dt} : dts;
-    for (std::size_t i = 0; i < sc_dts.size(); ++i)
-      if (sc_dts[i] > t_end)
-        Fail(dts.empty() ? JoinKey(path, "t_end")
-                         : JoinIndex(JoinKey(path, "dt"), i),
-             "dt must be <= t_end (" + Num(t_end) + ") of " + scene_ref +
-                 ", got " + Num(sc_dts[i]));
-    const std::vector<double> sc_eps =
-        epss.empty() ? std::vector<double>{sc.scene.epsilon} : epss;
-    const std::vector<double> sc_mu =
-        mus.empty() ? std::vector<double>{sc.scene.mu} : mus;
-    std::vector<std::optional<std::uint64_t>> sc_seeds;
-    if (!seeds.empty()) {
-      for (auto s : seeds) sc_seeds.emplace_back(s);
-    } else if (sc.random_terrain()) {
-      sc_seeds.emplace_back(sc.terrain.random->seed);
-    } else {
-      sc_seeds.emplace_back(std::nullopt);
-    }
-
-    // Axes in grid order (docs/harness.md): the order of the original nested
-    // loops, then the generic axes in file order.
-    std::vector<Axis> axes;
-    axes.push_back(
-        MakeAxis("mu", sc_mu, [](RunSpec* r, double v) { r->mu = v; }));
-    axes.push_back(
-        MakeAxis("seed", sc_seeds,
-                 [](RunSpec* r, const std::optional<std::uint64_t>& v) {
-                   r->seed = v;
-                 }));
-    axes.push_back(MakeAxis("roughness", roughness,
-                            [](RunSpec* r, double v) { r->roughness = v; }));
-    axes.push_back(
-        MakeAxis("eps", sc_eps, [](RunSpec* r, double v) { r->eps = v; }));
-    axes.push_back(MakeAxis(
-        "nlp", nlps, [](RunSpec* r, const std::string& v) { r->nlp = v; }));
-    axes.push_back(MakeAxis(
-        "dae", daes, [](RunSpec* r, const std::string& v) { r->dae = v; }));
-    axes.push_back(
-        MakeAxis("coupling", couplings, [](RunSpec* r, const std::string& v) {
-          r->coupling = CouplingFromString(v);
-        }));
-    axes.push_back(
-        MakeAxis("rk_method", rks,
-                 [](RunSpec* r, const std::string& v) { r->rk_method = v; }));
-    axes.push_back(
-        MakeAxis("dae_index", dae_indices, [](RunSpec* r, std::int64_t v) {
-          r->dae_index = static_cast<int>(v);
-        }));
-    axes.push_back(
-        MakeAxis("sigma", sigmas, [](RunSpec* r, double v) { r->sigma = v; }));
-    axes.push_back(MakeAxis("tol", tols, [atol_ratio](RunSpec* r, double v) {
-      r->tol = v;
-      r->atol = v * atol_ratio;
-    }));
-    axes.push_back(MakeAxis("nlp_tol", nlp_tols,
-                            [](RunSpec* r, double v) { r->nlp_tol = v; }));
-    axes.push_back(
-        MakeAxis("dt", sc_dts, [](RunSpec* r, double v) { r->dt = v; }));
-    axes.push_back(MakeAxis(
-        "substeps", substeps,
-        [](RunSpec* r, std::int64_t v) { r->substeps = static_cast<int>(v); }));
-    axes.push_back(MakeAxis("contact_check", contact_checks,
-                            [](RunSpec* r, std::int64_t v) {
-                              r->contact_check = static_cast<int>(v);
-                            }));
-    for (const Axis& a : generic_axes) axes.push_back(a);
-
+    const SceneAxes s = ResolveSceneAxes(path, g, sc, scene_ref);
+    const std::vector<Axis> axes = GridAxes(g, s);
     RunSpec base;
     base.group = group;
     base.scene_index = si;
     base.scene = sc.name;
-    base.t_end = t_end;
-    base.repeats = repeats;
-    base.bounds = bounds;
-    std::vector<std::size_t> at(axes.size(), 0);
-    for (bool more = true; more;) {
-      RunSpec r = base;
-      for (std::size_t k = 0; k < axes.size(); ++k)
-        axes[k].values[at[k]].apply(&r);
-      r.index = static_cast<int>(suite->runs.size());
-      ResolveRunOptions(node, path, tables->Dae(r.dae), &r);
-      r.key = CanonicalRunKey(r);
-      r.run_id = group + "-" + sc.name + "-" + r.nlp + "-" + r.dae + "-" +
-                 ToString(r.coupling) + "-" +
-                 Hex64(Fnv1a64(r.key)).substr(0, 8);
-      std::string why;
-      if (!r.Options().IsValid(&why))
-        Fail(path, "invalid method options (" + why + ") for " + scene_ref +
-                       ", got " + r.key);
-      suite->runs.push_back(std::move(r));
-      // Odometer step: the last axis varies fastest.
-      more = false;
-      for (std::size_t k = axes.size(); k-- > 0;) {
-        if (++at[k] < axes[k].values.size()) {
-          more = true;
-          break;
-        }
-        at[k] = 0;
-      }
-    }
+    base.t_end = s.t_end;
+    base.repeats = g.repeats;
+    base.bounds = g.bounds;
+    AppendGridRuns(node, path, base, scene_ref, axes, suite, tables);
   }
 }
 
