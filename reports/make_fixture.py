@@ -345,7 +345,8 @@ def build_fixture(out_dir, seed=7, legacy=False):
     for scene in ("paper_pvc", "rough"):
         with open(os.path.join(out_dir, "terrains", f"{scene}.json"), "w") as handle:
             json.dump(terrain, handle, indent=1)
-    write_meta(out_dir, seed, write_inputs(out_dir))
+    backends = {kind: sorted({row[kind] for row in rows}) for kind in ("nlp", "dae")}
+    write_meta(out_dir, seed, write_inputs(out_dir), backends)
     return out_dir
 
 
@@ -355,7 +356,7 @@ def _cell(value):
     return value
 
 
-def write_meta(out_dir, seed, suite_path):
+def write_meta(out_dir, seed, suite_path, backends):
     meta = {"commit": "0123abc (fixture)",
             "machine": {"hostname": "fixture-host", "cpu": "synthetic CPU", "cores": 4},
             "library_versions": {"eigen": "3.4.0", "ipopt": "3.14.10",
@@ -367,7 +368,10 @@ def write_meta(out_dir, seed, suite_path):
                       "absolute_path": os.path.abspath(suite_path)},
             "suite_hash": f"seed-{seed}",
             "start_time": "2024-01-01T00:00:00Z", "end_time": "2024-01-01T00:05:00Z",
-            "options": {"t_end": T_END, "repeats": 3}}
+            "options": {"t_end": T_END, "repeats": 3},
+            # The build's registered backends, as the harness writes them.
+            "backends": {kind: [{"name": name, "family": "fixture"} for name in names]
+                         for kind, names in backends.items()}}
     with open(os.path.join(out_dir, "meta.json"), "w") as handle:
         json.dump(meta, handle, indent=1)
 

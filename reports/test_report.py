@@ -25,7 +25,8 @@ from quasiroll_report import selection as sel  # noqa: E402
 import numpy as np  # noqa: E402
 from quasiroll_report import plotting  # noqa: E402
 from quasiroll_report import robot  # noqa: E402
-from quasiroll_report.data import read_references, read_runs  # noqa: E402
+from quasiroll_report import problems  # noqa: E402
+from quasiroll_report.data import read_meta, read_references, read_runs  # noqa: E402
 from quasiroll_report.report import FIGURE_NAMES  # noqa: E402
 
 # The fixture's stability groups: one chart (figure) each.
@@ -373,6 +374,8 @@ class LegacyResultsTest(unittest.TestCase):
 
 class SelectionTest(unittest.TestCase):
     def runs(self):
+        # Styles follow the build's backend list (meta.json "backends").
+        problems.use_backends(read_meta(Fixture.good))
         return read_runs(Fixture.good)[0]
 
     def test_failed_only_method_not_in_work_precision_data(self):

@@ -75,6 +75,10 @@ bool Adaptive(const std::string& dae, const GivenOptions& given) {
 }  // namespace
 
 double EstimatedRunCost(const RunSpec& run) {
+  // The hints live in the registries (idempotent: a plan may be asked for
+  // before anything else registered the built-ins).
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
   const double holds = run.t_end / run.dt * run.substeps;
   const double f_tol = Adaptive(run.dae, run.dae_options)
                            ? std::pow(1e-8 / run.tol, kTolExponent)
