@@ -29,8 +29,10 @@ struct BackendInfo {
   std::string library;
   std::string library_version;
   // Separate instances may run concurrently in one process (bench --jobs,
-  // the Python module); a backend that is not gets one job at a time.
-  bool thread_safe = true;
+  // the Python module); a backend that is not gets one job at a time. For
+  // an NLP backend it must equal NlpSolver::SupportsConcurrentInstances()
+  // (the conformance kit checks). Default: not claimed.
+  bool thread_safe = false;
   std::vector<BackendRole> roles;
 
   // Shard planner cost hints (docs/cluster.md, "Cost model"); 0 = unknown

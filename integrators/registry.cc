@@ -32,6 +32,7 @@ BackendInfo Info(const char* description, const char* family,
   info.library_version = version;
   info.seconds_per_hold_zoh = zoh;
   info.seconds_per_hold_coupled = coupled;
+  info.thread_safe = true;
   return info;
 }
 

@@ -28,6 +28,7 @@ BackendInfo Info(const char* description, const char* family,
   info.library = library;
   info.library_version = version;
   info.cost_ratio = cost_ratio;
+  info.thread_safe = true;
   return info;
 }
 }  // namespace

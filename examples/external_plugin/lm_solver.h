@@ -38,6 +38,8 @@ class LevenbergMarquardtSolver final : public quasiroll::NlpSolver {
   std::string name() const override { return "levenberg-marquardt"; }
   // Solve() then rejects non-square problems with std::invalid_argument.
   bool RequiresSquareSystem() const override { return true; }
+  // All state is in members: separate instances may solve concurrently.
+  bool SupportsConcurrentInstances() const override { return true; }
   quasiroll::OptionTable option_table() const override;
 
  private:

@@ -17,6 +17,7 @@ void RegisterExamplePlugins() {
       "example plugin: Levenberg-Marquardt (QR, More scaling) on square "
       "equality systems";
   lm.family = "least squares";
+  lm.thread_safe = true;  // as LevenbergMarquardtSolver says
   quasiroll::NlpSolverRegistry::Register(
       kNlpName, std::move(lm),
       [] { return std::make_unique<LevenbergMarquardtSolver>(); });
@@ -25,6 +26,7 @@ void RegisterExamplePlugins() {
       "example plugin: explicit midpoint (RK2, fixed step) + Newton "
       "projection onto H = 0";
   midpoint.family = "explicit Runge-Kutta";
+  midpoint.thread_safe = true;
   quasiroll::IntegratorRegistry::Register(
       kDaeName, std::move(midpoint),
       [] { return std::make_unique<MidpointProjectionIntegrator>(); });

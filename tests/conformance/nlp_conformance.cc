@@ -251,6 +251,18 @@ TEST_P(QuasirollNlpConformance, OptionTableIsValid) {
   ExpectOptionTableValid(*solver);
 }
 
+// The registration, the registry's BackendInfo and the object say the same
+// about thread safety (the harness schedules by the object's answer).
+TEST_P(QuasirollNlpConformance, ThreadSafetyClaimsAgree) {
+  const std::string& name = GetParam().backend;
+  EXPECT_EQ(NlpSolverRegistry::Create(name)->SupportsConcurrentInstances(),
+            GetParam().traits.thread_safe)
+      << name;
+  EXPECT_EQ(NlpSolverRegistry::Info(name).thread_safe,
+            GetParam().traits.thread_safe)
+      << name;
+}
+
 TEST_P(QuasirollNlpConformance, ConcurrentSolvesMatchSequential) {
   if (!GetParam().traits.thread_safe)
     GTEST_SKIP() << GetParam().backend << " is not registered as thread-safe";
