@@ -42,3 +42,30 @@ fi
 "$tmp/build/plugin_demo" "$@"
 # The plugins through the installed conformance kit (docs/plugins.md).
 "$tmp/build/plugin_conformance_test"
+# The loadable plugin through the installed `quasiroll --plugin`: a suite of
+# its backends only, and the report of it.
+plugin="$tmp/build/quasiroll_example_plugin.so"
+cat > "$tmp/plugin-suite.yaml" <<YAML
+name: example-plugin
+description: the example plugin's backends through the installed CLI
+scenes:
+  - name: paper
+    file: $tmp/prefix/share/quasiroll/bench/scenes/paper.yaml
+    overrides: {time: {t_end: 0.5}}
+groups:
+  plugin:
+    nlp: [levenberg-marquardt]
+    dae: [midpoint-projection]
+    coupling: [zoh, coupled]
+    dt: [0.05]
+YAML
+"$tmp/prefix/bin/quasiroll" --plugin "$plugin" bench --suite "$tmp/plugin-suite.yaml" \
+  --out "$tmp/plugin-out" --progress none
+if [ "$(grep -c ',success,' "$tmp/plugin-out/runs.csv")" != 2 ]; then
+  echo "test-plugin: the plugin suite did not succeed:" >&2
+  cat "$tmp/plugin-out/runs.csv" >&2
+  exit 1
+fi
+"$tmp/prefix/bin/quasiroll" report "$tmp/plugin-out" --out "$tmp/plugin-report" > /dev/null
+grep -q levenberg-marquardt "$tmp/plugin-report/index.html"
+echo "test-plugin: the loadable plugin ran a suite and a report through the installed quasiroll"

@@ -9,6 +9,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <dlfcn.h>
+
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -21,6 +23,7 @@
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/kinematics.h"
 #include "quasiroll/core/nlp.h"
+#include "quasiroll/core/plugin_loader.h"
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/simulator.h"
@@ -219,6 +222,32 @@ std::pair<std::string, std::string> RunText(
   return out;
 }
 
+// A plugin resolves quasiroll's symbols to this module's (it holds the
+// whole core library): the module, loaded RTLD_LOCAL by Python, is made
+// global first so that the plugin's dlopen can see them.
+py::dict LoadPluginForPython(const std::string& path) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  Dl_info self;
+  if (::dladdr(reinterpret_cast<void*>(&LoadPluginForPython), &self) &&
+      self.dli_fname)
+    ::dlopen(self.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_GLOBAL);
+  LoadedPlugin plugin;
+  try {
+    plugin = LoadPlugin(path);
+  } catch (const std::runtime_error& e) {
+    throw py::value_error(e.what());
+  }
+  py::dict d;
+  d["file"] = plugin.file;
+  d["path"] = plugin.path;
+  d["sha256"] = plugin.sha256;
+  d["version"] = plugin.version;
+  d["nlp"] = plugin.nlp_backends;
+  d["dae"] = plugin.integrators;
+  return d;
+}
+
 }  // namespace
 }  // namespace quasiroll
 
@@ -288,5 +317,7 @@ PYBIND11_MODULE(_quasiroll, m) {
     d["dae"] = IntegratorRegistry::Names();
     return d;
   });
+  m.def("load_plugin", &LoadPluginForPython, py::arg("path"),
+        "Load backends from a plugin library (docs/plugins.md)");
   m.attr("commit") = GitCommit();
 }

@@ -243,3 +243,24 @@ def test_worked_example_of_docs_python_md(tmp_path):
     assert "rk-projection success" in out.stdout, out.stdout
     png = (tmp_path / "paper_track.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10000
+
+
+PLUGIN = os.environ.get("QUASIROLL_EXAMPLE_PLUGIN", "")
+
+
+@pytest.mark.skipif(not PLUGIN, reason="QUASIROLL_EXAMPLE_PLUGIN not set")
+def test_load_plugin_adds_backends_that_run():
+    # A bad path: ValueError naming the file.
+    with pytest.raises(ValueError, match="no such file"):
+        quasiroll.load_plugin(PLUGIN + ".missing")
+    info = quasiroll.load_plugin(PLUGIN)
+    assert info["nlp"] == ["levenberg-marquardt"]
+    assert info["dae"] == ["midpoint-projection"]
+    assert len(info["sha256"]) == 64 and info["version"] == "0.1.0"
+    assert "levenberg-marquardt" in quasiroll.backends()["nlp"]
+    # Loading the same file again is a no-op returning the same record.
+    assert quasiroll.load_plugin(PLUGIN) == info
+    scene = quasiroll.load_scene(os.path.join(SRC, "bench/scenes/paper.yaml"))
+    _, stats = quasiroll.run(scene, nlp="levenberg-marquardt",
+                             dae="midpoint-projection", t_end=0.2)
+    assert stats["status"] == "success", stats["stop_reason"]

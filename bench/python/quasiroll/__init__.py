@@ -19,7 +19,7 @@ import os
 
 import numpy as np
 
-from ._quasiroll import GeometryError, Scene, SceneError, backends, commit
+from ._quasiroll import GeometryError, Scene, SceneError, backends, commit, load_plugin
 from ._quasiroll import load_scene as _load_scene
 from . import _quasiroll
 
