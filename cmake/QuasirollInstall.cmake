@@ -3,7 +3,7 @@
 #   <p>/include/quasiroll/{core,solvers,integrators,bench}/*.h
 #   <p>/lib/libquasiroll_{core,solvers,integrators,harness}.a
 #   <p>/bin/quasiroll
-#   <p>/share/quasiroll/{bench/scenes,bench/suites,reports}
+#   <p>/share/quasiroll/{bench/scenes,bench/suites,bench/io/runs_columns.tsv,reports}
 #   <p>/lib/cmake/quasiroll/quasirollConfig{,Version}.cmake + targets
 # so that find_package(quasiroll) gives quasiroll::core, ::solvers,
 # ::integrators, ::harness and the executable quasiroll::quasiroll.
@@ -51,6 +51,9 @@ install(TARGETS quasiroll_core quasiroll_solvers quasiroll_integrators
 # Run-time data.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/bench/scenes ${PROJECT_SOURCE_DIR}/bench/suites
         DESTINATION ${QUASIROLL_INSTALL_DATADIR}/bench COMPONENT runtime)
+# The runs.csv schema, read by the report (reports/quasiroll_report/data.py).
+install(FILES ${PROJECT_SOURCE_DIR}/bench/io/runs_columns.tsv
+        DESTINATION ${QUASIROLL_INSTALL_DATADIR}/bench/io COMPONENT runtime)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/reports/
         DESTINATION ${QUASIROLL_INSTALL_DATADIR}/reports COMPONENT runtime
         PATTERN "__pycache__" EXCLUDE PATTERN "*.pyc" EXCLUDE)

@@ -20,11 +20,12 @@
 #include <sstream>
 #include <thread>
 
-#include "quasiroll/bench/io/json_writer.h"
+#include "quasiroll/bench/cluster/shard.h"
 #include "quasiroll/bench/harness/failure_causes.h"
 #include "quasiroll/bench/harness/metrics.h"
+#include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/io/run_output.h"
-#include "quasiroll/bench/cluster/shard.h"
+#include "quasiroll/bench/io/runs_schema.h"
 #include "quasiroll/core/nlp.h"
 
 namespace quasiroll::bench {
@@ -33,73 +34,11 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 const std::vector<std::string>& RunsCsvColumns() {
-  static const std::vector<std::string> columns = {"run_id",
-                                                   "suite_group",
-                                                   "scene",
-                                                   "terrain",
-                                                   "nlp",
-                                                   "dae",
-                                                   "coupling",
-                                                   "rk_method",
-                                                   "dt",
-                                                   "tol",
-                                                   "atol",
-                                                   "nlp_tol",
-                                                   "sigma",
-                                                   "eps",
-                                                   "dae_index",
-                                                   "substeps",
-                                                   "contact_check",
-                                                   "mu",
-                                                   "seed",
-                                                   "roughness",
-                                                   "t_end",
-                                                   "repeats",
-                                                   "status",
-                                                   "stop_reason",
-                                                   "t_reached",
-                                                   "mu_min",
-                                                   "critical_wheel",
-                                                   "wall_s",
-                                                   "nlp_solves",
-                                                   "nlp_iters",
-                                                   "rhs_evals",
-                                                   "jac_evals",
-                                                   "steps",
-                                                   "rejected_steps",
-                                                   "samples",
-                                                   "ref_kind",
-                                                   "ref_status",
-                                                   "ref_hash",
-                                                   "common_samples",
-                                                   "err_pos_rms",
-                                                   "err_pos_max",
-                                                   "err_final",
-                                                   "err_final_rot",
-                                                   "err_rot_max",
-                                                   "err_force_rms",
-                                                   "err_slip",
-                                                   "drift_max",
-                                                   "drift_final",
-                                                   "gap_max",
-                                                   "host",
-                                                   "cpu_model",
-                                                   "nlp_options",
-                                                   "dae_options",
-                                                   "scene_fields",
-                                                   "kkt_residual",
-                                                   "cause",
-                                                   "cause_detail",
-                                                   "t_reached_frac",
-                                                   "wall_s_median",
-                                                   "wall_s_min",
-                                                   "wall_s_max",
-                                                   "wall_s_all",
-                                                   "wall_per_sim_s",
-                                                   "qs_inertia_ratio",
-                                                   "ref_mu_min",
-                                                   "ref_err_est",
-                                                   "nlp_iters_native"};
+  static const std::vector<std::string> columns = [] {
+    std::vector<std::string> names;
+    for (const RunsColumn& c : RunsCsvSchema()) names.push_back(c.name);
+    return names;
+  }();
   return columns;
 }
 
