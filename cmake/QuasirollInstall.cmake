@@ -4,7 +4,7 @@
 #     (not *_internal.h)
 #   <p>/lib/libquasiroll_{core,solvers,integrators,harness,conformance}.a
 #   <p>/bin/quasiroll
-#   <p>/share/quasiroll/{bench/scenes,bench/suites,reports}
+#   <p>/share/quasiroll/{bench/scenes,bench/suites,bench/io/runs_columns.tsv,reports}
 #   <p>/lib/cmake/quasiroll/quasirollConfig{,Version}.cmake + targets
 # so that find_package(quasiroll) gives quasiroll::core, ::solvers,
 # ::integrators, ::harness, ::conformance (if QUASIROLL_WITH_CONFORMANCE) and
@@ -66,6 +66,9 @@ install(TARGETS ${_quasiroll_install_targets}
 # Run-time data.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/bench/scenes ${PROJECT_SOURCE_DIR}/bench/suites
         DESTINATION ${QUASIROLL_INSTALL_DATADIR}/bench COMPONENT runtime)
+# The runs.csv schema, read by the report (reports/quasiroll_report/data.py).
+install(FILES ${PROJECT_SOURCE_DIR}/bench/io/runs_columns.tsv
+        DESTINATION ${QUASIROLL_INSTALL_DATADIR}/bench/io COMPONENT runtime)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/reports/
         DESTINATION ${QUASIROLL_INSTALL_DATADIR}/reports COMPONENT runtime
         PATTERN "__pycache__" EXCLUDE PATTERN "*.pyc" EXCLUDE)

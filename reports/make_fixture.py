@@ -27,16 +27,12 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from quasiroll_report.data import REQUIRED_COLUMNS, TRAJECTORY_COLUMNS  # noqa: E402
+from quasiroll_report.data import (NUMERIC_COLUMNS, REQUIRED_COLUMNS,  # noqa: E402
+                                   RUNS_COLUMNS, TRAJECTORY_COLUMNS, parse_number)
 
-LEGACY_COLUMNS = (["run_id", "suite_group"] + REQUIRED_COLUMNS
-                  + ["mu_min", "roughness", "t_end"])
-# Columns of issue #14 (docs/harness.md); --legacy leaves them out.
-RUN_COLUMNS = LEGACY_COLUMNS + [
-    "terrain", "rk_method", "ref_hash", "kkt_residual", "cause", "cause_detail",
-    "t_reached_frac", "wall_s_median", "wall_s_min", "wall_s_max", "wall_s_all",
-    "wall_per_sim_s", "qs_inertia_ratio", "ref_mu_min", "ref_err_est", "host",
-    "cpu_model"]
+# The columns of runs.csv before issue #14 (--legacy writes only these).
+LEGACY_COLUMNS = {"run_id", "suite_group", "mu_min", "roughness", "t_end",
+                  *REQUIRED_COLUMNS}
 
 A, B, TRACK = 0.25, 0.25, 0.4       # robot geometry of bench/scenes/paper.yaml
 WHEEL_RADIUS = 0.10                 # major + tube radius
@@ -336,12 +332,12 @@ def build_fixture(out_dir, seed=7, legacy=False):
             run.update(failure_fields(*outcome))
         run.update(trust_fields(run, rng))
         rows.append(run)
-    columns = LEGACY_COLUMNS if legacy else RUN_COLUMNS
+    columns = runs_csv_columns(rows, legacy)
     with open(os.path.join(out_dir, "runs.csv"), "w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=columns)
         writer.writeheader()
         for row in rows:
-            writer.writerow({k: _cell(row.get(k, "")) for k in columns})
+            writer.writerow({k: _cell(k, row.get(k, "")) for k in columns})
     for scene in ("paper_pvc", "rough"):
         with open(os.path.join(out_dir, "terrains", f"{scene}.json"), "w") as handle:
             json.dump(terrain, handle, indent=1)
@@ -350,7 +346,16 @@ def build_fixture(out_dir, seed=7, legacy=False):
     return out_dir
 
 
-def _cell(value):
+def runs_csv_columns(rows, legacy):
+    """The schema's columns (bench/io/runs_columns.tsv, in runs.csv order)
+    that the fixture fills; with legacy only those of older harnesses."""
+    return [c for c in RUNS_COLUMNS if any(c in row for row in rows)
+            and (not legacy or c in LEGACY_COLUMNS)]
+
+
+def _cell(column, value):
+    if column in NUMERIC_COLUMNS and isinstance(value, str):
+        parse_number(value)  # ValueError: the schema says a number
     if isinstance(value, float):
         return "nan" if math.isnan(value) else f"{value:.10g}"
     return value

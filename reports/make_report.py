@@ -55,8 +55,11 @@ def main(argv=None):
     except ImportError as exc:
         return fail(f"{exc.name} is not available to {sys.executable}; "
                     "run with /usr/bin/python3", 2)
-    from quasiroll_report.data import ReportError
-    from quasiroll_report.report import build_report
+    try:
+        from quasiroll_report.data import ReportError
+        from quasiroll_report.report import build_report
+    except Exception as exc:  # noqa: BLE001 - e.g. no runs.csv schema installed
+        return fail(f"internal error: {type(exc).__name__}: {exc}", 1)
     warnings.simplefilter("ignore")
     try:
         index = build_report(args.results_dir, args.out, not args.strict)

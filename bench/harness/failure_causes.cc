@@ -6,13 +6,9 @@
 namespace quasiroll::bench {
 
 namespace {
-bool IsPhysicalStatus(const std::string& s) {
-  return s == "INFEASIBLE_FRICTION" || s == "LIFT_OFF" ||
-         s == "DEGENERATE_CONTACT";
-}
-std::string PhysicalDetail(const std::string& s) {
-  if (s == "INFEASIBLE_FRICTION") return "friction_limit";
-  if (s == "LIFT_OFF") return "lift_off";
+std::string PhysicalDetail(RunStatus s) {
+  if (s == RunStatus::kInfeasibleFriction) return "friction_limit";
+  if (s == RunStatus::kLiftOff) return "lift_off";
   return "degenerate_contact";
 }
 // Why a run that left the reference's path did so, from the evidence.
@@ -25,23 +21,24 @@ std::string DivergenceDetail(const FailureEvidence& e) {
 }  // namespace
 
 FailureCause ClassifyFailure(const FailureEvidence& e) {
-  const std::string& st = e.status;
-  if (st == "success") return {"", ""};
-  if (st == "error") return {"numerical", "error"};
+  const RunStatus st = e.status;
+  if (st == RunStatus::kSuccess) return {"", ""};
+  if (st == RunStatus::kError) return {"numerical", "error"};
   // A run past its bounds: the root cause when it is known (e.g. sigma h
   // beyond RK4's stability interval), else the symptom.
-  if (st == "drift_exceeded" || st == "gap_exceeded")
-    return {"numerical", !e.known_instability.empty() ? e.known_instability
-                         : st == "drift_exceeded"     ? "drift_blowup"
-                                                      : "gap_blowup"};
+  if (st == RunStatus::kDriftExceeded || st == RunStatus::kGapExceeded)
+    return {"numerical", !e.known_instability.empty()      ? e.known_instability
+                         : st == RunStatus::kDriftExceeded ? "drift_blowup"
+                                                           : "gap_blowup"};
   // Stops are detected on the output grid (dt), the sampled second-contact
   // check only every contact_check samples: two detection intervals.
   const double tol_t =
       2.0 * std::max(e.dt * std::max(1, e.contact_check), e.ref_dt);
-  const bool ref_stopped = e.has_reference && e.ref_status != "success";
+  const bool ref_stopped =
+      e.has_reference && e.ref_status != RunStatus::kSuccess;
   const bool same_place =
       ref_stopped && std::abs(e.t_reached - e.ref_t_reached) <= tol_t + 1e-9;
-  if (IsPhysicalStatus(st)) {
+  if (IsPhysicalStop(st)) {
     // The reference stops there too (also where its own solver gave up
     // just short of the limit): the limit is the problem's.
     if (same_place) return {"physical", PhysicalDetail(st)};
@@ -54,28 +51,30 @@ FailureCause ClassifyFailure(const FailureEvidence& e) {
     }
     return {"numerical", DivergenceDetail(e)};
   }
-  if (st == "SINGULAR" && same_place && e.ref_status == "SINGULAR")
+  if (st == RunStatus::kSingular && same_place &&
+      e.ref_status == RunStatus::kSingular)
     // Rank-deficient statics at the same place on the reference's path: a
     // property of the configuration, not of the method.
     return {"physical", "singular_point"};
-  if (st == "SOLVER_FAILURE" || st == "SINGULAR") {
+  if (st == RunStatus::kSolverFailure || st == RunStatus::kSingular) {
     // SOLVER_FAILURE means mu > mu_min and regular statics at that state
     // (model.md §7): a solution exists and the NLP did not find it. That the
     // reference (newton by default) fails there too does not make it
     // physical (another backend may pass); only a physical stop of the
     // reference at the same place does.
-    if (same_place && IsPhysicalStatus(e.ref_status))
-      return {"physical", PhysicalDetail(e.ref_status)};
+    if (same_place && e.ref_status && IsPhysicalStop(*e.ref_status))
+      return {"physical", PhysicalDetail(*e.ref_status)};
     // The reference's own solver gives up at the same place: a hard point
     // of the quasi-static NLP (seen within 1 % of mu_min), not this
     // method's weakness alone. Still numerical: a solution exists.
-    if (same_place && e.ref_status == "SOLVER_FAILURE")
+    if (same_place && e.ref_status == RunStatus::kSolverFailure)
       return {"numerical", "shared_solver_failure"};
     return {"numerical", "solver_failure"};
   }
   // An implicit integrator whose residual could not be evaluated because the
   // NLP failed inside it, where the reference's solver fails too.
-  if (st == "rhs_failure" && same_place && e.ref_status == "SOLVER_FAILURE")
+  if (st == RunStatus::kRhsFailure && same_place &&
+      e.ref_status == RunStatus::kSolverFailure)
     return {"numerical", "shared_solver_failure"};
   return {"numerical", "integrator_failure"};
 }

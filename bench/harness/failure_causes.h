@@ -3,13 +3,16 @@
 // method's), with a detail name. Pure functions of the evidence; no I/O.
 #pragma once
 
+#include <optional>
 #include <string>
+
+#include "quasiroll/bench/harness/run_status.h"
 
 namespace quasiroll::bench {
 
 // Everything ClassifyFailure() looks at (docs/harness.md, Failure causes).
 struct FailureEvidence {
-  std::string status;  // runs.csv status (after the suite's bounds)
+  RunStatus status = RunStatus::kSuccess;  // after the suite's bounds
   double t_reached = 0;
   // Method.
   double dt = 0;  // hold / output interval
@@ -21,7 +24,9 @@ struct FailureEvidence {
   double drift_max = 0, gap_max = 0, drift_bound = 0, gap_bound = 0;
   // Reference: has_reference false when none could be computed.
   bool has_reference = false;
-  std::string ref_status;
+  // The reference run's status; nullopt for a text that is no RunStatus
+  // (then it compares unequal to every status, success included).
+  std::optional<RunStatus> ref_status;
   double ref_t_reached = 0;
   double ref_dt = 0;  // spacing of the reference's samples
 };

@@ -20,12 +20,14 @@
 #include <sstream>
 #include <thread>
 
-#include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/harness/failure_causes.h"
 #include "quasiroll/bench/harness/metrics.h"
-#include "quasiroll/core/quasi_static_validity.h"
-#include "quasiroll/bench/io/run_output.h"
+#include "quasiroll/bench/harness/run_status.h"
 #include "quasiroll/bench/harness/shard.h"
+#include "quasiroll/bench/io/json_writer.h"
+#include "quasiroll/bench/io/run_output.h"
+#include "quasiroll/bench/io/runs_schema.h"
+#include "quasiroll/core/quasi_static_validity.h"
 #include "quasiroll/core/nlp.h"
 
 namespace quasiroll::bench {
@@ -34,73 +36,11 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 const std::vector<std::string>& RunsCsvColumns() {
-  static const std::vector<std::string> columns = {"run_id",
-                                                   "suite_group",
-                                                   "scene",
-                                                   "terrain",
-                                                   "nlp",
-                                                   "dae",
-                                                   "coupling",
-                                                   "rk_method",
-                                                   "dt",
-                                                   "tol",
-                                                   "atol",
-                                                   "nlp_tol",
-                                                   "sigma",
-                                                   "eps",
-                                                   "dae_index",
-                                                   "substeps",
-                                                   "contact_check",
-                                                   "mu",
-                                                   "seed",
-                                                   "roughness",
-                                                   "t_end",
-                                                   "repeats",
-                                                   "status",
-                                                   "stop_reason",
-                                                   "t_reached",
-                                                   "mu_min",
-                                                   "critical_wheel",
-                                                   "wall_s",
-                                                   "nlp_solves",
-                                                   "nlp_iters",
-                                                   "rhs_evals",
-                                                   "jac_evals",
-                                                   "steps",
-                                                   "rejected_steps",
-                                                   "samples",
-                                                   "ref_kind",
-                                                   "ref_status",
-                                                   "ref_hash",
-                                                   "common_samples",
-                                                   "err_pos_rms",
-                                                   "err_pos_max",
-                                                   "err_final",
-                                                   "err_final_rot",
-                                                   "err_rot_max",
-                                                   "err_force_rms",
-                                                   "err_slip",
-                                                   "drift_max",
-                                                   "drift_final",
-                                                   "gap_max",
-                                                   "host",
-                                                   "cpu_model",
-                                                   "nlp_options",
-                                                   "dae_options",
-                                                   "scene_fields",
-                                                   "kkt_residual",
-                                                   "cause",
-                                                   "cause_detail",
-                                                   "t_reached_frac",
-                                                   "wall_s_median",
-                                                   "wall_s_min",
-                                                   "wall_s_max",
-                                                   "wall_s_all",
-                                                   "wall_per_sim_s",
-                                                   "qs_inertia_ratio",
-                                                   "ref_mu_min",
-                                                   "ref_err_est",
-                                                   "nlp_iters_native"};
+  static const std::vector<std::string> columns = [] {
+    std::vector<std::string> names;
+    for (const RunsColumn& c : RunsCsvSchema()) names.push_back(c.name);
+    return names;
+  }();
   return columns;
 }
 
@@ -225,8 +165,8 @@ void SetNanMetrics(RowBuilder* b) {
   b->SetInt("common_samples", 0);
 }
 
-FailureEvidence Evidence(const RunSpec& run, const std::string& status,
-                         double t_reached, const Reference* reference) {
+FailureEvidence Evidence(const RunSpec& run, RunStatus status, double t_reached,
+                         const Reference* reference) {
   FailureEvidence e;
   e.status = status;
   e.t_reached = t_reached;
@@ -240,12 +180,21 @@ FailureEvidence Evidence(const RunSpec& run, const std::string& status,
   e.gap_bound = run.bounds.gap;
   if (reference && !reference->samples.empty()) {
     e.has_reference = true;
-    e.ref_status = reference->status;
+    e.ref_status = ParseRunStatus(reference->status);
     e.ref_t_reached = reference->samples.back().t;
     if (reference->samples.size() >= 2)
       e.ref_dt = reference->samples[1].t - reference->samples[0].t;
   }
   return e;
+}
+
+// The simulator's stop as a RunStatus. Its statuses are the quasi-static and
+// integrator enums' spellings, all of them RunStatus values
+// (tests/bench/run_status_test.cc): another text is a bug.
+RunStatus SimulatedStatus(const SimulationResult& result) {
+  const std::optional<RunStatus> s = ParseRunStatus(result.status);
+  if (!s) throw std::logic_error("unknown simulation status " + result.status);
+  return *s;
 }
 
 }  // namespace
@@ -261,21 +210,22 @@ std::vector<std::string> MakeRow(const RunSpec& run,
   // The harness's verdict: a run that reached t_end is a success only with
   // its constraint drift and geometric gap within the suite's bounds.
   const DriftMetrics d = ComputeDrift(result.samples);
-  std::string status = result.status;
+  const RunStatus simulated = SimulatedStatus(result);
+  RunStatus status = simulated;
   std::string stop_reason = result.stop_reason;
   if (result.success() && d.drift_max > run.bounds.drift) {
-    status = "drift_exceeded";
+    status = RunStatus::kDriftExceeded;
     stop_reason = "drift_max " + Num(d.drift_max) + " > bounds.drift " +
                   Num(run.bounds.drift);
   } else if (result.success() && d.gap_max > run.bounds.gap) {
-    status = "gap_exceeded";
+    status = RunStatus::kGapExceeded;
     stop_reason = "gap_max " + Num(d.gap_max) + " m > bounds.gap " +
                   Num(run.bounds.gap) + " m";
   }
-  b.Set("status", status);
+  b.Set("status", ToString(status));
   b.Set("stop_reason", OneLine(stop_reason));
   b.Set("t_reached", result.t_reached);
-  b.Set("mu_min", result.status == "INFEASIBLE_FRICTION"
+  b.Set("mu_min", simulated == RunStatus::kInfeasibleFriction
                       ? Num(result.mu_min_at_stop)
                       : std::string());
   b.Set("critical_wheel", result.critical_contact > 0
@@ -341,7 +291,7 @@ std::vector<std::string> ErrorRow(const RunSpec& run,
                                   const std::string& reference_error) {
   RowBuilder b;
   SetParameters(run, terrain_id, &b);
-  b.Set("status", "error");
+  b.Set("status", ToString(RunStatus::kError));
   b.Set("stop_reason", OneLine(message));
   b.Set("t_reached", std::numeric_limits<double>::quiet_NaN());
   b.Set("wall_s", std::numeric_limits<double>::quiet_NaN());
@@ -357,7 +307,7 @@ std::vector<std::string> ErrorRow(const RunSpec& run,
         "wall_s_max", "wall_per_sim_s", "qs_inertia_ratio"})
     b.Set(c, nan);
   const FailureCause cause =
-      ClassifyFailure(Evidence(run, "error", nan, reference));
+      ClassifyFailure(Evidence(run, RunStatus::kError, nan, reference));
   b.Set("cause", cause.cause);
   b.Set("cause_detail", cause.detail);
   return b.values();
@@ -656,7 +606,7 @@ void Progress::Done(const std::string& run_id, const std::string& status,
                     double t_reached, double wall) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++done_;
-  if (status != "success") ++failed_;
+  if (ParseRunStatus(status) != RunStatus::kSuccess) ++failed_;
   const double elapsed = SteadySeconds() - start_;
   const double eta = done_ > 0 ? elapsed / done_ * (total_ - done_) : NAN;
   if (mode_ == 1) {
@@ -827,7 +777,7 @@ RunOutcome ExecuteRun(const Suite& suite, const RunSpec& run,
     row = MakeRow(run, terrain_id, result, walls, scene, ref, reference.error);
   } catch (const std::exception& e) {
     result = SimulationResult{};
-    result.status = "error";
+    result.status = ToString(RunStatus::kError);
     row = ErrorRow(run, terrain_id, e.what(), ref, reference.error);
   }
   RunOutcome outcome;
@@ -863,7 +813,7 @@ HarnessSummary FinishSuiteOutput(const Suite& suite,
     for (std::size_t c = 0; c < status_col && pos != std::string::npos; ++c)
       pos = row.find(',', pos) + 1;
     const std::string status = row.substr(pos, row.find(',', pos) - pos);
-    if (status != "success") ++summary.failures;
+    if (ParseRunStatus(status) != RunStatus::kSuccess) ++summary.failures;
   }
   AtomicWriteFile(SuiteOutputDir(options) + "/runs.csv", csv);
   summary.wall_seconds = wall_seconds;

@@ -29,8 +29,8 @@ struct HarnessOptions {
   // one line per finished run), 0 never, 1 lines, 2 updating line.
   int progress = -1;
   std::FILE* log = stderr;
-  // --shard I/N (bench/harness/shard.h): run only slice shard_index of shard_count;
-  // shard_count 0 = no sharding. runs.csv and meta.json then go to
+  // --shard I/N (bench/harness/shard.h): run only slice shard_index of
+  // shard_count; shard_count 0 = no sharding. runs.csv and meta.json then go to
   // DIR/shards/<I>-of-<N>/ so that the N shards may share DIR.
   int shard_index = 0;
   int shard_count = 0;
@@ -47,7 +47,8 @@ struct HarnessSummary {
   double wall_seconds = 0;
 };
 
-// runs.csv column names, in order.
+// runs.csv column names, in order: the names of RunsCsvSchema()
+// (bench/io/runs_columns.tsv).
 const std::vector<std::string>& RunsCsvColumns();
 // A CSV field: quoted (with doubled quotes) if it contains , " CR or LF.
 std::string CsvField(const std::string& value);

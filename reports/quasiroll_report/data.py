@@ -16,6 +16,37 @@ class ReportError(Exception):
     """Bad input: the message is printed as one line, exit code 2."""
 
 
+# The runs.csv schema: bench/io/runs_columns.tsv, the one definition the
+# C++ writer embeds. Beside the package in the source tree (reports/..) and
+# in an install (<prefix>/share/quasiroll/{reports,bench/io}).
+RUNS_SCHEMA_PATH = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
+    os.path.abspath(__file__)))), "bench", "io", "runs_columns.tsv")
+SCHEMA_TYPES = ("string", "int", "double", "json")
+
+
+def read_runs_schema(path=RUNS_SCHEMA_PATH):
+    """The runs.csv columns in order: dicts with name, type, unit, doc."""
+    try:
+        with open(path, encoding="utf-8") as handle:
+            lines = handle.read().splitlines()
+    except OSError as exc:
+        raise ReportError(f"cannot read the runs.csv schema: {exc}") from None
+    if not lines or lines[0].split("\t") != ["name", "type", "unit", "doc"]:
+        raise ReportError(f"{path}: expected the header name, type, unit, doc")
+    columns = []
+    for line_no, line in enumerate(lines[1:], start=2):
+        fields = line.split("\t")
+        if len(fields) != 4 or fields[1] not in SCHEMA_TYPES:
+            raise ReportError(f"{path} line {line_no}: expected name, type "
+                              f"({'|'.join(SCHEMA_TYPES)}), unit, doc")
+        columns.append(dict(zip(("name", "type", "unit", "doc"), fields)))
+    return columns
+
+
+RUNS_SCHEMA = read_runs_schema()
+RUNS_COLUMNS = [c["name"] for c in RUNS_SCHEMA]
+
+# What the report needs of a runs.csv (older files lack later columns).
 REQUIRED_COLUMNS = [
     "scene", "nlp", "dae", "coupling", "dt", "tol", "sigma", "eps", "mu",
     "seed", "status", "stop_reason", "t_reached", "wall_s", "repeats",
@@ -24,21 +55,25 @@ REQUIRED_COLUMNS = [
     "err_slip", "drift_max", "drift_final", "gap_max",
 ]
 
-# Columns kept as strings; every other known column is parsed as a float.
-STRING_COLUMNS = {"scene", "nlp", "dae", "coupling", "status", "stop_reason",
-                  "run_id", "suite_group", "seed", "terrain", "rk_method",
-                  "ref_kind", "ref_status", "ref_hash", "cause", "cause_detail",
-                  "wall_s_all", "host", "cpu_model", "nlp_options",
-                  "dae_options"}
-OPTIONAL_NUMERIC_COLUMNS = ["mu_min", "roughness", "t_end"]
+# Types from the schema: string and json columns stay strings, int and
+# double columns are parsed as floats. seed is an int that the report only
+# uses as a label and a grouping key (problems.py): kept as text.
+STRING_COLUMNS = {c["name"] for c in RUNS_SCHEMA
+                  if c["type"] in ("string", "json")} | {"seed"}
+NUMERIC_COLUMNS = set(RUNS_COLUMNS) - STRING_COLUMNS
 
-# Columns added for issue #14 (docs/harness.md). Every one is optional: the
-# report omits what needs a missing one and says so on the page.
-TRUST_NUMERIC_COLUMNS = ["kkt_residual", "t_reached_frac", "wall_s_median",
-                         "wall_s_min", "wall_s_max", "wall_per_sim_s",
-                         "qs_inertia_ratio", "ref_mu_min", "ref_err_est"]
-TRUST_STRING_COLUMNS = ["cause", "cause_detail", "wall_s_all", "host",
-                        "cpu_model"]
+# Columns that a row lacking them gets, as nan or "" by their type: added
+# later (issue #14, docs/harness.md), the report omits what needs a missing
+# one and says so on the page. Others stay absent (e.g. ref_status, whose
+# absence selection.py reads as a reference that succeeded).
+DEFAULTED_COLUMNS = [
+    "mu_min", "roughness", "t_end", "kkt_residual", "t_reached_frac",
+    "wall_s_median", "wall_s_min", "wall_s_max", "wall_per_sim_s",
+    "qs_inertia_ratio", "ref_mu_min", "ref_err_est", "cause", "cause_detail",
+    "wall_s_all", "host", "cpu_model", "ref_hash", "terrain", "rk_method"]
+
+for _name in REQUIRED_COLUMNS + DEFAULTED_COLUMNS:
+    assert _name in RUNS_COLUMNS, f"{_name} is no runs.csv column ({RUNS_SCHEMA_PATH})"
 
 WHEEL_COLUMNS = ("c{i}_x", "c{i}_y", "c{i}_z", "n{i}", "t{i}_lon", "t{i}_lat",
                  "slip{i}", "use{i}")
@@ -95,10 +130,6 @@ def _check_columns(header, required, label):
             raise ReportError(f"{label} is missing column '{column}'")
 
 
-NUMERIC_COLUMNS = ({c for c in REQUIRED_COLUMNS if c not in STRING_COLUMNS}
-                   | set(OPTIONAL_NUMERIC_COLUMNS) | set(TRUST_NUMERIC_COLUMNS))
-
-
 def _typed_run(record, line_no):
     """Known numeric columns must parse; extra columns (runs.csv only grows
     additively) stay strings unless they look like numbers."""
@@ -140,10 +171,8 @@ def read_runs(results_dir):
         run.setdefault("run_id", f"row{index + 1}")
         if not run["run_id"]:
             run["run_id"] = f"row{index + 1}"
-        for column in OPTIONAL_NUMERIC_COLUMNS + TRUST_NUMERIC_COLUMNS:
-            run.setdefault(column, math.nan)
-        for column in TRUST_STRING_COLUMNS + ["ref_hash", "terrain", "rk_method"]:
-            run.setdefault(column, "")
+        for column in DEFAULTED_COLUMNS:
+            run.setdefault(column, "" if column in STRING_COLUMNS else math.nan)
         run["timings"] = parse_timings(run.get("wall_s_all", ""))
         run["method"] = method_name(run)
         run["row"] = index + 1

@@ -109,7 +109,7 @@ std::string KnownInstability(const std::string& dae, double sigma,
 FailureEvidence Evidence(const std::string& status, double t_reached,
                          const std::string& ref_status, double ref_t) {
   FailureEvidence e;
-  e.status = status;
+  e.status = ParseRunStatus(status).value();
   e.t_reached = t_reached;
   e.dt = 0.05;
   e.known_instability = KnownInstability("rk-projection", 5, 0.05);
@@ -117,7 +117,7 @@ FailureEvidence Evidence(const std::string& status, double t_reached,
   e.gap_max = 1e-13;
   e.drift_bound = e.gap_bound = 1e-3;
   e.has_reference = true;
-  e.ref_status = ref_status;
+  e.ref_status = ParseRunStatus(ref_status);
   e.ref_t_reached = ref_t;
   e.ref_dt = 0.0125;
   return e;
