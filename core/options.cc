@@ -348,4 +348,18 @@ const char* ToString(BackendRole role) {
   return "?";
 }
 
+const std::vector<std::string>& RunSettingNames() {
+  static const std::vector<std::string> names = {
+      "mu",       "eps",      "mode",         "nlp",      "dae",
+      "coupling", "dt",       "t_end",        "tol",      "atol",
+      "nlp_tol",  "nlp_max_iter", "substeps", "contact_check"};
+  return names;
+}
+
+std::string ShadowedRunSetting(const OptionTable& table) {
+  for (const std::string& name : RunSettingNames())
+    if (FindOption(table, name) != nullptr) return name;
+  return "";
+}
+
 }  // namespace quasiroll

@@ -104,6 +104,14 @@ OptionValue ParseOptionValue(const OptionSpec& spec, const std::string& text,
 OptionValues ResolveOptions(const OptionTable& table, const GivenOptions& given,
                             const std::string& context);
 
+// The names of a run's own settings (the keys of the harness's RunRequest:
+// dt, t_end, tol, substeps, ...). A backend option may not use one: it
+// would act next to the run's setting of that name (the harness refuses
+// such a backend; the conformance kit checks option tables).
+const std::vector<std::string>& RunSettingNames();
+// The first name of RunSettingNames() that `table` declares, "" if none.
+std::string ShadowedRunSetting(const OptionTable& table);
+
 // Names of the table, comma separated ("" for an empty table).
 std::string OptionNames(const OptionTable& table);
 // Finds an option by name (nullptr if absent).

@@ -12,6 +12,7 @@
 
 #include "quasiroll/bench/io/command_json.h"
 #include "quasiroll/bench/harness/harness.h"
+#include "quasiroll/bench/harness/run_request.h"
 #include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/bench/harness/suite.h"
@@ -56,36 +57,10 @@ void AddNlpTol(CLI::App* command, std::optional<double>* nlp_tol) {
 
 }  // namespace
 
-void Commands::Register(CLI::App& app) {
-  RegisterBuiltinNlpSolvers();
-  RegisterBuiltinIntegrators();
-  const std::vector<std::string> nlps = NlpSolverRegistry::Names();
-  const std::vector<std::string> daes = IntegratorRegistry::Names();
-  // Defaults: the registered backends with the default role.
-  solve_.nlp = run_.nlp = NlpSolverRegistry::WithRole(BackendRole::kDefault);
-  run_.dae = IntegratorRegistry::WithRole(BackendRole::kDefault);
-
-  CLI::App* pose = app.add_subcommand(
-      "pose", "Print the initial consistent configuration of a scene");
-  pose->add_option("--scene", pose_.scene, "Scene YAML file")->required();
-  pose->add_flag("--json", pose_.json, "Print JSON instead of text");
-  pose->callback([this] { selected_ = [this] { return RunPose(pose_); }; });
-
-  CLI::App* solve = app.add_subcommand(
-      "solve",
-      "Solve the quasi-static problem at a scene's initial configuration");
-  solve->add_option("--scene", solve_.scene, "Scene YAML file")->required();
-  solve->add_option("--nlp", solve_.nlp, "NLP backend (see 'quasiroll list')")
-      ->check(OneOf(nlps))
-      ->capture_default_str();
-  AddSceneOverrides(solve, &solve_.overrides);
-  AddNlpTol(solve, &solve_.nlp_tol);
-  solve->add_option("--nlp-opt", solve_.nlp_opts,
-                    "NLP backend option key=value (repeatable; see 'quasiroll "
-                    "list --options')");
-  solve->add_flag("--json", solve_.json, "Print JSON instead of text");
-  solve->callback([this] { selected_ = [this] { return RunSolve(solve_); }; });
-
+// `quasiroll run`: its flags are the keys of a RunRequest
+// (bench/harness/run_request.h).
+void Commands::RegisterRun(CLI::App& app, const std::vector<std::string>& nlps,
+                           const std::vector<std::string>& daes) {
   const IntegratorOptions integrator_defaults;
   CLI::App* run = app.add_subcommand(
       "run", "Simulate a scene; writes DIR/trajectory.csv and DIR/run.json");
@@ -143,6 +118,9 @@ void Commands::Register(CLI::App& app) {
                   "IDA formulation: 2 (GGL) or 1 (Baumgarte) (default: 2; "
                   "shorthand of --dae-opt dae_index=...)")
       ->check(IntegerIn(1, 2));
+  run->add_option("--nlp-max-iter", run_.nlp_max_iter,
+                  "Iteration limit of each quasi-static solve (default: 100)")
+      ->check(IntegerIn(1, 1000000));
   run->add_option("--substeps", run_.substeps,
                   "Integrator steps per dt (RK4 step = dt / substeps; initial "
                   "step of adaptive schemes; default: 1)")
@@ -164,6 +142,39 @@ void Commands::Register(CLI::App& app) {
       ->check(OneOf({"auto", "bar", "none"}))
       ->capture_default_str();
   run->callback([this] { selected_ = [this] { return RunRun(run_); }; });
+}
+
+void Commands::Register(CLI::App& app) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  const std::vector<std::string> nlps = NlpSolverRegistry::Names();
+  const std::vector<std::string> daes = IntegratorRegistry::Names();
+  // Defaults: the registered backends with the default role.
+  solve_.nlp = run_.nlp = NlpSolverRegistry::WithRole(BackendRole::kDefault);
+  run_.dae = IntegratorRegistry::WithRole(BackendRole::kDefault);
+
+  CLI::App* pose = app.add_subcommand(
+      "pose", "Print the initial consistent configuration of a scene");
+  pose->add_option("--scene", pose_.scene, "Scene YAML file")->required();
+  pose->add_flag("--json", pose_.json, "Print JSON instead of text");
+  pose->callback([this] { selected_ = [this] { return RunPose(pose_); }; });
+
+  CLI::App* solve = app.add_subcommand(
+      "solve",
+      "Solve the quasi-static problem at a scene's initial configuration");
+  solve->add_option("--scene", solve_.scene, "Scene YAML file")->required();
+  solve->add_option("--nlp", solve_.nlp, "NLP backend (see 'quasiroll list')")
+      ->check(OneOf(nlps))
+      ->capture_default_str();
+  AddSceneOverrides(solve, &solve_.overrides);
+  AddNlpTol(solve, &solve_.nlp_tol);
+  solve->add_option("--nlp-opt", solve_.nlp_opts,
+                    "NLP backend option key=value (repeatable; see 'quasiroll "
+                    "list --options')");
+  solve->add_flag("--json", solve_.json, "Print JSON instead of text");
+  solve->callback([this] { selected_ = [this] { return RunSolve(solve_); }; });
+
+  RegisterRun(app, nlps, daes);
 
   CLI::App* list = app.add_subcommand(
       "list", "List the registered NLP backends and integrators");
@@ -344,6 +355,16 @@ int RunList(const ListArgs& args) {
 
 namespace {
 
+// A RunRequest key as the command line spells it: --dt, --t-end, --dae-opt.
+std::string FlagName(const std::string& key) {
+  if (key == "nlp_options") return "--nlp-opt";
+  if (key == "dae_options") return "--dae-opt";
+  std::string flag = "--" + key;
+  for (char& c : flag)
+    if (c == '_') c = '-';
+  return flag;
+}
+
 void ApplyOverrides(Scene* scene, const SceneOverrides& o) {
   if (o.mu) scene->mu = *o.mu;
   if (o.eps) scene->epsilon = *o.eps;
@@ -454,67 +475,34 @@ int RunRun(const RunArgs& args) {
   CheckOutputDirectory("--out", args.out);
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
-  Scene scene = LoadScene(args.scene);
-  ApplyOverrides(&scene, args.overrides);
-  const double dt = args.dt.value_or(scene.dt);
-  const double t_end = args.t_end.value_or(scene.t_end);
-  if (dt > t_end) {
-    if (args.dt)
-      throw UsageError("--dt",
-                       "must be <= the end time " + bench::Num(t_end) + " s (" +
-                           (args.t_end ? "--t-end" : "scene time.t_end") +
-                           "), got " + bench::Num(dt));
-    throw UsageError("--t-end",
-                     "must be >= the hold interval " + bench::Num(dt) +
-                         " s (scene time.dt), got " + bench::Num(t_end));
-  }
-  SimulationOptions options;
-  options.nlp = args.nlp;
-  options.dae = args.dae;
-  options.coupling = CouplingFromString(args.coupling);
-  options.dt = dt;
-  options.t_end = t_end;
-  if (args.tol) options.integrator.rtol = *args.tol;
-  if (args.atol) options.integrator.atol = *args.atol;
-  options.nlp_options = ParseOptionFlags(args.nlp_opts, "--nlp-opt");
-  options.dae_options = ParseOptionFlags(args.dae_opts, "--dae-opt");
-  // Shorthand flags: the integrator option of the same meaning, when the
-  // integrator has it. For an integrator without it: a one-line note
-  // (nothing changes); given together with --dae-opt for it: an error.
-  {
-    const OptionTable table =
-        IntegratorRegistry::Create(args.dae)->option_table();
-    struct Shorthand {
-      const char* flag;
-      const char* option;
-      std::optional<std::string> value;
-    };
-    const Shorthand shorthands[] = {
-        {"--rk-method", "rk_method", args.rk_method},
-        {"--sigma", "baumgarte_sigma",
-         args.sigma ? std::optional<std::string>(bench::Num(*args.sigma))
-                    : std::nullopt},
-        {"--dae-index", "dae_index",
-         args.dae_index
-             ? std::optional<std::string>(std::to_string(*args.dae_index))
-             : std::nullopt}};
-    for (const Shorthand& sh : shorthands) {
-      if (!sh.value) continue;
-      if (FindOption(table, sh.option) == nullptr) {
-        std::fprintf(stderr, "note: %s does not apply to %s (ignored)\n",
-                     sh.flag, args.dae.c_str());
-        continue;
-      }
-      if (options.dae_options.count(sh.option))
-        throw UsageError(sh.flag,
-                         std::string("also given as --dae-opt ") + sh.option);
-      options.dae_options[sh.option] = *sh.value;
-    }
-  }
-  if (args.substeps) options.integrator.step = dt / *args.substeps;
-  if (args.nlp_tol) options.quasi_static.residual_tolerance = *args.nlp_tol;
-  if (args.contact_check)
-    options.second_contact_check_every = *args.contact_check;
+  bench::RunRequest request;
+  request.mu = args.overrides.mu;
+  request.eps = args.overrides.eps;
+  if (args.overrides.mode)
+    request.mode = *args.overrides.mode == "pvc" ? ActuationMode::kPvc
+                                                 : ActuationMode::kPaper;
+  request.nlp = args.nlp;
+  request.dae = args.dae;
+  request.coupling = CouplingFromString(args.coupling);
+  request.dt = args.dt;
+  request.t_end = args.t_end;
+  request.tol = args.tol;
+  request.atol = args.atol;
+  request.nlp_tol = args.nlp_tol;
+  request.nlp_max_iter = args.nlp_max_iter;
+  request.substeps = args.substeps;
+  request.contact_check = args.contact_check;
+  request.rk_method = args.rk_method;
+  request.sigma = args.sigma;
+  request.dae_index = args.dae_index;
+  request.nlp_options = ParseOptionFlags(args.nlp_opts, "--nlp-opt");
+  request.dae_options = ParseOptionFlags(args.dae_opts, "--dae-opt");
+  bench::ResolvedRun resolved =
+      bench::ResolveRunRequest(LoadScene(args.scene), request, FlagName);
+  for (const std::string& note : resolved.notes)
+    std::fprintf(stderr, "note: %s\n", note.c_str());
+  const Scene& scene = resolved.scene;
+  const SimulationOptions& options = resolved.options;
   Simulator sim(scene, options);
 
   const bool tty = ::isatty(STDERR_FILENO) == 1;

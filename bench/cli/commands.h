@@ -46,7 +46,7 @@ struct RunArgs {
   SceneOverrides overrides;
   std::optional<std::string> rk_method;
   std::optional<double> sigma, tol, atol, nlp_tol;
-  std::optional<int> dae_index, substeps, contact_check;
+  std::optional<int> dae_index, substeps, contact_check, nlp_max_iter;
   std::string out = "out/run";
   std::string progress = "auto";
   std::vector<std::string> nlp_opts, dae_opts;  // --nlp-opt / --dae-opt
@@ -67,6 +67,8 @@ class Commands {
   int Run();
 
  private:
+  void RegisterRun(CLI::App& app, const std::vector<std::string>& nlps,
+                   const std::vector<std::string>& daes);
   std::function<int()> selected_;
   PoseArgs pose_;
   SolveArgs solve_;

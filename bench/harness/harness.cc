@@ -127,6 +127,7 @@ void SetParameters(const RunSpec& run, const std::string& terrain_id,
   b->SetInt("dae_index", run.dae_index);
   b->SetInt("substeps", run.substeps);
   b->SetInt("contact_check", run.contact_check);
+  b->SetInt("nlp_max_iter", run.nlp_max_iter);
   b->Set("mu", run.mu);
   b->Set("seed", run.seed ? std::to_string(*run.seed) : "");
   b->Set("roughness", run.roughness);

@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "quasiroll/bench/harness/run_request.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/yaml_util.h"
 
@@ -56,6 +57,7 @@ SimulationOptions RunSpec::Options() const {
   o.dae_options = dae_options;
   o.quasi_static.residual_tolerance = nlp_tol;
   o.second_contact_check_every = contact_check;
+  o.quasi_static.max_iterations = nlp_max_iter;
   return o;
 }
 
@@ -271,8 +273,11 @@ std::string CanonicalRunKey(const RunSpec& r) {
      << ";seed=" << (r.seed ? std::to_string(*r.seed) : "-")
      << ";roughness=" << Num(r.roughness) << ";t_end=" << Num(r.t_end)
      << ";repeats=" << r.repeats;
-  // Generic axes are appended only when a group has them, so the keys (and
-  // run ids) of suites without them are those of the original fixed grid.
+  // Keys added after the original fixed grid appear only when they differ
+  // from their default, and generic axes only when a group has them, so the
+  // keys (and run ids) of existing suites stay those of the fixed grid.
+  if (r.nlp_max_iter != QuasiStaticOptions{}.max_iterations)
+    os << ";nlp_max_iter=" << r.nlp_max_iter;
   for (const auto& [field, value] : r.scene_fields)
     os << ";scene." << field << "=" << value;
   for (const auto& [name, value] : r.nlp_options_explicit)
@@ -552,6 +557,7 @@ struct GroupSpec {
   double atol_ratio = 1e-2;
   std::vector<double> nlp_tols, sigmas;
   std::vector<std::int64_t> dae_indices, substeps, contact_checks;
+  std::vector<std::int64_t> nlp_max_iters;
   std::vector<double> roughness;
   std::vector<double> dts, epss, mus;
   std::vector<std::uint64_t> seeds;
@@ -601,6 +607,9 @@ void ReadMethodAxes(const YAML::Node& node, const std::string& path,
   g->dae_indices = ReadIntAxis(node, path, "dae_index", 1, 2, {2});
   g->substeps = ReadIntAxis(node, path, "substeps", 1, 100000, {1});
   g->contact_checks = ReadIntAxis(node, path, "contact_check", 0, 1000000, {0});
+  g->nlp_max_iters =
+      ReadIntAxis(node, path, "nlp_max_iter", 1, 1000000,
+                  {QuasiStaticOptions{}.max_iterations});
   g->roughness =
       ReadDoubleAxis(node, path, "roughness", Bounds::NonNegative(), {1.0});
 }
@@ -652,6 +661,24 @@ void ReadGenericAxes(const YAML::Node& node, const std::string& path,
 
 // Reads and checks every key of a group. The order of the reads is the order
 // in which errors are reported, so it is part of the behaviour.
+// A backend option named like a run setting would act next to the run's own
+// setting (run_request.h): such a backend cannot be run.
+void RequireNoShadowedRunSettings(const std::string& path, const GroupSpec& g,
+                                  OptionTables* tables) {
+  auto check = [&](const char* key, const std::string& name,
+                   const OptionTable& table) {
+    const std::string shadowed = ShadowedRunSetting(table);
+    if (!shadowed.empty())
+      Fail(JoinKey(path, key),
+           "backend '" + name + "' declares an option named like the run "
+           "setting " + shadowed +
+               " (a backend option may not shadow a run setting), got '" +
+               shadowed + "'");
+  };
+  for (const std::string& n : g.nlps) check("nlp", n, tables->Nlp(n));
+  for (const std::string& n : g.daes) check("dae", n, tables->Dae(n));
+}
+
 GroupSpec ReadGroupSpec(const YAML::Node& node, const std::string& path,
                         const Suite& suite, OptionTables* tables) {
   yaml::CheckKeys(node, path,
@@ -660,12 +687,14 @@ GroupSpec ReadGroupSpec(const YAML::Node& node, const std::string& path,
                    "atol_ratio",   "nlp_tol",       "sigma",       "eps",
                    "mu",           "seed",          "roughness",   "dae_index",
                    "substeps",     "contact_check", "t_end",       "repeats",
-                   "scene_fields", "nlp_options",   "dae_options", "bounds"});
+                   "scene_fields", "nlp_options",   "dae_options", "bounds",
+                   "nlp_max_iter"});
   if (auto n = Child(node, "description"))
     yaml::ReadString(*n, JoinKey(path, "description"));
   GroupSpec g;
   g.scene_idx = ReadGroupScenes(node, path, suite);
   ReadMethodAxes(node, path, &g);
+  RequireNoShadowedRunSettings(path, g, tables);
   ReadSceneDefaultedAxes(node, path, &g);
   ReadGenericAxes(node, path, suite, tables, &g);
   g.bounds = suite.bounds;
@@ -760,6 +789,10 @@ std::vector<Axis> GridAxes(const GroupSpec& g, const SceneAxes& s) {
   axes.push_back(MakeAxis("contact_check", g.contact_checks,
                           [](RunSpec* r, std::int64_t v) {
                             r->contact_check = static_cast<int>(v);
+                          }));
+  axes.push_back(MakeAxis("nlp_max_iter", g.nlp_max_iters,
+                          [](RunSpec* r, std::int64_t v) {
+                            r->nlp_max_iter = static_cast<int>(v);
                           }));
   for (const Axis& a : g.generic_axes) axes.push_back(a);
   return axes;

@@ -97,6 +97,8 @@ struct RunSpec {
   // Sampled second-contact (single-point contact) check every N samples,
   // 0 = never (SimulationOptions::second_contact_check_every).
   int contact_check = 0;
+  // Iteration limit of each quasi-static solve (QuasiStaticOptions).
+  int nlp_max_iter = 100;
   // Scene sweeps.
   double mu = 0;
   std::optional<std::uint64_t> seed;  // only for random gaussian terrains

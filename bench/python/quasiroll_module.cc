@@ -16,6 +16,7 @@
 #include <optional>
 #include <string>
 
+#include "quasiroll/bench/harness/run_request.h"
 #include "quasiroll/bench/io/command_json.h"
 #include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/bench/harness/suite.h"
@@ -41,19 +42,6 @@ void RequirePositive(const char* name, const std::optional<double>& v) {
                                 ": must be a finite number > 0, got " +
                                 bench::Num(*v));
 }
-void RequireNonNegative(const char* name, const std::optional<double>& v) {
-  if (v && !(std::isfinite(*v) && *v >= 0))
-    throw std::invalid_argument(std::string(name) +
-                                ": must be a finite number >= 0, got " +
-                                bench::Num(*v));
-}
-void RequireIn(const char* name, const std::optional<int>& v, int lo, int hi) {
-  if (v && (*v < lo || *v > hi))
-    throw std::invalid_argument(
-        std::string(name) + ": must be an integer in [" + std::to_string(lo) +
-        ", " + std::to_string(hi) + "], got " + bench::Num(*v));
-}
-
 ActuationMode ModeFromString(const std::string& mode) {
   if (mode == "paper") return ActuationMode::kPaper;
   if (mode == "pvc") return ActuationMode::kPvc;
@@ -126,73 +114,41 @@ std::string SolveText(const Scene& scene_in, const std::string& nlp_given,
 
 // (trajectory.csv text, run.json text) of one simulation.
 std::pair<std::string, std::string> RunText(
-    const Scene& scene_in, const std::string& nlp_given,
-    const std::string& dae_given, const std::string& coupling, std::optional<double> dt,
+    const Scene& scene_in, const std::string& nlp, const std::string& dae,
+    const std::string& coupling, std::optional<double> dt,
     std::optional<double> t_end, std::optional<double> mu,
     std::optional<double> eps, std::optional<std::string> mode,
     std::optional<std::string> rk_method, std::optional<double> sigma,
     std::optional<double> tol, std::optional<double> atol,
     std::optional<double> nlp_tol, std::optional<int> dae_index,
     std::optional<int> substeps, std::optional<int> contact_check,
-    const GivenOptions& nlp_options, const GivenOptions& dae_options) {
-  RegisterBuiltinNlpSolvers();
-  RegisterBuiltinIntegrators();
-  // "" (Python None): the registry's default backends.
-  const std::string nlp = nlp_given.empty() ? NlpSolverRegistry::WithRole(
-                                                  BackendRole::kDefault)
-                                            : nlp_given;
-  const std::string dae = dae_given.empty() ? IntegratorRegistry::WithRole(
-                                                  BackendRole::kDefault)
-                                            : dae_given;
-  RequireBackend("nlp", nlp, NlpSolverRegistry::Names());
-  RequireBackend("dae", dae, IntegratorRegistry::Names());
-  RequirePositive("dt", dt);
-  RequirePositive("t_end", t_end);
-  RequireNonNegative("sigma", sigma);
-  RequirePositive("tol", tol);
-  RequirePositive("atol", atol);
-  RequirePositive("nlp_tol", nlp_tol);
-  RequireIn("dae_index", dae_index, 1, 2);
-  RequireIn("substeps", substeps, 1, 100000);
-  RequireIn("contact_check", contact_check, 1, 1000000000);
-  const Scene scene = WithOverrides(scene_in, mu, eps, mode);
-  SimulationOptions options;
-  options.nlp = nlp;
-  options.dae = dae;
-  options.coupling = CouplingFromString(coupling);
-  options.dt = dt.value_or(scene.dt);
-  options.t_end = t_end.value_or(scene.t_end);
-  if (options.dt > options.t_end)
-    throw std::invalid_argument("dt: must be <= the end time " +
-                                bench::Num(options.t_end) + " s, got " +
-                                bench::Num(options.dt));
-  // Backend options as `quasiroll run --nlp-opt/--dae-opt` takes them
-  // (docs/plugins.md); the shorthands below override the same keys as the
-  // CLI's flags do.
-  options.nlp_options = nlp_options;
-  options.dae_options = dae_options;
-  if (tol) options.integrator.rtol = *tol;
-  if (atol) options.integrator.atol = *atol;
-  // rk_method, sigma, dae_index: shorthands of the integrator options of
-  // that meaning (docs/plugins.md), for integrators that have them.
-  {
-    const OptionTable table = IntegratorRegistry::Create(dae)->option_table();
-    auto shorthand = [&](const char* option,
-                         const std::optional<std::string>& value) {
-      if (value && FindOption(table, option) != nullptr)
-        options.dae_options[option] = *value;
-    };
-    shorthand("rk_method", rk_method);
-    shorthand(
-        "baumgarte_sigma",
-        sigma ? std::optional<std::string>(bench::Num(*sigma)) : std::nullopt);
-    shorthand("dae_index",
-              dae_index ? std::optional<std::string>(std::to_string(*dae_index))
-                        : std::nullopt);
-  }
-  if (substeps) options.integrator.step = options.dt / *substeps;
-  if (nlp_tol) options.quasi_static.residual_tolerance = *nlp_tol;
-  if (contact_check) options.second_contact_check_every = *contact_check;
+    std::optional<int> nlp_max_iter, const GivenOptions& nlp_options,
+    const GivenOptions& dae_options) {
+  bench::RunRequest request;
+  request.mu = mu;
+  request.eps = eps;
+  if (mode) request.mode = ModeFromString(*mode);
+  request.nlp = nlp;  // "" (Python None): the registry's default
+  request.dae = dae;
+  request.coupling = CouplingFromString(coupling);
+  request.dt = dt;
+  request.t_end = t_end;
+  request.tol = tol;
+  request.atol = atol;
+  request.nlp_tol = nlp_tol;
+  request.nlp_max_iter = nlp_max_iter;
+  request.substeps = substeps;
+  request.contact_check = contact_check;
+  request.rk_method = rk_method;
+  request.sigma = sigma;
+  request.dae_index = dae_index;
+  request.nlp_options = nlp_options;
+  request.dae_options = dae_options;
+  // Keywords are named as written in Python: dt, t_end, dae_options.
+  const bench::ResolvedRun resolved = bench::ResolveRunRequest(
+      scene_in, request, [](const std::string& key) { return key; });
+  const Scene& scene = resolved.scene;
+  const SimulationOptions& options = resolved.options;
 
   std::optional<Simulator> sim;
   SimulationResult result;
@@ -308,7 +264,8 @@ PYBIND11_MODULE(_quasiroll, m) {
         py::arg("eps"), py::arg("mode"), py::arg("rk_method"), py::arg("sigma"),
         py::arg("tol"), py::arg("atol"), py::arg("nlp_tol"),
         py::arg("dae_index"), py::arg("substeps"), py::arg("contact_check"),
-        py::arg("nlp_options"), py::arg("dae_options"));
+        py::arg("nlp_max_iter"), py::arg("nlp_options"),
+        py::arg("dae_options"));
   m.def("backends", [] {
     RegisterBuiltinNlpSolvers();
     RegisterBuiltinIntegrators();

@@ -20,7 +20,7 @@ quasiroll::OptionTable MidpointProjectionIntegrator::option_table() const {
       OptionSpec::Int("max_projection_iterations", 10,
                       "Newton corrections per projection")
           .AtLeast(1),
-      OptionSpec::Int("substeps", 1,
+      OptionSpec::Int("midpoint_steps", 1,
                       "midpoint steps per IntegratorOptions::step")
           .AtLeast(1)
           .AtMost(1000),
@@ -32,7 +32,7 @@ void MidpointProjectionIntegrator::ApplyBackendOptions(
   projection_tolerance_ = values.GetDouble("projection_tolerance");
   max_projection_iterations_ =
       static_cast<int>(values.GetInt("max_projection_iterations"));
-  substeps_ = static_cast<int>(values.GetInt("substeps"));
+  substeps_ = static_cast<int>(values.GetInt("midpoint_steps"));
 }
 
 IntegratorStatus MidpointProjectionIntegrator::Project(

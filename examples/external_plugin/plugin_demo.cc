@@ -350,7 +350,7 @@ std::vector<std::string> CsvFields(const std::string& line) {
 
 // The plugin_options group swept the plugins' own options: runs.csv records
 // them (nlp_options / dae_options, the options used) and they took effect
-// (substeps 2 takes twice the midpoint steps of substeps 1).
+// (midpoint_steps 2 takes twice the midpoint steps of midpoint_steps 1).
 void CheckOptionSweep(const std::filesystem::path& runs_csv) {
   std::ifstream in(runs_csv);
   std::string line;
@@ -369,12 +369,12 @@ void CheckOptionSweep(const std::filesystem::path& runs_csv) {
   Check(rows.size() == 4, "plugin_options group: " +
                               std::to_string(rows.size()) + " rows (want 4)");
   if (rows.size() != 4) return;
-  // Grid order: lambda_init_scale, then substeps (innermost).
+  // Grid order: lambda_init_scale, then midpoint_steps (innermost).
   for (std::size_t i = 0; i < 4; ++i) {
     const std::string& dae = rows[i][col("dae_options")];
     const std::string& nlp = rows[i][col("nlp_options")];
     const std::string want_sub =
-        i % 2 == 0 ? "\"substeps\":1" : "\"substeps\":2";
+        i % 2 == 0 ? "\"midpoint_steps\":1" : "\"midpoint_steps\":2";
     const std::string want_lambda =
         i < 2 ? "\"lambda_init_scale\":1e-06" : "\"lambda_init_scale\":0.001";
     Check(dae.find(want_sub) != std::string::npos &&
@@ -387,7 +387,7 @@ void CheckOptionSweep(const std::filesystem::path& runs_csv) {
     const long steps1 = std::stol(rows[i][col("steps")]);
     const long steps2 = std::stol(rows[i + 1][col("steps")]);
     Check(steps2 == 2 * steps1,
-          "substeps 2 doubles the midpoint steps: " + std::to_string(steps1) +
+          "midpoint_steps 2 doubles the midpoint steps: " + std::to_string(steps1) +
               " -> " + std::to_string(steps2));
   }
 }
@@ -416,7 +416,7 @@ groups:
                            R"(]
     dt: [0.05]
     nlp_options: {lambda_init_scale: [1.0e-6, 1.0e-3]}
-    dae_options: {substeps: [1, 2]}
+    dae_options: {midpoint_steps: [1, 2]}
 )";
   const std::string suites = data_dir + "/bench/suites";
   const bench::Suite suite =
@@ -448,7 +448,7 @@ groups:
     const std::string msg = e.what();
     Check(msg.find("no_such_option") != std::string::npos &&
               msg.find("known: ") != std::string::npos &&
-              msg.find("substeps") != std::string::npos,
+              msg.find("midpoint_steps") != std::string::npos,
           "unknown plugin option refused: " + msg);
   }
   if (g_failures == 0) std::filesystem::remove_all(out);

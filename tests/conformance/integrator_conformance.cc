@@ -106,6 +106,8 @@ void ExpectOptionTableValid(Integrator& integrator) {
                        std::isdigit(static_cast<unsigned char>(c)) || c == '_');
     EXPECT_TRUE(alphabet) << spec.name << ": not [a-z0-9_]+";
     EXPECT_FALSE(spec.doc.empty()) << spec.name << ": no doc line";
+    EXPECT_EQ(ShadowedRunSetting({spec}), "")
+        << spec.name << ": named like a run setting (RunSettingNames())";
     defaults[spec.name] = OptionValueText(spec.default_value);
   }
   EXPECT_EQ(integrator.backend_options().values().size(), table.size());

@@ -149,6 +149,8 @@ void ExpectOptionTableValid(NlpSolver& solver) {
         << spec.name << ": duplicate name";
     EXPECT_TRUE(IsOptionName(spec.name)) << spec.name << ": not [a-z0-9_]+";
     EXPECT_FALSE(spec.doc.empty()) << spec.name << ": no doc line";
+    EXPECT_EQ(ShadowedRunSetting({spec}), "")
+        << spec.name << ": named like a run setting (RunSettingNames())";
     defaults[spec.name] = OptionValueText(spec.default_value);
   }
   EXPECT_EQ(solver.backend_options().values().size(), table.size());

@@ -72,13 +72,15 @@ def solve(scene, nlp=None, *, mu=None, eps=None, mode=None, nlp_tol=None):
 def run(scene, nlp=None, dae=None, *, coupling="zoh", dt=None,
         t_end=None, mu=None, eps=None, mode=None, rk_method=None, sigma=None,
         tol=None, atol=None, nlp_tol=None, dae_index=None, substeps=None,
-        contact_check=None, nlp_options=None, dae_options=None, as_frame=True):
+        contact_check=None, nlp_options=None, dae_options=None, as_frame=True,
+        nlp_max_iter=None):
     """Simulates `scene` (`quasiroll run`). Returns (trajectory, stats):
     trajectory is a pandas DataFrame with the columns of trajectory.csv (or,
     with as_frame=False, a dict of numpy arrays), stats the run.json dict
     (status, stop_reason, t_reached, counters, wall_s, options, ...).
     Options left at None take the scene's value or the library default (nlp,
     dae: the backends registered as defaults, `quasiroll list`).
+    nlp_max_iter: the iteration limit of each quasi-static solve (100).
     nlp_options / dae_options: the backends' own options as a dict (name ->
     value, as `--nlp-opt` / `--dae-opt`; `quasiroll list --options` lists
     them); an unknown or ill-typed one raises ValueError naming it. The GIL
@@ -99,7 +101,7 @@ def run(scene, nlp=None, dae=None, *, coupling="zoh", dt=None,
         return out
     csv_text, run_json = _quasiroll._run_text(
         scene, nlp or "", dae or "", coupling, dt, t_end, mu, eps, mode, rk_method, sigma,
-        tol, atol, nlp_tol, dae_index, substeps, contact_check,
+        tol, atol, nlp_tol, dae_index, substeps, contact_check, nlp_max_iter,
         _given("nlp_options", nlp_options), _given("dae_options", dae_options))
     stats = json.loads(run_json)
     if as_frame:

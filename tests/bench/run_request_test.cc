@@ -1,0 +1,146 @@
+// One RunRequest, one set of rules (bench/harness/run_request.h): the CLI and
+// the Python module differ only in how they name keys.
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "quasiroll/bench/harness/run_request.h"
+#include "quasiroll/bench/harness/suite.h"
+#include "quasiroll/core/dae.h"
+#include "quasiroll/core/nlp.h"
+
+namespace quasiroll::bench {
+namespace {
+
+const std::string kScenes = std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/";
+
+std::string Flag(const std::string& key) {
+  if (key == "dae_options") return "--dae-opt";
+  std::string f = "--" + key;
+  for (char& c : f)
+    if (c == '_') c = '-';
+  return f;
+}
+std::string Same(const std::string& key) { return key; }
+
+std::string ErrorOf(const RunRequest& r, const KeyNamer& namer) {
+  try {
+    ResolveRunRequest(LoadScene(kScenes + "flat.yaml"), r, namer);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(RunRequest, DefaultsComeFromTheSceneAndTheRegistry) {
+  const Scene scene = LoadScene(kScenes + "paper.yaml");
+  RunRequest r;
+  r.mu = 0.3;
+  r.nlp_max_iter = 7;
+  r.substeps = 4;
+  const ResolvedRun run = ResolveRunRequest(scene, r, Flag);
+  EXPECT_EQ(run.options.nlp, NlpSolverRegistry::WithRole(BackendRole::kDefault));
+  EXPECT_EQ(run.options.dae,
+            IntegratorRegistry::WithRole(BackendRole::kDefault));
+  EXPECT_EQ(run.options.dt, scene.dt);
+  EXPECT_EQ(run.options.t_end, scene.t_end);
+  EXPECT_EQ(run.options.integrator.step, scene.dt / 4);
+  EXPECT_EQ(run.options.quasi_static.max_iterations, 7);
+  EXPECT_EQ(run.scene.mu, 0.3);
+}
+
+TEST(RunRequest, TimesAreNamedAsTheFrontEndSpellsThem) {
+  RunRequest r;
+  r.dt = 5;
+  r.t_end = 1;
+  EXPECT_EQ(ErrorOf(r, Flag),
+            "--dt: must be <= the end time 1 s (--t-end), got 5");
+  EXPECT_EQ(ErrorOf(r, Same), "dt: must be <= the end time 1 s (t_end), got 5");
+  r.dt.reset();
+  r.t_end = 0.01;  // flat.yaml's dt is larger
+  EXPECT_NE(ErrorOf(r, Flag).find("--t-end: must be >= the hold interval"),
+            std::string::npos);
+  RunRequest bad;
+  bad.nlp_max_iter = 0;
+  EXPECT_EQ(ErrorOf(bad, Same),
+            "nlp_max_iter: must be an integer in [1, 1000000], got 0");
+}
+
+TEST(RunRequest, ShorthandsMapOntoIntegratorOptionsOnce) {
+  const Scene scene = LoadScene(kScenes + "flat.yaml");
+  RunRequest r;
+  r.dae = "rk-baumgarte";
+  r.sigma = 2;
+  r.rk_method = "dp54";
+  r.dae_index = 1;  // rk-baumgarte has no dae_index: a note, nothing else
+  const ResolvedRun run = ResolveRunRequest(scene, r, Flag);
+  EXPECT_EQ(run.options.dae_options.at("baumgarte_sigma"), "2");
+  EXPECT_EQ(run.options.dae_options.at("rk_method"), "dp54");
+  EXPECT_EQ(run.options.dae_options.count("dae_index"), 0u);
+  ASSERT_EQ(run.notes.size(), 1u);
+  EXPECT_EQ(run.notes[0], "--dae-index does not apply to rk-baumgarte (ignored)");
+  // Given twice (shorthand and backend option): an error in every front end.
+  r.dae_options["rk_method"] = "rk4";
+  EXPECT_EQ(ErrorOf(r, Flag), "--rk-method: also given as --dae-opt rk_method");
+  EXPECT_EQ(ErrorOf(r, Same), "rk_method: also given as dae_options rk_method");
+}
+
+// A backend whose option is named like a run setting ("substeps") would act
+// next to the run's own setting: refused by the request and by suites.
+class ShadowingIntegrator final : public Integrator {
+ public:
+  std::string name() const override { return "shadowing-test"; }
+  OptionTable option_table() const override {
+    return {OptionSpec::Int("substeps", 1, "clashes with the run setting")};
+  }
+
+ private:
+  void DoIntegrate(ConstrainedOde&, double, double, Eigen::Ref<Eigen::VectorXd>,
+                   const IntegratorOptions&, IntegratorResult* result) override {
+    result->status = IntegratorStatus::kConvergenceFailure;
+  }
+};
+
+TEST(RunRequest, ABackendOptionMayNotShadowARunSetting) {
+  RegisterBuiltinIntegrators();
+  if (!IntegratorRegistry::Has("shadowing-test"))
+    IntegratorRegistry::Register("shadowing-test", "test", [] {
+      return std::make_unique<ShadowingIntegrator>();
+    });
+  RunRequest r;
+  r.dae = "shadowing-test";
+  EXPECT_NE(ErrorOf(r, Flag).find("--dae-opt: backend 'shadowing-test' "
+                                  "declares an option named like the run "
+                                  "setting --substeps"),
+            std::string::npos);
+  try {
+    LoadSuiteFromString(
+        "name: s\nscenes:\n  - {name: flat, file: flat.yaml}\ngroups:\n  g:\n"
+        "    dae: [shadowing-test]\n",
+        "<test>", kScenes);
+    FAIL() << "a shadowing backend was accepted in a suite";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("groups.g.dae: backend "
+                                         "'shadowing-test' declares an option "
+                                         "named like the run setting substeps"),
+              std::string::npos)
+        << e.what();
+  }
+  // No built-in shadows a run setting.
+  for (const std::string& n : IntegratorRegistry::Names()) {
+    if (n == "shadowing-test") continue;
+    EXPECT_EQ(ShadowedRunSetting(IntegratorRegistry::Create(n)->option_table()),
+              "")
+        << n;
+  }
+  RegisterBuiltinNlpSolvers();
+  for (const std::string& n : NlpSolverRegistry::Names())
+    EXPECT_EQ(ShadowedRunSetting(NlpSolverRegistry::Create(n)->option_table()),
+              "")
+        << n;
+}
+
+}  // namespace
+}  // namespace quasiroll::bench
