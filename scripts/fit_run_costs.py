@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Calibrates the a-priori run cost of bench/harness/shard.cc from a measured suite.
+"""Calibrates the a-priori run cost (bench/harness/cost_model.cc) from a measured suite.
 
     /usr/bin/python3 scripts/fit_run_costs.py DIR
 
@@ -15,9 +15,12 @@ s (seconds per hold interval) is the median over the successful rows of each
 per-run overhead outside the timed loop (elapsed between consecutive
 runs/<id>.csv files minus repeats * wall_s: initial configuration, metrics,
 files); p is the least-squares slope of log(wall_s / (holds * s)) against
-log(1e-8 / tol) over the adaptive rows of other tolerances. Prints the C++
-tables for bench/harness/shard.cc and the model's accuracy against the elapsed
-times.
+log(1e-8 / tol) over the adaptive rows of other tolerances. Prints the
+table of s and the model's accuracy against the elapsed times. The
+backends' BackendInfo cost hints (solvers/registry.cc,
+integrators/registry.cc) come from this table: an NLP's cost_ratio is its
+s with the default integrator in zoh over the default NLP's, an
+integrator's seconds_per_hold_{zoh,coupled} its s with the default NLP.
 """
 import math
 import os

@@ -4,7 +4,7 @@
 #   scripts/install-deps.sh --fuzz   also the optional fuzzing toolchain
 set -euo pipefail
 PACKAGES=(
-  build-essential cmake pkg-config git
+  build-essential cmake pkg-config git ccache
   libeigen3-dev coinor-libipopt-dev liblapack-dev libnlopt-cxx-dev libceres-dev
   libsundials-dev libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev
   libcli11-dev python3 python3-matplotlib python3-numpy

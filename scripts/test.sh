@@ -21,7 +21,15 @@ build_type=Release
 # and MPI, docs/cluster.md) in the Release build only.
 long_tests=ON
 [ "$sanitize" = ON ] && long_tests=OFF
-cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE="$build_type" \
+# ccache (installed by install-deps.sh) when present: paths relative to the
+# checkout (CCACHE_BASEDIR, no hashed working directory) so that another
+# clone of the same sources on this machine reuses the objects.
+launcher=()
+if command -v ccache > /dev/null; then
+  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=true
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
+cmake -S . -B "$build_dir" "${launcher[@]}" -DCMAKE_BUILD_TYPE="$build_type" \
   -DQUASIROLL_WERROR=ON -DQUASIROLL_SANITIZE="$sanitize" \
   -DQUASIROLL_LONG_TESTS="$long_tests"
 cmake --build "$build_dir" -j "$jobs"
