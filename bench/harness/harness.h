@@ -17,6 +17,7 @@
 
 #include "quasiroll/bench/harness/reference.h"
 #include "quasiroll/bench/harness/suite.h"
+#include "quasiroll/bench/io/csv.h"  // CsvField, JoinCsvRow (runs.csv rows)
 
 namespace quasiroll::bench {
 
@@ -29,8 +30,8 @@ struct HarnessOptions {
   // one line per finished run), 0 never, 1 lines, 2 updating line.
   int progress = -1;
   std::FILE* log = stderr;
-  // --shard I/N (bench/harness/shard.h): run only slice shard_index of shard_count;
-  // shard_count 0 = no sharding. runs.csv and meta.json then go to
+  // --shard I/N (bench/harness/shard.h): run only slice shard_index of
+  // shard_count; shard_count 0 = no sharding. runs.csv and meta.json then go to
   // DIR/shards/<I>-of-<N>/ so that the N shards may share DIR.
   int shard_index = 0;
   int shard_count = 0;
@@ -49,8 +50,6 @@ struct HarnessSummary {
 
 // runs.csv column names, in order.
 const std::vector<std::string>& RunsCsvColumns();
-// A CSV field: quoted (with doubled quotes) if it contains , " CR or LF.
-std::string CsvField(const std::string& value);
 
 // One runs.csv row (values in RunsCsvColumns() order) for a run of `scene`
 // whose simulation produced `result` (the first repeat; `wall_seconds` has

@@ -15,59 +15,18 @@
 #include <sstream>
 
 #include "quasiroll/bench/harness/suite.h"
+#include "quasiroll/bench/io/csv.h"
+#include "test_support.h"
 
 namespace quasiroll::bench {
 namespace {
 
 namespace fs = std::filesystem;
-const std::string kScenes =
-    std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/";
-
-std::string ReadAll(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 std::string HostName() {
   char host[256] = {0};
   ::gethostname(host, sizeof(host) - 1);
   return host;
-}
-
-// RFC 4180-style parser (quoted fields, doubled quotes); rows of fields.
-std::vector<std::vector<std::string>> ParseCsv(const std::string& text) {
-  std::vector<std::vector<std::string>> rows;
-  std::vector<std::string> row;
-  std::string field;
-  bool quoted = false;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
-        field += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        field += c;
-      }
-    } else if (c == '"') {
-      quoted = true;
-    } else if (c == ',') {
-      row.push_back(field);
-      field.clear();
-    } else if (c == '\n') {
-      row.push_back(field);
-      field.clear();
-      rows.push_back(row);
-      row.clear();
-    } else {
-      field += c;
-    }
-  }
-  return rows;
 }
 
 struct Table {
@@ -109,22 +68,11 @@ std::string WithoutTiming(const fs::path& p) {
 class BenchHarness : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ = fs::temp_directory_path() /
-            ("quasiroll_harness_test_" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
+    root_ = FreshTempDir("quasiroll_harness_test_");
     suite_path_ = (root_ / "tiny.yaml").string();
     std::ofstream(suite_path_)
-        << "name: tiny\n"
-           "scenes:\n"
-           "  - {name: paper, file: "
-        << kScenes
-        << "paper.yaml, overrides: {time: {t_end: 0.5}}}\n"
-           "  - {name: flat, file: "
-        << kScenes
-        << "flat.yaml, overrides: {time: {t_end: 0.5}}}\n"
-           "groups:\n"
-           "  wp:\n"
+        << TinySuiteScenes()
+        << "  wp:\n"
            "    nlp: [newton, ceres]\n"
            "    dae: [rk-projection, rk-baumgarte]\n"
            "    dt: [0.05, 0.1]\n"
@@ -390,11 +338,7 @@ TEST_F(BenchHarness, VerdictColumns) {
 // physical. Tight bounds turn a finished Baumgarte run (drift ~1e-8) into
 // drift_exceeded.
 TEST(BenchVerdicts, BlowUpIsNumericalFrictionStopIsPhysical) {
-  const fs::path root =
-      fs::temp_directory_path() /
-      ("quasiroll_verdict_test_" + std::to_string(::getpid()));
-  fs::remove_all(root);
-  fs::create_directories(root);
+  const fs::path root = FreshTempDir("quasiroll_verdict_test_");
   const std::string suite_path = (root / "verdicts.yaml").string();
   std::ofstream(suite_path)
       << "scenes:\n"

@@ -1,0 +1,48 @@
+// Helpers shared by the bench/ tests that run suites end to end.
+#pragma once
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+
+#include "quasiroll/bench/io/run_output.h"
+
+namespace quasiroll::bench {
+
+// The scene files of the tree, with a trailing slash.
+inline const std::string kScenes =
+    std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/";
+
+// The whole file ("" if it cannot be read).
+inline std::string ReadAll(const std::filesystem::path& p) {
+  std::string text;
+  ReadTextFile(p.string(), &text);
+  return text;
+}
+
+// An empty directory under the temporary directory, named `prefix` and this
+// process's id (parallel ctest processes do not share one).
+inline std::filesystem::path FreshTempDir(const std::string& prefix) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    (prefix + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+// The start of a suite file named "tiny": the paper and flat scenes cut to
+// t_end 0.5 s, then "groups:" for the caller to fill.
+inline std::string TinySuiteScenes() {
+  return "name: tiny\n"
+         "scenes:\n"
+         "  - {name: paper, file: " +
+         kScenes +
+         "paper.yaml, overrides: {time: {t_end: 0.5}}}\n"
+         "  - {name: flat, file: " +
+         kScenes +
+         "flat.yaml, overrides: {time: {t_end: 0.5}}}\n"
+         "groups:\n";
+}
+
+}  // namespace quasiroll::bench
