@@ -43,12 +43,6 @@ const std::vector<std::string>& TimingAndHostColumns() {
 
 namespace {
 
-std::string JsonQuote(const std::string& s) {
-  JsonWriter w;
-  w.Value(s);
-  return w.str();
-}
-
 struct Meta {
   std::string path;
   JsonValue doc;  // an object

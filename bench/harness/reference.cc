@@ -264,10 +264,34 @@ std::string ReferenceKey(const Scene& scene, const TerrainSpec& terrain,
 }
 
 namespace {
+
 bool PhysicalStop(const std::string& status) {
   return status == "INFEASIBLE_FRICTION" || status == "LIFT_OFF" ||
          status == "DEGENERATE_CONTACT";
 }
+
+// The numerical reference's options: "rk4" at a fixed step (the primary
+// method), "dp54" at rtol 1e-10 (the fallback after a numerical breakdown).
+SimulationOptions NumericalReferenceOptions(const Scene& scene,
+                                            const ReferenceSettings& settings,
+                                            const std::string& method) {
+  SimulationOptions o;
+  o.nlp = settings.Nlp();
+  o.dae = ReferenceSettings::Integrator();
+  o.coupling = Coupling::kCoupled;
+  o.dt = scene.dt / settings.dt_divisor;
+  o.t_end = scene.t_end;
+  o.dae_options = {{"rk_method", method}};
+  o.integrator.step = o.dt / settings.substeps;
+  o.integrator.max_steps = 100000000;
+  if (method != "rk4") {
+    o.integrator.rtol = 1e-10;
+    o.integrator.atol = 1e-12;
+  }
+  o.quasi_static.residual_tolerance = settings.residual_tolerance;
+  return o;
+}
+
 }  // namespace
 
 SimulationResult ComputeNumericalReference(const Scene& scene,
@@ -275,16 +299,7 @@ SimulationResult ComputeNumericalReference(const Scene& scene,
                                            std::string* method) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
-  SimulationOptions o;
-  o.nlp = settings.Nlp();
-  o.dae = ReferenceSettings::Integrator();
-  o.coupling = Coupling::kCoupled;
-  o.dt = scene.dt / settings.dt_divisor;
-  o.t_end = scene.t_end;
-  o.dae_options = {{"rk_method", "rk4"}};
-  o.integrator.step = o.dt / settings.substeps;
-  o.integrator.max_steps = 100000000;
-  o.quasi_static.residual_tolerance = settings.residual_tolerance;
+  SimulationOptions o = NumericalReferenceOptions(scene, settings, "rk4");
   Simulator sim(scene, o);
   SimulationResult result = sim.Run();
   if (method) *method = "rk4";
@@ -292,9 +307,7 @@ SimulationResult ComputeNumericalReference(const Scene& scene,
   // A numerical breakdown (solver or integrator failure) of the primary
   // configuration: try DP5(4) at rtol 1e-10 (other stage points) and keep
   // whichever gets further.
-  o.dae_options = {{"rk_method", "dp54"}};
-  o.integrator.rtol = 1e-10;
-  o.integrator.atol = 1e-12;
+  o = NumericalReferenceOptions(scene, settings, "dp54");
   Simulator alt(scene, o);
   SimulationResult second = alt.Run();
   if (second.success() || second.t_reached > result.t_reached) {
@@ -534,23 +547,6 @@ SimulationResult ComputeAnalyticReference(const Scene& scene,
   result.t_reached = n * dt;
   ref->method = std::string("closed form (") + ToString(ac) + ")";
   return result;
-}
-
-// The options ComputeNumericalReference used, for DescribeReferenceMethod.
-SimulationOptions NumericalReferenceOptions(const Scene& scene,
-                                            const ReferenceSettings& settings,
-                                            const std::string& method) {
-  SimulationOptions used;
-  used.nlp = settings.Nlp();
-  used.dae = ReferenceSettings::Integrator();
-  used.coupling = Coupling::kCoupled;
-  used.dt = scene.dt / settings.dt_divisor;
-  used.dae_options = {{"rk_method", method}};
-  used.integrator.step = used.dt / settings.substeps;
-  used.integrator.rtol = 1e-10;
-  used.integrator.atol = 1e-12;
-  used.quasi_static.residual_tolerance = settings.residual_tolerance;
-  return used;
 }
 
 // mu_min along the path (every 2nd scene-dt sample, refined around the
