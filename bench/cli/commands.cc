@@ -210,12 +210,10 @@ int RunPose(const PoseArgs& args) {
     std::cout << PoseJson(scene, model, theta, report) << "\n";
     return kExitOk;
   }
-  Mat3 R;
-  Vec3 p;
-  model.PlatformPose(theta, &R, &p);
-  const Vec3 rpy = RpyFromRotation(R);
-  std::array<ChainState, 3> chains;
-  for (int i = 0; i < 3; ++i) model.EvaluateChain(theta, i, &chains[i]);
+  const PoseView pose = EvaluatePose(model, theta);
+  const Vec3& p = pose.p;
+  const Vec3& rpy = pose.rpy;
+  const auto& chains = pose.chains;
   std::printf("scene        %s (%s)\n", scene.name.c_str(),
               scene.terrain->Describe().c_str());
   std::printf("position     x=%.9f y=%.9f z=%.9f m\n", p.x(), p.y(), p.z());

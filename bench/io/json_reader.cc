@@ -143,51 +143,42 @@ class JsonParser {
     return v;
   }
 
-  void ParseObject(int depth, JsonValue* v) {
-    v->type_ = JsonValue::Type::kObject;
-    ++pos_;  // '{'
+  // The comma-separated items up to `close` of the object or array opened at
+  // pos_; `read_item` reads one.
+  template <typename ReadItem>
+  void ParseItems(char close, const char* why, ReadItem read_item) {
+    ++pos_;  // '{' or '['
     SkipSpace();
-    if (Peek() == '}') {
+    if (Peek() == close) {
       ++pos_;
       return;
     }
     for (;;) {
+      read_item();
+      SkipSpace();
+      if (Peek() != ',') break;
+      ++pos_;
+      SkipSpace();
+    }
+    Expect(close, why);
+  }
+
+  void ParseObject(int depth, JsonValue* v) {
+    v->type_ = JsonValue::Type::kObject;
+    ParseItems('}', "',' or '}' expected", [&] {
       if (Peek() != '"') Fail("key expected");
       std::string key = ParseString();
       SkipSpace();
       Expect(':', "':' expected");
       SkipSpace();
       v->members_.emplace_back(std::move(key), ParseValue(depth + 1));
-      SkipSpace();
-      if (Peek() == ',') {
-        ++pos_;
-        SkipSpace();
-        continue;
-      }
-      Expect('}', "',' or '}' expected");
-      return;
-    }
+    });
   }
 
   void ParseArray(int depth, JsonValue* v) {
     v->type_ = JsonValue::Type::kArray;
-    ++pos_;  // '['
-    SkipSpace();
-    if (Peek() == ']') {
-      ++pos_;
-      return;
-    }
-    for (;;) {
-      v->items_.push_back(ParseValue(depth + 1));
-      SkipSpace();
-      if (Peek() == ',') {
-        ++pos_;
-        SkipSpace();
-        continue;
-      }
-      Expect(']', "',' or ']' expected");
-      return;
-    }
+    ParseItems(']', "',' or ']' expected",
+               [&] { v->items_.push_back(ParseValue(depth + 1)); });
   }
 
   void ParseWord(std::string_view word, JsonValue::Type type, JsonValue* v) {

@@ -168,24 +168,23 @@ class ShardMerge : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     root_ = FreshTempDir("quasiroll_cluster_test_");
-    suite_path_ = (root_ / "tiny.yaml").string();
-    std::ofstream(suite_path_)
-        << TinySuiteScenes()
-        << "  wp:\n"
-           "    nlp: [newton, ceres]\n"
-           "    dae: [rk-projection, ida]\n"
-           "    coupling: [zoh, coupled]\n"
-           "    dt: 0.1\n"
-           "  mu:\n"  // four more references
-           "    scenes: [paper]\n"
-           "    mu: [0.3, 0.45, 0.8, 1.0]\n"
-           "  unstable:\n"  // a failure row
-           "    scenes: [paper]\n"
-           "    dae: rk-baumgarte\n"
-           "    sigma: 200\n"
-           "  rough:\n"  // an error row (no initial configuration)
-           "    scenes: [paper]\n"
-           "    roughness: 100\n";
+    suite_path_ =
+        WriteTinySuite(root_,
+                       "  wp:\n"
+                       "    nlp: [newton, ceres]\n"
+                       "    dae: [rk-projection, ida]\n"
+                       "    coupling: [zoh, coupled]\n"
+                       "    dt: 0.1\n"
+                       "  mu:\n"  // four more references
+                       "    scenes: [paper]\n"
+                       "    mu: [0.3, 0.45, 0.8, 1.0]\n"
+                       "  unstable:\n"  // a failure row
+                       "    scenes: [paper]\n"
+                       "    dae: rk-baumgarte\n"
+                       "    sigma: 200\n"
+                       "  rough:\n"  // an error row (no initial configuration)
+                       "    scenes: [paper]\n"
+                       "    roughness: 100\n");
     suite_ = LoadSuite(suite_path_);
     HarnessOptions o = Options("j1");
     o.jobs = 1;

@@ -69,25 +69,24 @@ class BenchHarness : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     root_ = FreshTempDir("quasiroll_harness_test_");
-    suite_path_ = (root_ / "tiny.yaml").string();
-    std::ofstream(suite_path_)
-        << TinySuiteScenes()
-        << "  wp:\n"
-           "    nlp: [newton, ceres]\n"
-           "    dae: [rk-projection, rk-baumgarte]\n"
-           "    dt: [0.05, 0.1]\n"
-           "  ip:\n"  // ipopt-mumps runs are serialised (MUMPS)
-           "    scenes: [paper]\n"
-           "    nlp: [ipopt, ipopt-mumps]\n"
-           "    dae: [rk-projection, rk-baumgarte]\n"
-           "    dt: 0.1\n"
-           "  unstable:\n"  // sigma * dt = 10 >> 2.785: blows up
-           "    scenes: [paper]\n"
-           "    dae: rk-baumgarte\n"
-           "    sigma: 200\n"
-           "  rough:\n"  // no initial contact configuration
-           "    scenes: [paper]\n"
-           "    roughness: 100\n";
+    suite_path_ =
+        WriteTinySuite(root_,
+                       "  wp:\n"
+                       "    nlp: [newton, ceres]\n"
+                       "    dae: [rk-projection, rk-baumgarte]\n"
+                       "    dt: [0.05, 0.1]\n"
+                       "  ip:\n"  // ipopt-mumps runs are serialised (MUMPS)
+                       "    scenes: [paper]\n"
+                       "    nlp: [ipopt, ipopt-mumps]\n"
+                       "    dae: [rk-projection, rk-baumgarte]\n"
+                       "    dt: 0.1\n"
+                       "  unstable:\n"  // sigma * dt = 10 >> 2.785: blows up
+                       "    scenes: [paper]\n"
+                       "    dae: rk-baumgarte\n"
+                       "    sigma: 200\n"
+                       "  rough:\n"  // no initial contact configuration
+                       "    scenes: [paper]\n"
+                       "    roughness: 100\n");
     suite_ = LoadSuite(suite_path_);
     HarnessOptions o;
     o.out_dir = (root_ / "j1").string();

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "quasiroll/bench/io/run_output.h"
@@ -31,18 +32,22 @@ inline std::filesystem::path FreshTempDir(const std::string& prefix) {
   return dir;
 }
 
-// The start of a suite file named "tiny": the paper and flat scenes cut to
-// t_end 0.5 s, then "groups:" for the caller to fill.
-inline std::string TinySuiteScenes() {
-  return "name: tiny\n"
-         "scenes:\n"
-         "  - {name: paper, file: " +
-         kScenes +
-         "paper.yaml, overrides: {time: {t_end: 0.5}}}\n"
-         "  - {name: flat, file: " +
-         kScenes +
-         "flat.yaml, overrides: {time: {t_end: 0.5}}}\n"
-         "groups:\n";
+// Writes DIR/tiny.yaml, a suite named "tiny" of the paper and flat scenes
+// cut to t_end 0.5 s with `groups` (the text under "groups:"); its path.
+inline std::string WriteTinySuite(const std::filesystem::path& dir,
+                                  const std::string& groups) {
+  const std::string path = (dir / "tiny.yaml").string();
+  std::ofstream(path) << "name: tiny\n"
+                         "scenes:\n"
+                         "  - {name: paper, file: "
+                      << kScenes
+                      << "paper.yaml, overrides: {time: {t_end: 0.5}}}\n"
+                         "  - {name: flat, file: "
+                      << kScenes
+                      << "flat.yaml, overrides: {time: {t_end: 0.5}}}\n"
+                         "groups:\n"
+                      << groups;
+  return path;
 }
 
 }  // namespace quasiroll::bench
