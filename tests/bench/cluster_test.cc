@@ -369,13 +369,6 @@ TEST_F(ShardMerge, MergeRefusesMismatchedCommitSuiteAndMissingRuns) {
   EXPECT_FALSE(fs::exists(root_ / "bad_out" / "runs.csv"));
 }
 
-int RunCli(const std::string& args) {
-  const std::string cmd =
-      std::string(QUASIROLL_CLI_PATH) + " " + args + " >/dev/null 2>&1";
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 TEST_F(ShardMerge, CliExitCodes) {
   const std::string suite = " --suite " + suite_path_ + " --out " +
                             (root_ / "cli").string() + " --progress none";

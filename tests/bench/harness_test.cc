@@ -408,13 +408,6 @@ TEST(BenchVerdicts, BlowUpIsNumericalFrictionStopIsPhysical) {
   fs::remove_all(root);
 }
 
-int RunCli(const std::string& args) {
-  const std::string cmd =
-      std::string(QUASIROLL_CLI_PATH) + " " + args + " >/dev/null 2>&1";
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 TEST_F(BenchHarness, CliExitCodes) {
   const fs::path bad = root_ / "bad.yaml";
   std::ofstream(bad) << "scenes:\n  - {file: " << kScenes

@@ -1,8 +1,10 @@
 // Helpers shared by the bench/ tests that run suites end to end.
 #pragma once
 
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -49,5 +51,15 @@ inline std::string WriteTinySuite(const std::filesystem::path& dir,
                       << groups;
   return path;
 }
+
+#ifdef QUASIROLL_CLI_PATH
+// The exit code of `quasiroll ARGS` (output discarded); -1 if it did not exit.
+inline int RunCli(const std::string& args) {
+  const std::string cmd =
+      std::string(QUASIROLL_CLI_PATH) + " " + args + " >/dev/null 2>&1";
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+#endif
 
 }  // namespace quasiroll::bench
