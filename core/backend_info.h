@@ -61,10 +61,8 @@ struct BackendInfo {
   bool IsAdaptive(const OptionValues& options) const {
     return adaptive ? adaptive(options) : false;
   }
-  std::string KnownInstability(const OptionValues& options,
-                               double step) const {
-    return known_instability ? known_instability(options, step)
-                             : std::string();
+  std::string KnownInstability(const OptionValues& options, double step) const {
+    return known_instability ? known_instability(options, step) : std::string();
   }
 };
 

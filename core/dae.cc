@@ -156,12 +156,14 @@ void IntegratorRegistry::Register(const std::string& name,
                                   Factory factory) {
   BackendInfo info;
   info.description = description;
-  IntegratorRegistryInstance().Register(name, std::move(info), std::move(factory));
+  IntegratorRegistryInstance().Register(name, std::move(info),
+                                        std::move(factory));
 }
 
 void IntegratorRegistry::Register(const std::string& name, BackendInfo info,
                                   Factory factory) {
-  IntegratorRegistryInstance().Register(name, std::move(info), std::move(factory));
+  IntegratorRegistryInstance().Register(name, std::move(info),
+                                        std::move(factory));
 }
 
 std::unique_ptr<Integrator> IntegratorRegistry::Create(

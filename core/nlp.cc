@@ -519,12 +519,14 @@ void NlpSolverRegistry::Register(const std::string& name,
                                  Factory factory) {
   BackendInfo info;
   info.description = description;
-  NlpSolverRegistryInstance().Register(name, std::move(info), std::move(factory));
+  NlpSolverRegistryInstance().Register(name, std::move(info),
+                                       std::move(factory));
 }
 
 void NlpSolverRegistry::Register(const std::string& name, BackendInfo info,
                                  Factory factory) {
-  NlpSolverRegistryInstance().Register(name, std::move(info), std::move(factory));
+  NlpSolverRegistryInstance().Register(name, std::move(info),
+                                       std::move(factory));
 }
 
 std::unique_ptr<NlpSolver> NlpSolverRegistry::Create(const std::string& name) {

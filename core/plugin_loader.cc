@@ -49,8 +49,7 @@ std::string Sha256Hex(const std::string& data) {
     std::array<std::uint32_t, 64> w{};
     for (int i = 0; i < 16; ++i)
       for (int b = 0; b < 4; ++b)
-        w[i] = (w[i] << 8) |
-               static_cast<unsigned char>(msg[block + 4 * i + b]);
+        w[i] = (w[i] << 8) | static_cast<unsigned char>(msg[block + 4 * i + b]);
     for (int i = 16; i < 64; ++i) {
       const std::uint32_t s0 =
           rotr(w[i - 15], 7) ^ rotr(w[i - 15], 18) ^ (w[i - 15] >> 3);
@@ -113,8 +112,7 @@ std::string FileSha256(const std::string& path) {
 LoadedPlugin LoadPlugin(const std::string& file) {
   std::lock_guard<std::mutex> lock(LoaderMutex());
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(file, ec))
-    Fail(file, "no such file");
+  if (!std::filesystem::is_regular_file(file, ec)) Fail(file, "no such file");
   const std::string path = std::filesystem::absolute(file).lexically_normal();
   for (const LoadedPlugin& p : Loaded())
     if (p.path == path) return p;
@@ -123,7 +121,8 @@ LoadedPlugin LoadPlugin(const std::string& file) {
   void* handle = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (!handle) {
     const char* why = ::dlerror();
-    Fail(file, std::string("cannot be loaded: ") + (why ? why : "dlopen failed"));
+    Fail(file,
+         std::string("cannot be loaded: ") + (why ? why : "dlopen failed"));
   }
   auto* entry =
       reinterpret_cast<void (*)()>(::dlsym(handle, kPluginEntryPoint));

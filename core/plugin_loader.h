@@ -24,10 +24,10 @@ inline constexpr const char* kPluginEntryPoint = "quasiroll_register_plugin";
 inline constexpr const char* kPluginPathVariable = "QUASIROLL_PLUGIN_PATH";
 
 struct LoadedPlugin {
-  std::string file;      // as given
-  std::string path;      // absolute
-  std::string sha256;    // of the file's bytes (hex)
-  std::string version;   // quasiroll_plugin_version() if exported, else ""
+  std::string file;     // as given
+  std::string path;     // absolute
+  std::string sha256;   // of the file's bytes (hex)
+  std::string version;  // quasiroll_plugin_version() if exported, else ""
   std::vector<std::string> nlp_backends;  // registered by this plugin
   std::vector<std::string> integrators;
 };

@@ -37,9 +37,9 @@ class Registry {
     for (BackendRole role : info.roles)
       for (const auto& entry : table_)
         if (entry.second.info.HasRole(role))
-          throw std::invalid_argument(
-              kind_ + " '" + name + "' claims the role '" + ToString(role) +
-              "' of '" + entry.first + "'");
+          throw std::invalid_argument(kind_ + " '" + name +
+                                      "' claims the role '" + ToString(role) +
+                                      "' of '" + entry.first + "'");
     table_[name] = Entry{std::move(info), std::move(factory)};
   }
 

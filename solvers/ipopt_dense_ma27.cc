@@ -1,11 +1,11 @@
-#include "quasiroll/solvers/ipopt_dense_ma27_internal.h"
-
 #include <HSLLoader.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <mutex>
+
+#include "quasiroll/solvers/ipopt_dense_ma27_internal.h"
 
 namespace quasiroll::internal {
 namespace {

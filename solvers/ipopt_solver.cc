@@ -298,9 +298,9 @@ IpoptSolver::IpoptSolver(IpoptLinearSolver linear_solver)
   // Silent by default; raised per solve from NlpOptions::verbosity.
   opts->SetIntegerValue("print_level", 0);
   if (linear_solver == IpoptLinearSolver::kDenseLdlt) {
-    // The dense LDL^T behind Ipopt's MA27 interface (ipopt_dense_ma27_internal.h);
-    // MC19 scaling is an HSL routine we do not have, and a dense
-    // Bunch-Kaufman factorization does not need it.
+    // The dense LDL^T behind Ipopt's MA27 interface
+    // (ipopt_dense_ma27_internal.h); MC19 scaling is an HSL routine we do not
+    // have, and a dense Bunch-Kaufman factorization does not need it.
     internal::InstallDenseMa27();
     opts->SetStringValue("linear_solver", "ma27");
     opts->SetStringValue("linear_system_scaling", "none");

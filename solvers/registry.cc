@@ -37,11 +37,12 @@ void RegisterBuiltinNlpSolvers() {
   static std::once_flag once;
   std::call_once(once, [] {
     BackendInfo newton =
-        Info("damped Newton with dense LU on square equality systems",
-             "Newton", "", "", 1.0);
+        Info("damped Newton with dense LU on square equality systems", "Newton",
+             "", "", 1.0);
     newton.roles = {BackendRole::kDefault, BackendRole::kReference};
-    NlpSolverRegistry::Register("newton", std::move(newton),
-                                [] { return std::make_unique<NewtonSolver>(); });
+    NlpSolverRegistry::Register("newton", std::move(newton), [] {
+      return std::make_unique<NewtonSolver>();
+    });
 #ifdef QUASIROLL_HAVE_IPOPT
     NlpSolverRegistry::Register(
         "ipopt",

@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "quasiroll/bench/cli/cli_support.h"
-#include "quasiroll/bench/harness/harness.h"
 #include "quasiroll/bench/cluster/merge.h"
+#include "quasiroll/bench/harness/harness.h"
 #include "quasiroll/bench/harness/shard.h"
 #include "quasiroll/bench/harness/suite.h"
 

@@ -10,12 +10,12 @@
 #include <string>
 #include <vector>
 
-#include "quasiroll/bench/io/command_json.h"
 #include "quasiroll/bench/harness/harness.h"
 #include "quasiroll/bench/harness/run_request.h"
+#include "quasiroll/bench/harness/suite.h"
+#include "quasiroll/bench/io/command_json.h"
 #include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/io/run_output.h"
-#include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/kinematics.h"
@@ -217,18 +217,14 @@ int RunPose(const PoseArgs& args) {
   const KinematicModel model(scene.geometry, scene.terrain);
   InitialConfigurationReport report;
   const Configuration theta = SolveInitialConfiguration(model, scene, &report);
-  Mat3 R;
-  Vec3 p;
-  model.PlatformPose(theta, &R, &p);
-  const Vec3 rpy = RpyFromRotation(R);
-
-  std::array<ChainState, 3> chains;
-  for (int i = 0; i < 3; ++i) model.EvaluateChain(theta, i, &chains[i]);
-
   if (args.json) {
     std::cout << PoseJson(scene, model, theta, report) << "\n";
     return kExitOk;
   }
+  const PoseView pose = EvaluatePose(model, theta);
+  const Vec3& p = pose.p;
+  const Vec3& rpy = pose.rpy;
+  const auto& chains = pose.chains;
   std::printf("scene        %s (%s)\n", scene.name.c_str(),
               scene.terrain->Describe().c_str());
   std::printf("position     x=%.9f y=%.9f z=%.9f m\n", p.x(), p.y(), p.z());
@@ -263,13 +259,8 @@ void PrintTable(const OptionTable& table) {
                 o.RangeText().c_str(), o.doc.c_str());
 }
 
-std::string JsonText(const std::string& s) {
-  JsonWriter w;
-  w.Value(s);
-  return w.str();
-}
-
-// --nlp-opt / --dae-opt values -> name -> text; a key given twice is an error.
+// --nlp-opt / --dae-opt values -> name -> text; a key given twice is an
+// error.
 GivenOptions ParseOptionFlags(const std::vector<std::string>& flags,
                               const std::string& flag) {
   GivenOptions given;
@@ -294,20 +285,21 @@ std::string BackendListJson(bool with_options) {
     std::string roles;
     for (BackendRole role : info.roles) {
       if (!roles.empty()) roles += ",";
-      roles += JsonText(ToString(role));
+      roles += JsonQuote(ToString(role));
     }
     if (out.size() > 1) out += ",";
     out += "{\"name\":";
-    out += JsonText(name);
+    out += JsonQuote(name);
     out += ",\"description\":";
-    out += JsonText(info.description);
+    out += JsonQuote(info.description);
     out += ",\"family\":";
-    out += JsonText(info.family);
+    out += JsonQuote(info.family);
     out += ",\"library\":";
-    out += JsonText(info.library);
+    out += JsonQuote(info.library);
     out += ",\"library_version\":";
-    out += JsonText(info.library_version);
-    out += info.thread_safe ? ",\"thread_safe\":true" : ",\"thread_safe\":false";
+    out += JsonQuote(info.library_version);
+    out +=
+        info.thread_safe ? ",\"thread_safe\":true" : ",\"thread_safe\":false";
     out += ",\"roles\":[";
     out += roles;
     out += "]";
@@ -412,7 +404,8 @@ int RunSolve(const SolveArgs& args) {
     return kExitNotOk;
   }
   std::printf(
-      "twist V^B    v = (%.9f, %.9f, %.9f) m/s  w = (%.9f, %.9f, %.9f) rad/s\n",
+      "twist V^B    v = (%.9f, %.9f, %.9f) m/s  w = (%.9f, %.9f, %.9f) "
+      "rad/s\n",
       sol.twist(0), sol.twist(1), sol.twist(2), sol.twist(3), sol.twist(4),
       sol.twist(5));
   std::printf("joint rates  ");

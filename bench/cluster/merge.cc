@@ -12,6 +12,8 @@
 
 #include "quasiroll/bench/harness/harness.h"
 #include "quasiroll/bench/harness/suite.h"
+#include "quasiroll/bench/io/csv.h"
+#include "quasiroll/bench/io/json_reader.h"
 #include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/core/scene.h"
@@ -22,10 +24,9 @@ namespace fs = std::filesystem;
 
 const std::vector<std::string>& InvocationMetaKeys() {
   static const std::vector<std::string> keys = {
-      "machine",       "jobs",         "resume",   "options",
-      "shard",         "start_time",   "end_time", "wall_s",
-      "runs_executed", "runs_resumed", "merge",    "mpi",
-      "command"};
+      "machine",    "jobs",     "resume", "options",       "shard",
+      "start_time", "end_time", "wall_s", "runs_executed", "runs_resumed",
+      "merge",      "mpi",      "command"};
   return keys;
 }
 
@@ -38,163 +39,23 @@ const std::vector<std::string>& TimingAndHostColumns() {
   return columns;
 }
 
-// ------------------------------------------------------------ JSON text ----
-
-namespace {
-
-[[noreturn]] void BadJson(const std::string& why) {
-  throw std::runtime_error("malformed JSON: " + why);
-}
-
-std::size_t SkipSpace(const std::string& s, std::size_t i) {
-  while (i < s.size() &&
-         (s[i] == ' ' || s[i] == '\n' || s[i] == '\r' || s[i] == '\t'))
-    ++i;
-  return i;
-}
-
-// End (one past) of the string literal starting at s[i] == '"'.
-std::size_t StringEnd(const std::string& s, std::size_t i) {
-  for (++i; i < s.size(); ++i) {
-    if (s[i] == '\\')
-      ++i;
-    else if (s[i] == '"')
-      return i + 1;
-  }
-  BadJson("unterminated string");
-}
-
-// End (one past) of the value starting at s[i].
-std::size_t ValueEnd(const std::string& s, std::size_t i) {
-  if (i >= s.size()) BadJson("value expected at the end");
-  if (s[i] == '"') return StringEnd(s, i);
-  if (s[i] == '{' || s[i] == '[') {
-    int depth = 0;
-    for (; i < s.size(); ++i) {
-      const char c = s[i];
-      if (c == '"') {
-        i = StringEnd(s, i) - 1;
-      } else if (c == '{' || c == '[') {
-        ++depth;
-      } else if (c == '}' || c == ']') {
-        if (--depth == 0) return i + 1;
-      }
-    }
-    BadJson("unbalanced brackets");
-  }
-  while (i < s.size() && s[i] != ',' && s[i] != '}' && s[i] != ']' &&
-         s[i] != ' ' && s[i] != '\n' && s[i] != '\r' && s[i] != '\t')
-    ++i;
-  return i;
-}
-
-}  // namespace
-
-std::vector<std::pair<std::string, std::string>> JsonMembers(
-    const std::string& text) {
-  std::vector<std::pair<std::string, std::string>> members;
-  std::size_t i = SkipSpace(text, 0);
-  if (i >= text.size() || text[i] != '{') BadJson("object expected");
-  i = SkipSpace(text, i + 1);
-  if (i < text.size() && text[i] == '}') return members;
-  for (;;) {
-    if (i >= text.size() || text[i] != '"') BadJson("key expected");
-    const std::size_t key_end = StringEnd(text, i);
-    const std::string key = JsonStringValue(text.substr(i, key_end - i));
-    i = SkipSpace(text, key_end);
-    if (i >= text.size() || text[i] != ':') BadJson("':' expected");
-    i = SkipSpace(text, i + 1);
-    const std::size_t value_end = ValueEnd(text, i);
-    members.emplace_back(key, text.substr(i, value_end - i));
-    i = SkipSpace(text, value_end);
-    if (i < text.size() && text[i] == ',') {
-      i = SkipSpace(text, i + 1);
-      continue;
-    }
-    if (i < text.size() && text[i] == '}') return members;
-    BadJson("',' or '}' expected");
-  }
-}
-
-std::string JsonStringValue(const std::string& raw) {
-  if (raw.size() < 2 || raw.front() != '"' || raw.back() != '"')
-    return raw;  // not a string: the raw text (number, null, ...)
-  std::string out;
-  for (std::size_t i = 1; i + 1 < raw.size(); ++i) {
-    char c = raw[i];
-    if (c != '\\') {
-      out += c;
-      continue;
-    }
-    c = raw[++i];
-    switch (c) {
-      case 'n':
-        out += '\n';
-        break;
-      case 't':
-        out += '\t';
-        break;
-      case 'r':
-        out += '\r';
-        break;
-      case 'b':
-        out += '\b';
-        break;
-      case 'f':
-        out += '\f';
-        break;
-      case 'u': {
-        const long code =
-            std::strtol(raw.substr(i + 1, 4).c_str(), nullptr, 16);
-        i += 4;
-        if (code < 0x80) {
-          out += static_cast<char>(code);
-        } else if (code < 0x800) {
-          out += static_cast<char>(0xC0 | (code >> 6));
-          out += static_cast<char>(0x80 | (code & 0x3F));
-        } else {
-          out += static_cast<char>(0xE0 | (code >> 12));
-          out += static_cast<char>(0x80 | ((code >> 6) & 0x3F));
-          out += static_cast<char>(0x80 | (code & 0x3F));
-        }
-        break;
-      }
-      default:
-        out += c;  // \" \\ \/
-    }
-  }
-  return out;
-}
-
 // ---------------------------------------------------------------- merge ----
 
 namespace {
 
-std::string ReadText(const fs::path& p, bool* ok) {
-  std::ifstream in(p, std::ios::binary);
-  *ok = static_cast<bool>(in);
-  std::ostringstream ss;
-  if (in) ss << in.rdbuf();
-  return ss.str();
-}
-
-std::string JsonQuote(const std::string& s) {
-  JsonWriter w;
-  w.Value(s);
-  return w.str();
-}
-
 struct Meta {
   std::string path;
-  std::vector<std::pair<std::string, std::string>> members;
+  JsonValue doc;  // an object
+  // The member's text as written (copied verbatim into the merged meta.json).
   const std::string* Get(const std::string& key) const {
-    for (const auto& [k, v] : members)
-      if (k == key) return &v;
-    return nullptr;
+    const JsonValue* v = doc.Find(key);
+    return v ? &v->raw() : nullptr;
   }
+  // A string member's value; another value's text; "" if absent.
   std::string Str(const std::string& key) const {
-    const std::string* v = Get(key);
-    return v ? JsonStringValue(*v) : "";
+    const JsonValue* v = doc.Find(key);
+    if (!v) return "";
+    return v->is_string() ? v->str() : v->raw();
   }
   bool complete() const {
     const std::string* v = Get("complete");
@@ -203,16 +64,17 @@ struct Meta {
 };
 
 Meta ReadMeta(const fs::path& p) {
-  bool ok = false;
-  const std::string text = ReadText(p, &ok);
-  if (!ok) throw SceneError(p.string() + ": cannot read");
+  std::string text;
+  if (!ReadTextFile(p, &text)) throw SceneError(p.string() + ": cannot read");
   Meta m;
   m.path = p.string();
   try {
-    m.members = JsonMembers(text);
-  } catch (const std::exception& e) {
-    throw SceneError(m.path + ": " + e.what());
+    m.doc = ParseJson(text, m.path);
+  } catch (const JsonError& e) {
+    throw SceneError(e.what());
   }
+  if (!m.doc.is_object())
+    throw SceneError(m.path + ": malformed JSON: object expected");
   return m;
 }
 
@@ -275,34 +137,6 @@ void CheckAgreement(const std::vector<Meta>& metas) {
   }
 }
 
-std::vector<std::string> ParseCsvLine(const std::string& line) {
-  std::vector<std::string> fields;
-  std::string field;
-  bool quoted = false;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        field += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        field += c;
-      }
-    } else if (c == '"') {
-      quoted = true;
-    } else if (c == ',') {
-      fields.push_back(field);
-      field.clear();
-    } else {
-      field += c;
-    }
-  }
-  fields.push_back(field);
-  return fields;
-}
-
 struct FoundRow {
   std::string header, row;
   fs::path dir;
@@ -311,9 +145,10 @@ struct FoundRow {
 // The finished row of `run_id` in `dir` (runs/<id>.csv with one row for that
 // run and trajectories/<id>.csv present), as --resume accepts it.
 bool FindRow(const fs::path& dir, const std::string& run_id, FoundRow* out) {
-  bool ok = false;
-  const std::string text = ReadText(dir / "runs" / (run_id + ".csv"), &ok);
-  if (!ok || text.empty() || text.back() != '\n') return false;
+  std::string text;
+  if (!ReadTextFile(dir / "runs" / (run_id + ".csv"), &text) || text.empty() ||
+      text.back() != '\n')
+    return false;
   if (!fs::exists(dir / "trajectories" / (run_id + ".csv"))) return false;
   const auto nl = text.find('\n');
   std::string row = text.substr(nl + 1);
@@ -373,10 +208,10 @@ std::string ResolveSuitePath(const MergeOptions& options,
                              const std::vector<Meta>& metas) {
   std::string suite_path = options.suite;
   if (suite_path.empty()) {
-    const std::string* suite_obj = metas[0].Get("suite");
-    if (suite_obj)
-      for (const auto& [k, v] : JsonMembers(*suite_obj))
-        if (k == "absolute_path") suite_path = JsonStringValue(v);
+    const JsonValue* suite_obj = metas[0].doc.Find("suite");
+    const JsonValue* path =
+        suite_obj ? suite_obj->Find("absolute_path") : nullptr;
+    if (path) suite_path = path->is_string() ? path->str() : path->raw();
     if (suite_path.empty())
       throw SceneError("merge: " + metas[0].path +
                        " names no suite file; pass --suite FILE");
@@ -388,9 +223,8 @@ std::string ResolveSuitePath(const MergeOptions& options,
 // inputs ran (a changed file could give other run ids or another order).
 void CheckSuiteHash(const std::string& suite_path,
                     const std::string& suite_hash) {
-  bool ok = false;
-  const std::string text = ReadText(suite_path, &ok);
-  if (!ok)
+  std::string text;
+  if (!ReadTextFile(suite_path, &text))
     throw SceneError("merge: cannot read the suite file " + suite_path +
                      " (pass --suite FILE)");
   const std::string hash = Hex64(Fnv1a64(text));
@@ -425,7 +259,7 @@ void CompareDuplicateRow(const FoundRow& kept, const FoundRow& other,
                          const std::string& id, std::FILE* log,
                          MergeSummary* summary) {
   ++summary->duplicates;
-  const auto a = ParseCsvLine(kept.row), b = ParseCsvLine(other.row);
+  const auto a = SplitCsvLine(kept.row), b = SplitCsvLine(other.row);
   const auto& skip = TimingAndHostColumns();
   for (std::size_t c = 0; c < columns.size() && c < a.size(); ++c) {
     if (std::find(skip.begin(), skip.end(), columns[c]) != skip.end()) continue;
@@ -458,7 +292,7 @@ MergedRows CollectRows(const MergeOptions& options, const SuitePlan& plan,
       if (!FindRow(in, id, &f)) continue;
       if (m.header.empty()) {
         m.header = f.header;
-        m.columns = ParseCsvLine(m.header);
+        m.columns = SplitCsvLine(m.header);
       } else if (f.header != m.header) {
         throw SceneError("merge: " + (f.dir / "runs" / (id + ".csv")).string() +
                          " has other columns than " +
@@ -505,7 +339,7 @@ void WriteMergedRuns(const fs::path& out, const SuitePlan& plan,
                out / "trajectories" / (id + ".csv"));
     LinkOrCopy(f.dir / "runs" / (id + ".csv"), out / "runs" / (id + ".csv"));
     csv += f.row + "\n";
-    const auto fields = ParseCsvLine(f.row);
+    const auto fields = SplitCsvLine(f.row);
     const auto col = [&](auto it) -> std::string {
       const std::size_t c = static_cast<std::size_t>(it - columns.begin());
       return it != columns.end() && c < fields.size() ? fields[c] : "";
@@ -548,13 +382,14 @@ MergedInvocation SumInvocations(const std::vector<Meta>& metas) {
 // template has no options).
 std::string MergedOptionsJson(const Meta& tmpl, const std::string& out) {
   std::string options_raw;
-  if (const std::string* o = tmpl.Get("options")) {
+  if (const JsonValue* o = tmpl.doc.Find("options")) {
     options_raw = "{";
     bool first = true;
-    for (const auto& [k, v] : JsonMembers(*o)) {
+    for (const auto& [k, v] : o->members()) {
       if (!first) options_raw += ",";
       first = false;
-      options_raw += JsonQuote(k) + ":" + (k == "out" ? JsonQuote(out) : v);
+      options_raw +=
+          JsonQuote(k) + ":" + (k == "out" ? JsonQuote(out) : v.raw());
     }
     options_raw += "}";
   }
@@ -619,10 +454,10 @@ void WriteMergedMeta(const fs::path& out, const std::vector<Meta>& metas,
     meta += JsonQuote(k) + ":" + v;
     emitted.insert(k);
   };
-  for (const auto& [k, v] : tmpl->members) {
+  for (const auto& [k, v] : tmpl->doc.members()) {
     if (k == "shard" || k == "merge" || k == "mpi") continue;
     const auto it = replaced.find(k);
-    emit(k, it == replaced.end() ? v : it->second);
+    emit(k, it == replaced.end() ? v.raw() : it->second);
   }
   for (const char* k :
        {"start_time", "end_time", "wall_s", "runs_selected", "runs_executed",

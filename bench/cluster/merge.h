@@ -5,7 +5,6 @@
 
 #include <cstdio>
 #include <string>
-#include <utility>
 #include <vector>
 
 namespace quasiroll::bench {
@@ -43,13 +42,5 @@ const std::vector<std::string>& TimingAndHostColumns();
 // suite file does not match, or when selected runs are missing (naming how
 // many and the first); I/O errors propagate as std::runtime_error.
 MergeSummary MergeOutputs(const MergeOptions& options);
-
-// The members of a JSON object text, in order, as raw value texts
-// ({"a":{"b":1}} -> {"a", "{\"b\":1}"}). Throws std::runtime_error on
-// malformed text.
-std::vector<std::pair<std::string, std::string>> JsonMembers(
-    const std::string& object_text);
-// The string a JSON string literal denotes (raw text -> value).
-std::string JsonStringValue(const std::string& raw);
 
 }  // namespace quasiroll::bench

@@ -7,8 +7,8 @@
 // work one task at a time and writes runs.csv and meta.json exactly as
 // `quasiroll bench --jobs 1` does; ranks 1..K-1 execute tasks. Tasks are the
 // references first (a run waits for its reference), then the runs, biggest
-// estimated cost first (bench/harness/shard.h), to whichever worker is free: run
-// costs vary 1000x, so a static split would leave ranks idle. A worker
+// estimated cost first (bench/harness/shard.h), to whichever worker is free:
+// run costs vary 1000x, so a static split would leave ranks idle. A worker
 // computes a reference into DIR/references/ and keeps it; a run executes
 // with the shared harness step ExecuteRun (row + trajectory + runs/<id>.csv
 // written by the worker; DIR must be on a file system every rank sees,
@@ -39,10 +39,10 @@
 #include <vector>
 
 #include "quasiroll/bench/harness/harness.h"
-#include "quasiroll/bench/io/json_writer.h"
-#include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/bench/harness/shard.h"
 #include "quasiroll/bench/harness/suite.h"
+#include "quasiroll/bench/io/json_writer.h"
+#include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/nlp.h"

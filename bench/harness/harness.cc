@@ -24,11 +24,12 @@
 #include "quasiroll/bench/harness/metrics.h"
 #include "quasiroll/bench/harness/run_status.h"
 #include "quasiroll/bench/harness/shard.h"
+#include "quasiroll/bench/io/csv.h"
 #include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/bench/io/runs_schema.h"
-#include "quasiroll/core/quasi_static_validity.h"
 #include "quasiroll/core/nlp.h"
+#include "quasiroll/core/quasi_static_validity.h"
 
 namespace quasiroll::bench {
 
@@ -44,16 +45,6 @@ const std::vector<std::string>& RunsCsvColumns() {
   return columns;
 }
 
-std::string CsvField(const std::string& value) {
-  if (value.find_first_of(",\"\r\n") == std::string::npos) return value;
-  std::string out = "\"";
-  for (char c : value) {
-    if (c == '"') out += '"';
-    out += c;
-  }
-  return out + "\"";
-}
-
 namespace {
 
 std::string OneLine(std::string s) {
@@ -62,16 +53,7 @@ std::string OneLine(std::string s) {
   return s;
 }
 
-std::string JoinRow(const std::vector<std::string>& values) {
-  std::string line;
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    if (i) line += ',';
-    line += CsvField(values[i]);
-  }
-  return line;
-}
-
-std::string Header() { return JoinRow(RunsCsvColumns()); }
+std::string Header() { return JoinCsvRow(RunsCsvColumns()); }
 
 std::size_t ColumnIndex(const std::string& column) {
   const auto& cols = RunsCsvColumns();
@@ -373,7 +355,8 @@ std::string TerrainJson(const TerrainSpec& spec) {
   return w.str() + "\n";
 }
 
-// ---------------------------------------------------------------- runner ----
+// ---------------------------------------------------------------- runner
+// ----
 
 namespace {
 
@@ -782,7 +765,7 @@ RunOutcome ExecuteRun(const Suite& suite, const RunSpec& run,
     row = ErrorRow(run, terrain_id, e.what(), ref, reference.error);
   }
   RunOutcome outcome;
-  outcome.row = JoinRow(row);
+  outcome.row = JoinCsvRow(row);
   outcome.status = row[ColumnIndex("status")];
   outcome.t_reached = result.t_reached;
   outcome.wall_seconds = result.wall_seconds;

@@ -17,6 +17,7 @@
 
 #include "quasiroll/bench/harness/reference.h"
 #include "quasiroll/bench/harness/suite.h"
+#include "quasiroll/bench/io/csv.h"  // CsvField, JoinCsvRow (runs.csv rows)
 
 namespace quasiroll::bench {
 
@@ -50,8 +51,6 @@ struct HarnessSummary {
 // runs.csv column names, in order: the names of RunsCsvSchema()
 // (bench/io/runs_columns.tsv).
 const std::vector<std::string>& RunsCsvColumns();
-// A CSV field: quoted (with doubled quotes) if it contains , " CR or LF.
-std::string CsvField(const std::string& value);
 
 // One runs.csv row (values in RunsCsvColumns() order) for a run of `scene`
 // whose simulation produced `result` (the first repeat; `wall_seconds` has

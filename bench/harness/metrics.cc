@@ -146,5 +146,4 @@ TimingStats ComputeTimingStats(std::vector<double> wall_seconds) {
   return t;
 }
 
-
 }  // namespace quasiroll::bench

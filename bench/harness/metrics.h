@@ -64,5 +64,4 @@ struct TimingStats {
 // Median = middle value, or the mean of the two middle values.
 TimingStats ComputeTimingStats(std::vector<double> wall_seconds);
 
-
 }  // namespace quasiroll::bench

@@ -12,6 +12,8 @@
 #include <stdexcept>
 
 #include "quasiroll/bench/harness/metrics.h"
+#include "quasiroll/bench/io/csv.h"
+#include "quasiroll/bench/io/json_reader.h"
 #include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/core/quasi_static.h"
@@ -262,10 +264,34 @@ std::string ReferenceKey(const Scene& scene, const TerrainSpec& terrain,
 }
 
 namespace {
+
 bool PhysicalStop(const std::string& status) {
   return status == "INFEASIBLE_FRICTION" || status == "LIFT_OFF" ||
          status == "DEGENERATE_CONTACT";
 }
+
+// The numerical reference's options: "rk4" at a fixed step (the primary
+// method), "dp54" at rtol 1e-10 (the fallback after a numerical breakdown).
+SimulationOptions NumericalReferenceOptions(const Scene& scene,
+                                            const ReferenceSettings& settings,
+                                            const std::string& method) {
+  SimulationOptions o;
+  o.nlp = settings.Nlp();
+  o.dae = ReferenceSettings::Integrator();
+  o.coupling = Coupling::kCoupled;
+  o.dt = scene.dt / settings.dt_divisor;
+  o.t_end = scene.t_end;
+  o.dae_options = {{"rk_method", method}};
+  o.integrator.step = o.dt / settings.substeps;
+  o.integrator.max_steps = 100000000;
+  if (method != "rk4") {
+    o.integrator.rtol = 1e-10;
+    o.integrator.atol = 1e-12;
+  }
+  o.quasi_static.residual_tolerance = settings.residual_tolerance;
+  return o;
+}
+
 }  // namespace
 
 SimulationResult ComputeNumericalReference(const Scene& scene,
@@ -273,16 +299,7 @@ SimulationResult ComputeNumericalReference(const Scene& scene,
                                            std::string* method) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
-  SimulationOptions o;
-  o.nlp = settings.Nlp();
-  o.dae = ReferenceSettings::Integrator();
-  o.coupling = Coupling::kCoupled;
-  o.dt = scene.dt / settings.dt_divisor;
-  o.t_end = scene.t_end;
-  o.dae_options = {{"rk_method", "rk4"}};
-  o.integrator.step = o.dt / settings.substeps;
-  o.integrator.max_steps = 100000000;
-  o.quasi_static.residual_tolerance = settings.residual_tolerance;
+  SimulationOptions o = NumericalReferenceOptions(scene, settings, "rk4");
   Simulator sim(scene, o);
   SimulationResult result = sim.Run();
   if (method) *method = "rk4";
@@ -290,9 +307,7 @@ SimulationResult ComputeNumericalReference(const Scene& scene,
   // A numerical breakdown (solver or integrator failure) of the primary
   // configuration: try DP5(4) at rtol 1e-10 (other stage points) and keep
   // whichever gets further.
-  o.dae_options = {{"rk_method", "dp54"}};
-  o.integrator.rtol = 1e-10;
-  o.integrator.atol = 1e-12;
+  o = NumericalReferenceOptions(scene, settings, "dp54");
   Simulator alt(scene, o);
   SimulationResult second = alt.Run();
   if (second.success() || second.t_reached > result.t_reached) {
@@ -383,15 +398,6 @@ double PathMinimumFriction(const Scene& scene,
 
 namespace {
 
-std::vector<std::string> SplitCsvLine(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cell;
-  std::stringstream ss(line);
-  while (std::getline(ss, cell, ',')) out.push_back(cell);
-  if (!line.empty() && line.back() == ',') out.emplace_back();
-  return out;
-}
-
 double ParseNumber(const std::string& s, int line) {
   char* end = nullptr;
   const double v = std::strtod(s.c_str(), &end);
@@ -401,72 +407,20 @@ double ParseNumber(const std::string& s, int line) {
   return v;
 }
 
-// Value of a top-level string field "name" in JSON text written by
-// JsonWriter ("" if absent).
-std::string JsonStringField(const std::string& json, const std::string& name) {
-  const std::string pat = "\"" + name + "\":\"";
-  const auto pos = json.find(pat);
-  if (pos == std::string::npos) return "";
-  std::string out;
-  for (std::size_t i = pos + pat.size(); i < json.size(); ++i) {
-    const char c = json[i];
-    if (c == '"') return out;
-    if (c != '\\') {
-      out += c;
-      continue;
-    }
-    if (++i >= json.size()) break;
-    switch (json[i]) {
-      case 'n':
-        out += '\n';
-        break;
-      case 't':
-        out += '\t';
-        break;
-      case 'r':
-        out += '\r';
-        break;
-      case 'b':
-        out += '\b';
-        break;
-      case 'f':
-        out += '\f';
-        break;
-      case 'u':
-        if (i + 4 < json.size()) {
-          out += static_cast<char>(
-              std::strtol(json.substr(i + 1, 4).c_str(), nullptr, 16));
-          i += 4;
-        }
-        break;
-      default:
-        out += json[i];
-    }
-  }
-  return "";
+// A top-level string member ("" if absent or not a string).
+std::string StringMember(const JsonValue& json, const std::string& name) {
+  const JsonValue* v = json.Find(name);
+  return v && v->is_string() ? v->str() : "";
 }
 
-// Value of a top-level number field "name" (JsonWriter: a number or null);
-// NaN if absent or null, `*present` says whether the key exists.
-double JsonNumberField(const std::string& json, const std::string& name,
-                       bool* present) {
-  const std::string pat = "\"" + name + "\":";
-  const auto pos = json.find(pat);
-  *present = pos != std::string::npos;
-  if (!*present) return std::numeric_limits<double>::quiet_NaN();
-  const char* start = json.c_str() + pos + pat.size();
-  char* end = nullptr;
-  const double v = std::strtod(start, &end);
-  return end == start ? std::numeric_limits<double>::quiet_NaN() : v;
-}
-
-std::string ReadFile(const std::string& path, bool* ok) {
-  std::ifstream in(path, std::ios::binary);
-  *ok = static_cast<bool>(in);
-  if (!in) return "";
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+// A top-level number member (JsonWriter: a number or null); NaN if absent or
+// not a number, `*present` says whether the key exists.
+double NumberMember(const JsonValue& json, const std::string& name,
+                    bool* present) {
+  const JsonValue* v = json.Find(name);
+  *present = v != nullptr;
+  return v && v->is_number() ? v->number()
+                             : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace
@@ -546,22 +500,27 @@ bool LoadCachedReference(const std::string& csv_path,
                          const std::string& json_path, const Scene& scene,
                          const TerrainSpec& terrain, AnalyticCase ac,
                          Reference* ref) {
-  bool ok_csv = false, ok_json = false;
-  const std::string json = ReadFile(json_path, &ok_json);
+  std::string json_text, csv;
+  if (!ReadTextFile(json_path, &json_text)) return false;
+  JsonValue json;
+  try {
+    json = ParseJson(json_text, json_path);
+  } catch (const JsonError&) {
+    return false;  // corrupt cache: recompute
+  }
   // The key (not just the hash) must match: a hash collision is a miss.
-  if (!ok_json || JsonStringField(json, "key") != ref->key) return false;
-  const std::string csv = ReadFile(csv_path, &ok_csv);
-  if (!ok_csv) return false;
+  if (StringMember(json, "key") != ref->key) return false;
+  if (!ReadTextFile(csv_path, &csv)) return false;
   try {
     ref->samples = ParseTrajectoryCsv(csv);
-    ref->kind = JsonStringField(json, "kind");
-    ref->status = JsonStringField(json, "status");
-    ref->stop_reason = JsonStringField(json, "stop_reason");
-    ref->method = JsonStringField(json, "method");
-    ref->check_method = JsonStringField(json, "check_method");
+    ref->kind = StringMember(json, "kind");
+    ref->status = StringMember(json, "status");
+    ref->stop_reason = StringMember(json, "stop_reason");
+    ref->method = StringMember(json, "method");
+    ref->check_method = StringMember(json, "check_method");
     bool has_mu = false, has_err = false;
-    ref->mu_min_max = JsonNumberField(json, "ref_mu_min", &has_mu);
-    ref->err_est = JsonNumberField(json, "ref_err_est", &has_err);
+    ref->mu_min_max = NumberMember(json, "ref_mu_min", &has_mu);
+    ref->err_est = NumberMember(json, "ref_err_est", &has_err);
     if (ac != AnalyticCase::kNone) ref->analytic.emplace(scene, terrain, ac);
     // A cache written before these fields existed is recomputed.
     if (has_mu && has_err) return true;
@@ -588,23 +547,6 @@ SimulationResult ComputeAnalyticReference(const Scene& scene,
   result.t_reached = n * dt;
   ref->method = std::string("closed form (") + ToString(ac) + ")";
   return result;
-}
-
-// The options ComputeNumericalReference used, for DescribeReferenceMethod.
-SimulationOptions NumericalReferenceOptions(const Scene& scene,
-                                            const ReferenceSettings& settings,
-                                            const std::string& method) {
-  SimulationOptions used;
-  used.nlp = settings.Nlp();
-  used.dae = ReferenceSettings::Integrator();
-  used.coupling = Coupling::kCoupled;
-  used.dt = scene.dt / settings.dt_divisor;
-  used.dae_options = {{"rk_method", method}};
-  used.integrator.step = used.dt / settings.substeps;
-  used.integrator.rtol = 1e-10;
-  used.integrator.atol = 1e-12;
-  used.quasi_static.residual_tolerance = settings.residual_tolerance;
-  return used;
 }
 
 // mu_min along the path (every 2nd scene-dt sample, refined around the

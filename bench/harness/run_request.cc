@@ -57,8 +57,10 @@ void RequireNoShadowing(const KeyNamer& namer, const std::string& options_key,
   const std::string key = ShadowedRunSetting(table);
   if (!key.empty())
     Fail(namer, options_key,
-         "backend '" + backend + "' declares an option named like the run "
-         "setting " + namer(key) +
+         "backend '" + backend +
+             "' declares an option named like the run "
+             "setting " +
+             namer(key) +
              " (a backend option may not shadow a run setting), got '" + key +
              "'");
 }
@@ -88,8 +90,8 @@ void CheckTimes(const RunRequest& r, const KeyNamer& namer, double dt,
              (r.t_end ? namer("t_end") : std::string("scene time.t_end")) +
              "), got " + Num(dt));
   Fail(namer, "t_end",
-       "must be >= the hold interval " + Num(dt) +
-           " s (scene time.dt), got " + Num(t_end));
+       "must be >= the hold interval " + Num(dt) + " s (scene time.dt), got " +
+           Num(t_end));
 }
 
 // The shorthands onto the integrator's options: a note where the
@@ -101,8 +103,7 @@ void ApplyShorthands(const RunRequest& r, const KeyNamer& namer,
     std::optional<std::string> value;
     if (key == "rk_method") value = r.rk_method;
     if (key == "sigma" && r.sigma) value = Num(*r.sigma);
-    if (key == "dae_index" && r.dae_index)
-      value = std::to_string(*r.dae_index);
+    if (key == "dae_index" && r.dae_index) value = std::to_string(*r.dae_index);
     if (!value) continue;
     if (FindOption(table, sh.option) == nullptr) {
       out->notes.push_back(namer(key) + " does not apply to " +

@@ -26,10 +26,10 @@ struct RunRequest {
   Coupling coupling = Coupling::kZoh;
   // Unset = the scene's (dt, t_end) or the library's default.
   std::optional<double> dt, t_end;
-  std::optional<double> tol, atol;  // integrator rtol, atol
-  std::optional<double> nlp_tol;    // quasi-static residual tolerance
-  std::optional<int> nlp_max_iter;  // quasi-static solver iteration limit
-  std::optional<int> substeps;      // integrator steps per dt
+  std::optional<double> tol, atol;   // integrator rtol, atol
+  std::optional<double> nlp_tol;     // quasi-static residual tolerance
+  std::optional<int> nlp_max_iter;   // quasi-static solver iteration limit
+  std::optional<int> substeps;       // integrator steps per dt
   std::optional<int> contact_check;  // second-contact check every N samples
   // Shorthands of integrator options (IntegratorShorthands()): applied when
   // the run's integrator has the option.
@@ -60,8 +60,8 @@ const std::vector<IntegratorShorthand>& IntegratorShorthands();
 // and the conformance kit checks option tables for it.
 
 struct ResolvedRun {
-  Scene scene;                 // the base scene with the overrides
-  SimulationOptions options;   // everything the Simulator needs
+  Scene scene;                     // the base scene with the overrides
+  SimulationOptions options;       // everything the Simulator needs
   std::vector<std::string> notes;  // e.g. a shorthand that does not apply
 };
 

@@ -607,9 +607,8 @@ void ReadMethodAxes(const YAML::Node& node, const std::string& path,
   g->dae_indices = ReadIntAxis(node, path, "dae_index", 1, 2, {2});
   g->substeps = ReadIntAxis(node, path, "substeps", 1, 100000, {1});
   g->contact_checks = ReadIntAxis(node, path, "contact_check", 0, 1000000, {0});
-  g->nlp_max_iters =
-      ReadIntAxis(node, path, "nlp_max_iter", 1, 1000000,
-                  {QuasiStaticOptions{}.max_iterations});
+  g->nlp_max_iters = ReadIntAxis(node, path, "nlp_max_iter", 1, 1000000,
+                                 {QuasiStaticOptions{}.max_iterations});
   g->roughness =
       ReadDoubleAxis(node, path, "roughness", Bounds::NonNegative(), {1.0});
 }
@@ -670,8 +669,10 @@ void RequireNoShadowedRunSettings(const std::string& path, const GroupSpec& g,
     const std::string shadowed = ShadowedRunSetting(table);
     if (!shadowed.empty())
       Fail(JoinKey(path, key),
-           "backend '" + name + "' declares an option named like the run "
-           "setting " + shadowed +
+           "backend '" + name +
+               "' declares an option named like the run "
+               "setting " +
+               shadowed +
                " (a backend option may not shadow a run setting), got '" +
                shadowed + "'");
   };
@@ -790,10 +791,10 @@ std::vector<Axis> GridAxes(const GroupSpec& g, const SceneAxes& s) {
                           [](RunSpec* r, std::int64_t v) {
                             r->contact_check = static_cast<int>(v);
                           }));
-  axes.push_back(MakeAxis("nlp_max_iter", g.nlp_max_iters,
-                          [](RunSpec* r, std::int64_t v) {
-                            r->nlp_max_iter = static_cast<int>(v);
-                          }));
+  axes.push_back(
+      MakeAxis("nlp_max_iter", g.nlp_max_iters, [](RunSpec* r, std::int64_t v) {
+        r->nlp_max_iter = static_cast<int>(v);
+      }));
   for (const Axis& a : g.generic_axes) axes.push_back(a);
   return axes;
 }

@@ -18,15 +18,21 @@ void NullArray(JsonWriter* w, int n) {
 
 }  // namespace
 
+PoseView EvaluatePose(const KinematicModel& model, const Configuration& theta) {
+  PoseView v;
+  model.PlatformPose(theta, &v.R, &v.p);
+  v.rpy = RpyFromRotation(v.R);
+  for (int i = 0; i < 3; ++i) model.EvaluateChain(theta, i, &v.chains[i]);
+  return v;
+}
+
 std::string PoseJson(const Scene& scene, const KinematicModel& model,
                      const Configuration& theta,
                      const InitialConfigurationReport& report) {
-  Mat3 R;
-  Vec3 p;
-  model.PlatformPose(theta, &R, &p);
-  const Vec3 rpy = RpyFromRotation(R);
-  std::array<ChainState, 3> chains;
-  for (int i = 0; i < 3; ++i) model.EvaluateChain(theta, i, &chains[i]);
+  const PoseView pose = EvaluatePose(model, theta);
+  const Vec3& p = pose.p;
+  const Vec3& rpy = pose.rpy;
+  const auto& chains = pose.chains;
   JsonWriter w;
   w.BeginObject();
   w.Key("scene").Value(scene.name);

@@ -2,6 +2,7 @@
 // (docs/formats.md), shared by the CLI and the Python module (bench/python).
 #pragma once
 
+#include <array>
 #include <string>
 
 #include "quasiroll/core/initial_configuration.h"
@@ -10,6 +11,15 @@
 #include "quasiroll/core/scene.h"
 
 namespace quasiroll {
+
+// What `quasiroll pose` prints of a configuration, as text or JSON.
+struct PoseView {
+  Mat3 R;
+  Vec3 p;
+  Vec3 rpy;
+  std::array<ChainState, 3> chains;
+};
+PoseView EvaluatePose(const KinematicModel& model, const Configuration& theta);
 
 // `pose --json`: the initial configuration `theta` of `scene` (solved with
 // `report`).

@@ -130,4 +130,11 @@ class JsonWriter {
   bool after_key_ = false;
 };
 
+// `s` as a JSON string literal, quoted and escaped as JsonWriter writes it.
+inline std::string JsonQuote(const std::string& s) {
+  JsonWriter w;
+  w.Value(s);
+  return w.str();
+}
+
 }  // namespace quasiroll

@@ -15,15 +15,25 @@
 #include <thread>
 #include <variant>
 
-#include "quasiroll/core/quasi_static_validity.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/plugin_loader.h"
+#include "quasiroll/core/quasi_static_validity.h"
 #include "quasiroll_git_commit.h"
 
 namespace quasiroll {
 
 namespace fs = std::filesystem;
+
+bool ReadTextFile(const std::string& path, std::string* text) {
+  text->clear();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  *text = ss.str();
+  return true;
+}
 
 void AtomicWriteFile(const std::string& path, const std::string& content) {
   const fs::path target(path);
@@ -210,15 +220,15 @@ std::string ShellQuoted(const std::string& word) {
                              "XYZ0123456789_-+=./,:@%") == std::string::npos)
     return word;
   std::string out = "'";
-  for (char c : word) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  for (char c : word)
+    out += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return out + "'";
 }
 }  // namespace
 
 void SetInvocation(int argc, const char* const* argv) {
   std::string text;
-  for (int i = 0; i < argc; ++i)
-    text += (i ? " " : "") + ShellQuoted(argv[i]);
+  for (int i = 0; i < argc; ++i) text += (i ? " " : "") + ShellQuoted(argv[i]);
   InvocationText() = text;
 }
 
@@ -306,8 +316,7 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.EndObject();
   j.Key("wall_s").Value(r.wall_seconds);
   j.Key("kkt_residual").Value(r.kkt_residual);
-  j.Key("qs_inertia_ratio")
-      .Value(QuasiStaticInertiaRatio(r.samples, scene));
+  j.Key("qs_inertia_ratio").Value(QuasiStaticInertiaRatio(r.samples, scene));
   j.Key("scene").BeginObject();
   j.Key("name").Value(scene.name);
   j.Key("file").Value(scene.source_path);

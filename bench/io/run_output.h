@@ -14,6 +14,9 @@ namespace quasiroll {
 // directory, then rename(2). Creates parent directories. Throws
 // std::runtime_error naming the path on I/O failure.
 void AtomicWriteFile(const std::string& path, const std::string& content);
+// The whole file, bytes as they are, into *text; false (and *text empty) if
+// it cannot be opened.
+bool ReadTextFile(const std::string& path, std::string* text);
 
 // trajectory.csv: the header line (no trailing newline) and the whole file.
 std::string TrajectoryCsvHeader();

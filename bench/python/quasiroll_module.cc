@@ -6,10 +6,9 @@
 //
 // The GIL is released while C++ computes; a run gives it back every 0.1 s
 // of wall time to let Ctrl-C (KeyboardInterrupt) through.
+#include <dlfcn.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
-
-#include <dlfcn.h>
 
 #include <chrono>
 #include <cmath>
@@ -17,9 +16,9 @@
 #include <string>
 
 #include "quasiroll/bench/harness/run_request.h"
+#include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/bench/io/command_json.h"
 #include "quasiroll/bench/io/run_output.h"
-#include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/kinematics.h"
@@ -89,9 +88,9 @@ std::string SolveText(const Scene& scene_in, const std::string& nlp_given,
                       std::optional<double> nlp_tol) {
   RegisterBuiltinNlpSolvers();
   // "" (Python None): the registry's default NLP.
-  const std::string nlp = nlp_given.empty() ? NlpSolverRegistry::WithRole(
-                                                  BackendRole::kDefault)
-                                            : nlp_given;
+  const std::string nlp =
+      nlp_given.empty() ? NlpSolverRegistry::WithRole(BackendRole::kDefault)
+                        : nlp_given;
   RequireBackend("nlp", nlp, NlpSolverRegistry::Names());
   RequirePositive("nlp_tol", nlp_tol);
   const Scene scene = WithOverrides(scene_in, mu, eps, mode);

@@ -7,8 +7,8 @@
 // done by the public helper quasiroll::WeightedProjection
 // (core/weighted_projection.h) on the ConstrainedOde interface (core/dae.h).
 //
-// Step: options.step / midpoint_steps (step 0 = one step over [t0, t1]); the last
-// step ends exactly on t1; more than max_steps steps -> kStepSizeTooSmall.
+// Step: options.step / midpoint_steps (step 0 = one step over [t0, t1]); the
+// last step ends exactly on t1; more than max_steps steps -> kStepSizeTooSmall.
 // Backend options (option_table(), the plugin's own): projection_tolerance,
 // max_projection_iterations, midpoint_steps. Events: after each
 // step the signs of ode.Roots() are compared with the previous ones; on a

@@ -387,8 +387,8 @@ void CheckOptionSweep(const std::filesystem::path& runs_csv) {
     const long steps1 = std::stol(rows[i][col("steps")]);
     const long steps2 = std::stol(rows[i + 1][col("steps")]);
     Check(steps2 == 2 * steps1,
-          "midpoint_steps 2 doubles the midpoint steps: " + std::to_string(steps1) +
-              " -> " + std::to_string(steps2));
+          "midpoint_steps 2 doubles the midpoint steps: " +
+              std::to_string(steps1) + " -> " + std::to_string(steps2));
   }
 }
 

@@ -18,18 +18,18 @@ void RegisterExamplePlugins() {
       "equality systems";
   lm.family = "least squares";
   lm.thread_safe = true;  // as LevenbergMarquardtSolver says
-  quasiroll::NlpSolverRegistry::Register(
-      kNlpName, std::move(lm),
-      [] { return std::make_unique<LevenbergMarquardtSolver>(); });
+  quasiroll::NlpSolverRegistry::Register(kNlpName, std::move(lm), [] {
+    return std::make_unique<LevenbergMarquardtSolver>();
+  });
   quasiroll::BackendInfo midpoint;
   midpoint.description =
       "example plugin: explicit midpoint (RK2, fixed step) + Newton "
       "projection onto H = 0";
   midpoint.family = "explicit Runge-Kutta";
   midpoint.thread_safe = true;
-  quasiroll::IntegratorRegistry::Register(
-      kDaeName, std::move(midpoint),
-      [] { return std::make_unique<MidpointProjectionIntegrator>(); });
+  quasiroll::IntegratorRegistry::Register(kDaeName, std::move(midpoint), [] {
+    return std::make_unique<MidpointProjectionIntegrator>();
+  });
 }
 
 }  // namespace example

@@ -14,59 +14,23 @@
 #include <set>
 #include <sstream>
 
-#include "quasiroll/bench/harness/harness.h"
 #include "quasiroll/bench/cluster/merge.h"
+#include "quasiroll/bench/harness/harness.h"
 #include "quasiroll/bench/harness/shard.h"
 #include "quasiroll/bench/harness/suite.h"
+#include "quasiroll/bench/io/csv.h"
+#include "quasiroll/bench/io/json_reader.h"
 #include "quasiroll/core/dae.h"
+#include "test_support.h"
 
 namespace quasiroll::bench {
 namespace {
 
 namespace fs = std::filesystem;
-const std::string kScenes =
-    std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/";
-
-std::string ReadAll(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-// Splits CSV text into lines of fields (no field of these files spans lines:
-// stop_reason has its line breaks replaced).
-std::vector<std::vector<std::string>> CsvRows(const std::string& text) {
-  std::vector<std::vector<std::string>> rows;
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> fields;
-    std::string f;
-    bool quoted = false;
-    for (std::size_t i = 0; i < line.size(); ++i) {
-      const char c = line[i];
-      if (quoted && c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        f += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = !quoted;
-      } else if (c == ',' && !quoted) {
-        fields.push_back(f);
-        f.clear();
-      } else {
-        f += c;
-      }
-    }
-    fields.push_back(f);
-    rows.push_back(fields);
-  }
-  return rows;
-}
 
 // runs.csv without the timing and host columns.
 std::vector<std::vector<std::string>> WithoutTimingAndHost(const fs::path& p) {
-  auto rows = CsvRows(ReadAll(p));
+  auto rows = ParseCsv(ReadAll(p));
   const auto& skip = TimingAndHostColumns();
   std::vector<std::size_t> keep;
   for (std::size_t k = 0; k < rows[0].size(); ++k)
@@ -83,7 +47,9 @@ std::vector<std::vector<std::string>> WithoutTimingAndHost(const fs::path& p) {
 // meta.json members without the invocation keys.
 std::vector<std::pair<std::string, std::string>> WithoutInvocation(
     const fs::path& p) {
-  auto members = JsonMembers(ReadAll(p));
+  std::vector<std::pair<std::string, std::string>> members;
+  const JsonValue meta = ParseJson(ReadAll(p), p.string());
+  for (const auto& [k, v] : meta.members()) members.emplace_back(k, v.raw());
   const auto& skip = InvocationMetaKeys();
   std::erase_if(members, [&](const auto& m) {
     return std::find(skip.begin(), skip.end(), m.first) != skip.end();
@@ -168,20 +134,6 @@ TEST(Shard, CostGrowsWithStepsRepeatsAndCoupling) {
   EXPECT_GT(EstimatedRunCost(plugin), 0);
 }
 
-TEST(Json, MembersAreTheRawValueTexts) {
-  const auto m = JsonMembers(
-      "{\"a\":{\"b\":[1,\"x,}\"]},\"s\":\"q\\\"\\u00e9\", \"n\" : -1.5e3 ,"
-      "\"t\":true}\n");
-  ASSERT_EQ(m.size(), 4u);
-  EXPECT_EQ(m[0], std::make_pair(std::string("a"),
-                                 std::string("{\"b\":[1,\"x,}\"]}")));
-  EXPECT_EQ(JsonStringValue(m[1].second), "q\"\xc3\xa9");
-  EXPECT_EQ(m[2].second, "-1.5e3");
-  EXPECT_EQ(m[3].second, "true");
-  EXPECT_THROW(JsonMembers("{\"a\":1"), std::runtime_error);
-  EXPECT_THROW(JsonMembers("[1]"), std::runtime_error);
-}
-
 TEST(Atlas, EveryMethodOnEveryStabilityAxisWithTwentySeeds) {
   const Suite atlas =
       LoadSuite(std::string(QUASIROLL_SOURCE_DIR) + "/bench/suites/atlas.yaml");
@@ -215,36 +167,24 @@ TEST(Atlas, EveryMethodOnEveryStabilityAxisWithTwentySeeds) {
 class ShardMerge : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ = fs::temp_directory_path() /
-            ("quasiroll_cluster_test_" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
-    suite_path_ = (root_ / "tiny.yaml").string();
-    std::ofstream(suite_path_)
-        << "name: tiny\n"
-           "scenes:\n"
-           "  - {name: paper, file: "
-        << kScenes
-        << "paper.yaml, overrides: {time: {t_end: 0.5}}}\n"
-           "  - {name: flat, file: "
-        << kScenes
-        << "flat.yaml, overrides: {time: {t_end: 0.5}}}\n"
-           "groups:\n"
-           "  wp:\n"
-           "    nlp: [newton, ceres]\n"
-           "    dae: [rk-projection, ida]\n"
-           "    coupling: [zoh, coupled]\n"
-           "    dt: 0.1\n"
-           "  mu:\n"  // four more references
-           "    scenes: [paper]\n"
-           "    mu: [0.3, 0.45, 0.8, 1.0]\n"
-           "  unstable:\n"  // a failure row
-           "    scenes: [paper]\n"
-           "    dae: rk-baumgarte\n"
-           "    sigma: 200\n"
-           "  rough:\n"  // an error row (no initial configuration)
-           "    scenes: [paper]\n"
-           "    roughness: 100\n";
+    root_ = FreshTempDir("quasiroll_cluster_test_");
+    suite_path_ =
+        WriteTinySuite(root_,
+                       "  wp:\n"
+                       "    nlp: [newton, ceres]\n"
+                       "    dae: [rk-projection, ida]\n"
+                       "    coupling: [zoh, coupled]\n"
+                       "    dt: 0.1\n"
+                       "  mu:\n"  // four more references
+                       "    scenes: [paper]\n"
+                       "    mu: [0.3, 0.45, 0.8, 1.0]\n"
+                       "  unstable:\n"  // a failure row
+                       "    scenes: [paper]\n"
+                       "    dae: rk-baumgarte\n"
+                       "    sigma: 200\n"
+                       "  rough:\n"  // an error row (no initial configuration)
+                       "    scenes: [paper]\n"
+                       "    roughness: 100\n");
     suite_ = LoadSuite(suite_path_);
     HarnessOptions o = Options("j1");
     o.jobs = 1;
@@ -312,7 +252,7 @@ TEST_F(ShardMerge, ShardsCoverTheSuiteOnceAndWriteUnderShards) {
   for (int i = 0; i < kShards; ++i) {
     const fs::path d = root_ / "shared" / "shards" /
                        (std::to_string(i) + "-of-" + std::to_string(kShards));
-    const auto rows = CsvRows(ReadAll(d / "runs.csv"));
+    const auto rows = ParseCsv(ReadAll(d / "runs.csv"));
     for (std::size_t k = 1; k < rows.size(); ++k)
       EXPECT_TRUE(ids.insert(rows[k][0]).second) << rows[k][0];
     const std::string meta = ReadAll(d / "meta.json");
@@ -332,8 +272,9 @@ TEST_F(ShardMerge, MergeInPlaceEqualsJobsOne) {
   EXPECT_EQ(s.duplicates, 0);
   EXPECT_EQ(s.failures, 2);
   ExpectSameAsJobsOne("shared");
-  const auto meta = JsonMembers(ReadAll(root_ / "shared" / "meta.json"));
-  std::map<std::string, std::string> keys(meta.begin(), meta.end());
+  const JsonValue meta = ParseJson(ReadAll(root_ / "shared" / "meta.json"));
+  std::map<std::string, std::string> keys;
+  for (const auto& [k, v] : meta.members()) keys.emplace(k, v.raw());
   EXPECT_EQ(keys.count("shard"), 0u);  // only inside merge.inputs
   ASSERT_EQ(keys.count("merge"), 1u);
   EXPECT_EQ(keys["complete"], "true");
@@ -364,7 +305,7 @@ TEST_F(ShardMerge, ResumeWorksPerShard) {
   const fs::path dir = root_ / "resume";
   fs::remove_all(dir);
   fs::copy(root_ / "shared", dir, fs::copy_options::recursive);
-  const auto rows = CsvRows(ReadAll(dir / "shards" / "1-of-3" / "runs.csv"));
+  const auto rows = ParseCsv(ReadAll(dir / "shards" / "1-of-3" / "runs.csv"));
   ASSERT_GE(rows.size(), 3u);
   fs::remove(dir / "runs" / (rows[1][0] + ".csv"));
   fs::remove(dir / "trajectories" / (rows[2][0] + ".csv"));
@@ -428,13 +369,6 @@ TEST_F(ShardMerge, MergeRefusesMismatchedCommitSuiteAndMissingRuns) {
   EXPECT_FALSE(fs::exists(root_ / "bad_out" / "runs.csv"));
 }
 
-int RunCli(const std::string& args) {
-  const std::string cmd =
-      std::string(QUASIROLL_CLI_PATH) + " " + args + " >/dev/null 2>&1";
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 TEST_F(ShardMerge, CliExitCodes) {
   const std::string suite = " --suite " + suite_path_ + " --out " +
                             (root_ / "cli").string() + " --progress none";
@@ -450,12 +384,12 @@ TEST_F(ShardMerge, CliExitCodes) {
                          " --plan --shard 1/3 > " + plan.string())
                             .c_str()),
             0);
-  const auto rows = CsvRows(ReadAll(plan));
+  const auto rows = ParseCsv(ReadAll(plan));
   ASSERT_GE(rows.size(), 2u);
   EXPECT_EQ(rows[0][0], "run_id");
   EXPECT_EQ(rows[0][9], "estimated_cost_s");
   const auto shard1 =
-      CsvRows(ReadAll(root_ / "shared" / "shards" / "1-of-3" / "runs.csv"));
+      ParseCsv(ReadAll(root_ / "shared" / "shards" / "1-of-3" / "runs.csv"));
   ASSERT_EQ(rows.size(), shard1.size());
   for (std::size_t k = 1; k < rows.size(); ++k) {
     EXPECT_EQ(rows[k][0], shard1[k][0]);  // the runs shard 1 ran

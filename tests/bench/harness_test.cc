@@ -15,59 +15,18 @@
 #include <sstream>
 
 #include "quasiroll/bench/harness/suite.h"
+#include "quasiroll/bench/io/csv.h"
+#include "test_support.h"
 
 namespace quasiroll::bench {
 namespace {
 
 namespace fs = std::filesystem;
-const std::string kScenes =
-    std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/";
-
-std::string ReadAll(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 std::string HostName() {
   char host[256] = {0};
   ::gethostname(host, sizeof(host) - 1);
   return host;
-}
-
-// RFC 4180-style parser (quoted fields, doubled quotes); rows of fields.
-std::vector<std::vector<std::string>> ParseCsv(const std::string& text) {
-  std::vector<std::vector<std::string>> rows;
-  std::vector<std::string> row;
-  std::string field;
-  bool quoted = false;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
-        field += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        field += c;
-      }
-    } else if (c == '"') {
-      quoted = true;
-    } else if (c == ',') {
-      row.push_back(field);
-      field.clear();
-    } else if (c == '\n') {
-      row.push_back(field);
-      field.clear();
-      rows.push_back(row);
-      row.clear();
-    } else {
-      field += c;
-    }
-  }
-  return rows;
 }
 
 struct Table {
@@ -146,37 +105,25 @@ std::string WithoutTiming(const fs::path& p) {
 class BenchHarness : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ = fs::temp_directory_path() /
-            ("quasiroll_harness_test_" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
-    suite_path_ = (root_ / "tiny.yaml").string();
-    std::ofstream(suite_path_)
-        << "name: tiny\n"
-           "scenes:\n"
-           "  - {name: paper, file: "
-        << kScenes
-        << "paper.yaml, overrides: {time: {t_end: 0.5}}}\n"
-           "  - {name: flat, file: "
-        << kScenes
-        << "flat.yaml, overrides: {time: {t_end: 0.5}}}\n"
-           "groups:\n"
-           "  wp:\n"
-           "    nlp: [newton, ceres]\n"
-           "    dae: [rk-projection, rk-baumgarte]\n"
-           "    dt: [0.05, 0.1]\n"
-           "  ip:\n"  // ipopt-mumps runs are serialised (MUMPS)
-           "    scenes: [paper]\n"
-           "    nlp: [ipopt, ipopt-mumps]\n"
-           "    dae: [rk-projection, rk-baumgarte]\n"
-           "    dt: 0.1\n"
-           "  unstable:\n"  // sigma * dt = 10 >> 2.785: blows up
-           "    scenes: [paper]\n"
-           "    dae: rk-baumgarte\n"
-           "    sigma: 200\n"
-           "  rough:\n"  // no initial contact configuration
-           "    scenes: [paper]\n"
-           "    roughness: 100\n";
+    root_ = FreshTempDir("quasiroll_harness_test_");
+    suite_path_ =
+        WriteTinySuite(root_,
+                       "  wp:\n"
+                       "    nlp: [newton, ceres]\n"
+                       "    dae: [rk-projection, rk-baumgarte]\n"
+                       "    dt: [0.05, 0.1]\n"
+                       "  ip:\n"  // ipopt-mumps runs are serialised (MUMPS)
+                       "    scenes: [paper]\n"
+                       "    nlp: [ipopt, ipopt-mumps]\n"
+                       "    dae: [rk-projection, rk-baumgarte]\n"
+                       "    dt: 0.1\n"
+                       "  unstable:\n"  // sigma * dt = 10 >> 2.785: blows up
+                       "    scenes: [paper]\n"
+                       "    dae: rk-baumgarte\n"
+                       "    sigma: 200\n"
+                       "  rough:\n"  // no initial contact configuration
+                       "    scenes: [paper]\n"
+                       "    roughness: 100\n");
     suite_ = LoadSuite(suite_path_);
     HarnessOptions o;
     o.out_dir = (root_ / "j1").string();
@@ -398,11 +345,7 @@ TEST_F(BenchHarness, VerdictColumns) {
 // physical. Tight bounds turn a finished Baumgarte run (drift ~1e-8) into
 // drift_exceeded.
 TEST(BenchVerdicts, BlowUpIsNumericalFrictionStopIsPhysical) {
-  const fs::path root =
-      fs::temp_directory_path() /
-      ("quasiroll_verdict_test_" + std::to_string(::getpid()));
-  fs::remove_all(root);
-  fs::create_directories(root);
+  const fs::path root = FreshTempDir("quasiroll_verdict_test_");
   const std::string suite_path = (root / "verdicts.yaml").string();
   std::ofstream(suite_path)
       << "scenes:\n"
@@ -471,13 +414,6 @@ TEST(BenchVerdicts, BlowUpIsNumericalFrictionStopIsPhysical) {
   EXPECT_LE(std::stod(tight.at("wall_s_min")),
             std::stod(tight.at("wall_s_median")));
   fs::remove_all(root);
-}
-
-int RunCli(const std::string& args) {
-  const std::string cmd =
-      std::string(QUASIROLL_CLI_PATH) + " " + args + " >/dev/null 2>&1";
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 TEST_F(BenchHarness, CliExitCodes) {

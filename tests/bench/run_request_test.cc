@@ -1,12 +1,13 @@
 // One RunRequest, one set of rules (bench/harness/run_request.h): the CLI and
 // the Python module differ only in how they name keys.
+#include "quasiroll/bench/harness/run_request.h"
+
 #include <gtest/gtest.h>
 
 #include <memory>
 #include <stdexcept>
 #include <string>
 
-#include "quasiroll/bench/harness/run_request.h"
 #include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/nlp.h"
@@ -14,7 +15,8 @@
 namespace quasiroll::bench {
 namespace {
 
-const std::string kScenes = std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/";
+const std::string kScenes =
+    std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/";
 
 std::string Flag(const std::string& key) {
   if (key == "dae_options") return "--dae-opt";
@@ -41,7 +43,8 @@ TEST(RunRequest, DefaultsComeFromTheSceneAndTheRegistry) {
   r.nlp_max_iter = 7;
   r.substeps = 4;
   const ResolvedRun run = ResolveRunRequest(scene, r, Flag);
-  EXPECT_EQ(run.options.nlp, NlpSolverRegistry::WithRole(BackendRole::kDefault));
+  EXPECT_EQ(run.options.nlp,
+            NlpSolverRegistry::WithRole(BackendRole::kDefault));
   EXPECT_EQ(run.options.dae,
             IntegratorRegistry::WithRole(BackendRole::kDefault));
   EXPECT_EQ(run.options.dt, scene.dt);
@@ -80,7 +83,8 @@ TEST(RunRequest, ShorthandsMapOntoIntegratorOptionsOnce) {
   EXPECT_EQ(run.options.dae_options.at("rk_method"), "dp54");
   EXPECT_EQ(run.options.dae_options.count("dae_index"), 0u);
   ASSERT_EQ(run.notes.size(), 1u);
-  EXPECT_EQ(run.notes[0], "--dae-index does not apply to rk-baumgarte (ignored)");
+  EXPECT_EQ(run.notes[0],
+            "--dae-index does not apply to rk-baumgarte (ignored)");
   // Given twice (shorthand and backend option): an error in every front end.
   r.dae_options["rk_method"] = "rk4";
   EXPECT_EQ(ErrorOf(r, Flag), "--rk-method: also given as --dae-opt rk_method");
@@ -98,7 +102,8 @@ class ShadowingIntegrator final : public Integrator {
 
  private:
   void DoIntegrate(ConstrainedOde&, double, double, Eigen::Ref<Eigen::VectorXd>,
-                   const IntegratorOptions&, IntegratorResult* result) override {
+                   const IntegratorOptions&,
+                   IntegratorResult* result) override {
     result->status = IntegratorStatus::kConvergenceFailure;
   }
 };

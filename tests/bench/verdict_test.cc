@@ -10,9 +10,9 @@
 
 #include "quasiroll/bench/harness/failure_causes.h"
 #include "quasiroll/bench/harness/metrics.h"
-#include "quasiroll/core/quasi_static_validity.h"
 #include "quasiroll/bench/harness/reference.h"
 #include "quasiroll/core/dae.h"
+#include "quasiroll/core/quasi_static_validity.h"
 #include "quasiroll/core/yaml_util.h"
 
 namespace quasiroll::bench {

@@ -89,14 +89,14 @@ TEST(BackendInfo, ANameOrARoleCannotBeTakenTwice) {
   const std::string taken = NlpSolverRegistry::WithRole(BackendRole::kDefault);
   BackendInfo info;
   info.description = "test";
-  EXPECT_THROW(NlpSolverRegistry::Register(taken, info, [] {
-    return NlpSolverRegistry::Create("newton");
-  }),
-               std::invalid_argument);
+  EXPECT_THROW(
+      NlpSolverRegistry::Register(
+          taken, info, [] { return NlpSolverRegistry::Create("newton"); }),
+      std::invalid_argument);
   info.roles = {BackendRole::kDefault};
-  EXPECT_THROW(NlpSolverRegistry::Register("backend-info-test", info, [] {
-    return NlpSolverRegistry::Create("newton");
-  }),
+  EXPECT_THROW(NlpSolverRegistry::Register(
+                   "backend-info-test", info,
+                   [] { return NlpSolverRegistry::Create("newton"); }),
                std::invalid_argument);
   EXPECT_FALSE(NlpSolverRegistry::Has("backend-info-test"));
 }

@@ -23,7 +23,7 @@ class NeverIntegrator final : public quasiroll::Integrator {
 extern "C" void quasiroll_register_plugin() {
   quasiroll::BackendInfo info;
   info.description = "test: clashes with a built-in name";
-  quasiroll::IntegratorRegistry::Register(
-      "rk-projection", std::move(info),
-      [] { return std::make_unique<NeverIntegrator>(); });
+  quasiroll::IntegratorRegistry::Register("rk-projection", std::move(info), [] {
+    return std::make_unique<NeverIntegrator>();
+  });
 }
