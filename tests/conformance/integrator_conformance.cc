@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "quasiroll/conformance/option_table_conformance.h"
+
 namespace quasiroll::conformance {
 namespace {
 
@@ -89,32 +91,7 @@ void ExpectAndrewsAccuracy(Integrator& integrator, double step) {
 }
 
 void ExpectOptionTableValid(Integrator& integrator) {
-  SCOPED_TRACE(integrator.name());
-  const OptionTable table = integrator.option_table();
-  std::set<std::string> names;
-  GivenOptions defaults;
-  for (const OptionSpec& spec : table) {
-    std::string why;
-    EXPECT_TRUE(spec.Accepts(spec.default_value, &why))
-        << spec.name << ": default outside its own range: " << why;
-    EXPECT_TRUE(names.insert(spec.name).second)
-        << spec.name << ": duplicate name";
-    bool alphabet = !spec.name.empty();
-    for (char c : spec.name)
-      alphabet =
-          alphabet && (std::islower(static_cast<unsigned char>(c)) ||
-                       std::isdigit(static_cast<unsigned char>(c)) || c == '_');
-    EXPECT_TRUE(alphabet) << spec.name << ": not [a-z0-9_]+";
-    EXPECT_FALSE(spec.doc.empty()) << spec.name << ": no doc line";
-    EXPECT_EQ(ShadowedRunSetting({spec}), "")
-        << spec.name << ": named like a run setting (RunSettingNames())";
-    defaults[spec.name] = OptionValueText(spec.default_value);
-  }
-  EXPECT_EQ(integrator.backend_options().values().size(), table.size());
-  EXPECT_NO_THROW(integrator.SetBackendOptions(defaults))
-      << "the defaults, given as text, are not accepted";
-  EXPECT_THROW(integrator.SetBackendOptions({{"no_such_option", "1"}}),
-               std::invalid_argument);
+  ExpectBackendOptionTableValid(integrator);
 }
 
 std::unique_ptr<Integrator> IntegratorConformanceTest::Create() const {

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "quasiroll/conformance/option_table_conformance.h"
+
 namespace quasiroll::conformance {
 namespace {
 
@@ -22,14 +24,6 @@ bool IsRejectedClaim(const NlpResult& r) {
   return r.status == NlpStatus::kNotOptimal ||
          r.backend_status.find("claimed convergence rejected") !=
              std::string::npos;
-}
-
-// Options-table name alphabet (core/options.h: [a-z0-9_]+).
-bool IsOptionName(const std::string& name) {
-  return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
-    return std::islower(static_cast<unsigned char>(c)) ||
-           std::isdigit(static_cast<unsigned char>(c)) || c == '_';
-  });
 }
 
 }  // namespace
@@ -137,27 +131,7 @@ void ExpectInfeasibilityDetected(NlpSolver& solver,
 }
 
 void ExpectOptionTableValid(NlpSolver& solver) {
-  SCOPED_TRACE(solver.name());
-  const OptionTable table = solver.option_table();
-  std::set<std::string> names;
-  GivenOptions defaults;
-  for (const OptionSpec& spec : table) {
-    std::string why;
-    EXPECT_TRUE(spec.Accepts(spec.default_value, &why))
-        << spec.name << ": default outside its own range: " << why;
-    EXPECT_TRUE(names.insert(spec.name).second)
-        << spec.name << ": duplicate name";
-    EXPECT_TRUE(IsOptionName(spec.name)) << spec.name << ": not [a-z0-9_]+";
-    EXPECT_FALSE(spec.doc.empty()) << spec.name << ": no doc line";
-    EXPECT_EQ(ShadowedRunSetting({spec}), "")
-        << spec.name << ": named like a run setting (RunSettingNames())";
-    defaults[spec.name] = OptionValueText(spec.default_value);
-  }
-  EXPECT_EQ(solver.backend_options().values().size(), table.size());
-  EXPECT_NO_THROW(solver.SetBackendOptions(defaults))
-      << "the defaults, given as text, are not accepted";
-  EXPECT_THROW(solver.SetBackendOptions({{"no_such_option", "1"}}),
-               std::invalid_argument);
+  ExpectBackendOptionTableValid(solver);
 }
 
 void ExpectConcurrentSolvesMatchSequential(const std::string& backend) {

@@ -1,0 +1,53 @@
+// The option-table check shared by the NLP and the integrator conformance
+// suites (ExpectOptionTableValid in nlp_conformance.h and
+// integrator_conformance.h): both backend kinds have the same option API.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cctype>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+#include "quasiroll/core/options.h"
+
+namespace quasiroll::conformance {
+
+// Options-table name alphabet (core/options.h: [a-z0-9_]+).
+inline bool IsOptionName(const std::string& name) {
+  return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
+    return std::islower(static_cast<unsigned char>(c)) ||
+           std::isdigit(static_cast<unsigned char>(c)) || c == '_';
+  });
+}
+
+// `Backend`: NlpSolver or Integrator (name(), option_table(),
+// backend_options(), SetBackendOptions()).
+template <typename Backend>
+void ExpectBackendOptionTableValid(Backend& backend) {
+  SCOPED_TRACE(backend.name());
+  const OptionTable table = backend.option_table();
+  std::set<std::string> names;
+  GivenOptions defaults;
+  for (const OptionSpec& spec : table) {
+    std::string why;
+    EXPECT_TRUE(spec.Accepts(spec.default_value, &why))
+        << spec.name << ": default outside its own range: " << why;
+    EXPECT_TRUE(names.insert(spec.name).second)
+        << spec.name << ": duplicate name";
+    EXPECT_TRUE(IsOptionName(spec.name)) << spec.name << ": not [a-z0-9_]+";
+    EXPECT_FALSE(spec.doc.empty()) << spec.name << ": no doc line";
+    EXPECT_EQ(ShadowedRunSetting({spec}), "")
+        << spec.name << ": named like a run setting (RunSettingNames())";
+    defaults[spec.name] = OptionValueText(spec.default_value);
+  }
+  EXPECT_EQ(backend.backend_options().values().size(), table.size());
+  EXPECT_NO_THROW(backend.SetBackendOptions(defaults))
+      << "the defaults, given as text, are not accepted";
+  EXPECT_THROW(backend.SetBackendOptions({{"no_such_option", "1"}}),
+               std::invalid_argument);
+}
+
+}  // namespace quasiroll::conformance
