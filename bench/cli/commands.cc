@@ -55,6 +55,15 @@ void AddNlpTol(CLI::App* command, std::optional<double>* nlp_tol) {
       ->check(PositiveNumber());
 }
 
+void AddNlpMaxIter(CLI::App* command, std::optional<int>* nlp_max_iter) {
+  command
+      ->add_option("--nlp-max-iter", *nlp_max_iter,
+                   "Iteration limit of each quasi-static solve (default: " +
+                       std::to_string(QuasiStaticOptions().max_iterations) +
+                       ")")
+      ->check(IntegerIn(1, 1000000));
+}
+
 }  // namespace
 
 // `quasiroll run`: its flags are the keys of a RunRequest
@@ -118,17 +127,15 @@ void Commands::RegisterRun(CLI::App& app, const std::vector<std::string>& nlps,
                   "IDA formulation: 2 (GGL) or 1 (Baumgarte) (default: 2; "
                   "shorthand of --dae-opt dae_index=...)")
       ->check(IntegerIn(1, 2));
-  run->add_option("--nlp-max-iter", run_.nlp_max_iter,
-                  "Iteration limit of each quasi-static solve (default: 100)")
-      ->check(IntegerIn(1, 1000000));
+  AddNlpMaxIter(run, &run_.nlp_max_iter);
   run->add_option("--substeps", run_.substeps,
                   "Integrator steps per dt (RK4 step = dt / substeps; initial "
                   "step of adaptive schemes; default: 1)")
       ->check(IntegerIn(1, 100000));
   run->add_option("--contact-check", run_.contact_check,
-                  "Sampled second-contact check every N samples (default: "
-                  "never)")
-      ->check(IntegerIn(1, 1000000000));
+                  "Sampled second-contact check every N samples, 0 = never "
+                  "(default: never)")
+      ->check(IntegerIn(0, 1000000000));
   run->add_option("--nlp-opt", run_.nlp_opts,
                   "NLP backend option key=value (repeatable; see 'quasiroll "
                   "list --options')");
@@ -168,6 +175,7 @@ void Commands::Register(CLI::App& app) {
       ->capture_default_str();
   AddSceneOverrides(solve, &solve_.overrides);
   AddNlpTol(solve, &solve_.nlp_tol);
+  AddNlpMaxIter(solve, &solve_.nlp_max_iter);
   solve->add_option("--nlp-opt", solve_.nlp_opts,
                     "NLP backend option key=value (repeatable; see 'quasiroll "
                     "list --options')");
@@ -357,26 +365,34 @@ std::string FlagName(const std::string& key) {
   return flag;
 }
 
-void ApplyOverrides(Scene* scene, const SceneOverrides& o) {
-  if (o.mu) scene->mu = *o.mu;
-  if (o.eps) scene->epsilon = *o.eps;
-  if (o.mode == "paper") scene->mode = ActuationMode::kPaper;
-  if (o.mode == "pvc") scene->mode = ActuationMode::kPvc;
+// --mu, --eps, --mode into the request (the flag checked the mode's text).
+void SetSceneOverrides(const SceneOverrides& o, bench::RunRequest* request) {
+  request->mu = o.mu;
+  request->eps = o.eps;
+  if (o.mode)
+    request->mode =
+        *o.mode == "pvc" ? ActuationMode::kPvc : ActuationMode::kPaper;
 }
 
 }  // namespace
 
 int RunSolve(const SolveArgs& args) {
   RegisterBuiltinNlpSolvers();
-  Scene scene = LoadScene(args.scene);
-  ApplyOverrides(&scene, args.overrides);
+  bench::RunRequest request;
+  SetSceneOverrides(args.overrides, &request);
+  request.nlp = args.nlp;
+  request.nlp_tol = args.nlp_tol;
+  request.nlp_max_iter = args.nlp_max_iter;
+  request.nlp_options = ParseOptionFlags(args.nlp_opts, "--nlp-opt");
+  const bench::ResolvedSolve resolved =
+      bench::ResolveSolveRequest(LoadScene(args.scene), request, FlagName);
+  const Scene& scene = resolved.scene;
   const KinematicModel model(scene.geometry, scene.terrain);
   const Configuration theta = SolveInitialConfiguration(model, scene);
-  QuasiStaticOptions options;
+  QuasiStaticOptions options = resolved.quasi_static;
   options.diagnostics = true;
-  if (args.nlp_tol) options.residual_tolerance = *args.nlp_tol;
-  std::unique_ptr<NlpSolver> nlp = NlpSolverRegistry::Create(args.nlp);
-  nlp->SetBackendOptions(ParseOptionFlags(args.nlp_opts, "--nlp-opt"));
+  std::unique_ptr<NlpSolver> nlp = NlpSolverRegistry::Create(resolved.nlp);
+  nlp->SetBackendOptions(resolved.nlp_options);
   QuasiStaticSolver solver(model, QuasiStaticParameters::FromScene(scene),
                            std::move(nlp), options);
   QuasiStaticSolution sol;
@@ -469,11 +485,7 @@ int RunRun(const RunArgs& args) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
   bench::RunRequest request;
-  request.mu = args.overrides.mu;
-  request.eps = args.overrides.eps;
-  if (args.overrides.mode)
-    request.mode = *args.overrides.mode == "pvc" ? ActuationMode::kPvc
-                                                 : ActuationMode::kPaper;
+  SetSceneOverrides(args.overrides, &request);
   request.nlp = args.nlp;
   request.dae = args.dae;
   request.coupling = CouplingFromString(args.coupling);

@@ -32,6 +32,7 @@ struct SolveArgs {
   std::string nlp;  // "" until Commands::Register: the default NLP
   SceneOverrides overrides;
   std::optional<double> nlp_tol;
+  std::optional<int> nlp_max_iter;
   std::vector<std::string> nlp_opts;  // --nlp-opt key=value
   bool json = false;
 };

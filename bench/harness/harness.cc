@@ -752,8 +752,9 @@ RunOutcome ExecuteRun(const Suite& suite, const RunSpec& run,
   std::vector<std::string> row;
   SimulationResult result;
   try {
-    const Scene scene = RunScene(suite, run);
-    Simulator sim(scene, run.Options());
+    const ResolvedRun resolved = ResolveRun(suite, run);
+    const Scene& scene = resolved.scene;
+    Simulator sim(scene, resolved.options);
     result = sim.Run();
     std::vector<double> walls = {result.wall_seconds};
     for (int rep = 1; rep < run.repeats; ++rep)

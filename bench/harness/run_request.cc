@@ -75,7 +75,7 @@ void CheckValues(const RunRequest& r, const KeyNamer& namer) {
   RequireIn(namer, "nlp_max_iter", r.nlp_max_iter, 1, 1000000);
   RequireIn(namer, "dae_index", r.dae_index, 1, 2);
   RequireIn(namer, "substeps", r.substeps, 1, 100000);
-  RequireIn(namer, "contact_check", r.contact_check, 1, 1000000000);
+  RequireIn(namer, "contact_check", r.contact_check, 0, 1000000000);
   RequirePositive(namer, "mu", r.mu);
   RequirePositive(namer, "eps", r.eps);
 }
@@ -100,10 +100,7 @@ void ApplyShorthands(const RunRequest& r, const KeyNamer& namer,
                      const OptionTable& table, ResolvedRun* out) {
   for (const IntegratorShorthand& sh : IntegratorShorthands()) {
     const std::string key = sh.key;
-    std::optional<std::string> value;
-    if (key == "rk_method") value = r.rk_method;
-    if (key == "sigma" && r.sigma) value = Num(*r.sigma);
-    if (key == "dae_index" && r.dae_index) value = std::to_string(*r.dae_index);
+    const std::optional<std::string> value = ShorthandText(r, key);
     if (!value) continue;
     if (FindOption(table, sh.option) == nullptr) {
       out->notes.push_back(namer(key) + " does not apply to " +
@@ -118,6 +115,14 @@ void ApplyShorthands(const RunRequest& r, const KeyNamer& namer,
 }
 
 }  // namespace
+
+std::optional<std::string> ShorthandText(const RunRequest& r,
+                                        const std::string& key) {
+  if (key == "rk_method") return r.rk_method;
+  if (key == "sigma" && r.sigma) return Num(*r.sigma);
+  if (key == "dae_index" && r.dae_index) return std::to_string(*r.dae_index);
+  return std::nullopt;
+}
 
 const std::vector<IntegratorShorthand>& IntegratorShorthands() {
   static const std::vector<IntegratorShorthand> shorthands = {
@@ -159,6 +164,13 @@ ResolvedRun ResolveRunRequest(const Scene& base, const RunRequest& r,
   if (r.nlp_max_iter) o.quasi_static.max_iterations = *r.nlp_max_iter;
   if (r.contact_check) o.second_contact_check_every = *r.contact_check;
   return out;
+}
+
+ResolvedSolve ResolveSolveRequest(const Scene& base, const RunRequest& r,
+                                  const KeyNamer& namer) {
+  ResolvedRun run = ResolveRunRequest(base, r, namer);
+  return {std::move(run.scene), run.options.nlp,
+          std::move(run.options.nlp_options), run.options.quasi_static};
 }
 
 }  // namespace quasiroll::bench

@@ -30,7 +30,8 @@ struct RunRequest {
   std::optional<double> nlp_tol;     // quasi-static residual tolerance
   std::optional<int> nlp_max_iter;   // quasi-static solver iteration limit
   std::optional<int> substeps;       // integrator steps per dt
-  std::optional<int> contact_check;  // second-contact check every N samples
+  std::optional<int> contact_check;  // second-contact check every N samples,
+                                     // 0 = never
   // Shorthands of integrator options (IntegratorShorthands()): applied when
   // the run's integrator has the option.
   std::optional<std::string> rk_method;
@@ -53,6 +54,11 @@ struct IntegratorShorthand {
 // rk_method -> rk_method, sigma -> baumgarte_sigma, dae_index -> dae_index.
 const std::vector<IntegratorShorthand>& IntegratorShorthands();
 
+// The value of shorthand `key` in `request` as option text (the number
+// formatter's text for sigma), unset when the request does not give it.
+std::optional<std::string> ShorthandText(const RunRequest& request,
+                                        const std::string& key);
+
 // The run settings' keys are RunSettingNames() (core/options.h): a backend
 // option may not have one of these names (it would act next to the run's
 // own setting, e.g. a plugin's `substeps` multiplying the run's).
@@ -73,5 +79,20 @@ struct ResolvedRun {
 // setting. A shorthand for an integrator without the option is a note.
 ResolvedRun ResolveRunRequest(const Scene& base, const RunRequest& request,
                               const KeyNamer& namer);
+
+// A quasi-static solve (`quasiroll solve`, quasiroll.solve()): the part of
+// a run the solve has, resolved by the same rules.
+struct ResolvedSolve {
+  Scene scene;  // the base scene with the overrides
+  std::string nlp;
+  GivenOptions nlp_options;
+  QuasiStaticOptions quasi_static;  // nlp_tol, nlp_max_iter applied
+};
+
+// ResolveRunRequest for a solve: `request` may set the scene overrides
+// (mu, eps, mode), nlp, nlp_options, nlp_tol and nlp_max_iter; the same
+// errors as a run's.
+ResolvedSolve ResolveSolveRequest(const Scene& base, const RunRequest& request,
+                                  const KeyNamer& namer);
 
 }  // namespace quasiroll::bench

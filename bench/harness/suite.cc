@@ -43,22 +43,34 @@ std::string ReferenceSettings::Canonical() const {
   return os.str();
 }
 
-SimulationOptions RunSpec::Options() const {
-  SimulationOptions o;
-  o.nlp = nlp;
-  o.dae = dae;
-  o.coupling = coupling;
-  o.dt = dt;
-  o.t_end = t_end;
-  o.integrator.step = dt / substeps;
-  o.integrator.rtol = tol;
-  o.integrator.atol = atol;
-  o.nlp_options = nlp_options;
-  o.dae_options = dae_options;
-  o.quasi_static.residual_tolerance = nlp_tol;
-  o.second_contact_check_every = contact_check;
-  o.quasi_static.max_iterations = nlp_max_iter;
-  return o;
+RunRequest RunSpec::Request() const {
+  RunRequest q;
+  q.mu = mu;
+  q.eps = eps;
+  q.nlp = nlp;
+  q.dae = dae;
+  q.coupling = coupling;
+  q.dt = dt;
+  q.t_end = t_end;
+  q.tol = tol;
+  q.atol = atol;
+  q.nlp_tol = nlp_tol;
+  q.nlp_max_iter = nlp_max_iter;
+  q.substeps = substeps;
+  q.contact_check = contact_check;
+  q.nlp_options = nlp_options_explicit;
+  q.dae_options = dae_options_explicit;
+  // Where the group gave the integrator option itself, the shorthand field
+  // only mirrors it (the suite refuses both at once): not given twice.
+  auto mirrored = [this](const std::string& key) {
+    for (const IntegratorShorthand& sh : IntegratorShorthands())
+      if (key == sh.key) return dae_options_explicit.count(sh.option) > 0;
+    return false;
+  };
+  if (!mirrored("rk_method")) q.rk_method = rk_method;
+  if (!mirrored("sigma")) q.sigma = sigma;
+  if (!mirrored("dae_index")) q.dae_index = dae_index;
+  return q;
 }
 
 namespace {
@@ -511,40 +523,38 @@ std::vector<Axis> ReadOptionAxes(
   return axes;
 }
 
-// Completes a run's backend options: the explicit ones, plus the shorthand
-// keys for the integrator options of the same meaning. An explicit integrator
-// option with a shorthand also sets the shorthand's field (the runs.csv
-// column keeps its meaning).
-void ResolveRunOptions(const YAML::Node& group_node, const std::string& path,
-                       const OptionTable& dae_table, RunSpec* r) {
-  r->nlp_options = r->nlp_options_explicit;
-  r->dae_options = r->dae_options_explicit;
-  struct Shorthand {
-    const char* key;     // group key
-    const char* option;  // integrator option
-  };
-  for (const Shorthand& sh : {Shorthand{"rk_method", "rk_method"},
-                              Shorthand{"sigma", "baumgarte_sigma"},
-                              Shorthand{"dae_index", "dae_index"}}) {
-    const auto explicit_it = r->dae_options_explicit.find(sh.option);
-    if (explicit_it != r->dae_options_explicit.end()) {
-      if (Child(group_node, sh.key))
-        Fail(JoinKey(JoinKey(path, "dae_options"), sh.option),
-             std::string("given twice: also as the group key ") + sh.key +
-                 ", got \"" + explicit_it->second + "\"");
-      const std::string& v = explicit_it->second;
-      const std::string shorthand(sh.key);
-      if (shorthand == "rk_method") r->rk_method = v;
-      if (shorthand == "sigma") r->sigma = std::stod(v);
-      if (shorthand == "dae_index") r->dae_index = std::stoi(v);
-      continue;
-    }
-    if (FindOption(dae_table, sh.option) == nullptr) continue;
-    const std::string shorthand(sh.key);
-    r->dae_options[sh.option] = shorthand == "rk_method" ? r->rk_method
-                                : shorthand == "sigma"
-                                    ? Num(r->sigma)
-                                    : std::to_string(r->dae_index);
+// The suite's side of the shorthand keys (rk_method, sigma, dae_index):
+// they have defaults that are part of every run key, so a shorthand given
+// as a group key and also as its integrator option is refused here (the
+// request would see the default as given too), and an explicit integrator
+// option sets the shorthand's field so that the runs.csv column keeps its
+// meaning. Mapping them onto the options is ResolveRunRequest's.
+void ReconcileShorthands(const YAML::Node& group_node, const std::string& path,
+                         RunSpec* r) {
+  for (const IntegratorShorthand& sh : IntegratorShorthands()) {
+    const auto it = r->dae_options_explicit.find(sh.option);
+    if (it == r->dae_options_explicit.end()) continue;
+    const std::string key = sh.key;
+    if (Child(group_node, key))
+      Fail(JoinKey(JoinKey(path, "dae_options"), sh.option),
+           "given twice: also as the group key " + key + ", got \"" +
+               it->second + "\"");
+    if (key == "rk_method") r->rk_method = it->second;
+    if (key == "sigma") r->sigma = std::stod(it->second);
+    if (key == "dae_index") r->dae_index = std::stoi(it->second);
+  }
+}
+
+// The run's request resolved as every front end resolves one; a problem
+// is a SceneError naming the group's keys.
+ResolvedRun ResolveGroupRun(const std::string& path, const Scene& base,
+                            const RunSpec& r) {
+  try {
+    return ResolveRunRequest(base, r.Request(), [&path](const std::string& k) {
+      return JoinKey(path, k);
+    });
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(e.what());
   }
 }
 
@@ -803,20 +813,23 @@ std::vector<Axis> GridAxes(const GroupSpec& g, const SceneAxes& s) {
 // each completed (options, key, id) and checked.
 void AppendGridRuns(const YAML::Node& node, const std::string& path,
                     const RunSpec& base, const std::string& scene_ref,
-                    const std::vector<Axis>& axes, Suite* suite,
-                    OptionTables* tables) {
+                    const std::vector<Axis>& axes, Suite* suite) {
   std::vector<std::size_t> at(axes.size(), 0);
   for (bool more = true; more;) {
     RunSpec r = base;
     for (std::size_t k = 0; k < axes.size(); ++k)
       axes[k].values[at[k]].apply(&r);
     r.index = static_cast<int>(suite->runs.size());
-    ResolveRunOptions(node, path, tables->Dae(r.dae), &r);
+    ReconcileShorthands(node, path, &r);
+    const ResolvedRun resolved =
+        ResolveGroupRun(path, suite->scenes.at(r.scene_index).scene, r);
+    r.nlp_options = resolved.options.nlp_options;
+    r.dae_options = resolved.options.dae_options;
     r.key = CanonicalRunKey(r);
     r.run_id = base.group + "-" + base.scene + "-" + r.nlp + "-" + r.dae + "-" +
                ToString(r.coupling) + "-" + Hex64(Fnv1a64(r.key)).substr(0, 8);
     std::string why;
-    if (!r.Options().IsValid(&why))
+    if (!resolved.options.IsValid(&why))
       Fail(path, "invalid method options (" + why + ") for " + scene_ref +
                      ", got " + r.key);
     suite->runs.push_back(std::move(r));
@@ -849,7 +862,7 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
     base.t_end = s.t_end;
     base.repeats = g.repeats;
     base.bounds = g.bounds;
-    AppendGridRuns(node, path, base, scene_ref, axes, suite, tables);
+    AppendGridRuns(node, path, base, scene_ref, axes, suite);
   }
 }
 
@@ -974,9 +987,11 @@ Scene ReferenceScene(const Suite& suite, const RunSpec& run) {
 }
 
 Scene RunScene(const Suite& suite, const RunSpec& run) {
-  Scene s = SweptScene(suite, run);
-  s.epsilon = run.eps;
-  return s;
+  return ResolveRun(suite, run).scene;
+}
+
+ResolvedRun ResolveRun(const Suite& suite, const RunSpec& run) {
+  return ResolveGroupRun("run " + run.run_id, ReferenceScene(suite, run), run);
 }
 
 std::string SceneCanonicalText(const Scene& scene, const TerrainSpec& t,

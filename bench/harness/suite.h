@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "quasiroll/bench/harness/run_request.h"
 #include "quasiroll/bench/io/format.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/scene.h"
@@ -121,7 +122,12 @@ struct RunSpec {
   std::string key;     // canonical text of every parameter above
   std::string run_id;  // <group>-<scene>-<nlp>-<dae>-<coupling>-<8 hex>
 
-  SimulationOptions Options() const;
+  // The run as a RunRequest (docs/architecture.md, "A new setting of a
+  // run"): its backends, times, tolerances and checks, mu and epsilon, the
+  // explicit backend options, and the shorthands rk_method / sigma /
+  // dae_index except where the explicit integrator options already hold
+  // them. ResolveRun turns it into what the Simulator runs.
+  RunRequest Request() const;
 };
 
 struct Suite {
@@ -158,6 +164,13 @@ TerrainSpec SweptTerrain(const SuiteScene& scene,
 Scene ReferenceScene(const Suite& suite, const RunSpec& run);
 // The scene the run itself simulates: ReferenceScene + the run's epsilon.
 Scene RunScene(const Suite& suite, const RunSpec& run);
+
+// The scene and SimulationOptions `run` simulates: ResolveRunRequest of
+// run.Request() on ReferenceScene(suite, run), the same step the CLI and
+// the Python module take. Throws SceneError naming the run for a request
+// that does not resolve (suites are checked when expanded, so only a
+// RunSpec edited by hand can).
+ResolvedRun ResolveRun(const Suite& suite, const RunSpec& run);
 
 // Canonical text of every parameter of a scene that affects its motion
 // (geometry, mass, gravity, mu, mode, rates, initial pose, time span,

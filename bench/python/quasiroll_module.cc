@@ -59,16 +59,6 @@ Scene WithOverrides(Scene scene, const std::optional<double>& mu,
   return scene;
 }
 
-void RequireBackend(const char* kind, const std::string& name,
-                    const std::vector<std::string>& known) {
-  for (const std::string& k : known)
-    if (k == name) return;
-  std::string list;
-  for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
-  throw std::invalid_argument(std::string(kind) + ": must be one of " + list +
-                              ", got '" + name + "'");
-}
-
 std::string PoseText(const Scene& scene) {
   std::string json;
   {
@@ -82,31 +72,38 @@ std::string PoseText(const Scene& scene) {
   return json;
 }
 
-std::string SolveText(const Scene& scene_in, const std::string& nlp_given,
+std::string SolveText(const Scene& scene_in, const std::string& nlp,
                       std::optional<double> mu, std::optional<double> eps,
                       std::optional<std::string> mode,
-                      std::optional<double> nlp_tol) {
-  RegisterBuiltinNlpSolvers();
-  // "" (Python None): the registry's default NLP.
-  const std::string nlp =
-      nlp_given.empty() ? NlpSolverRegistry::WithRole(BackendRole::kDefault)
-                        : nlp_given;
-  RequireBackend("nlp", nlp, NlpSolverRegistry::Names());
-  RequirePositive("nlp_tol", nlp_tol);
-  const Scene scene = WithOverrides(scene_in, mu, eps, mode);
+                      std::optional<double> nlp_tol,
+                      std::optional<int> nlp_max_iter,
+                      const GivenOptions& nlp_options) {
+  bench::RunRequest request;
+  request.mu = mu;
+  request.eps = eps;
+  if (mode) request.mode = ModeFromString(*mode);
+  request.nlp = nlp;  // "" (Python None): the registry's default
+  request.nlp_tol = nlp_tol;
+  request.nlp_max_iter = nlp_max_iter;
+  request.nlp_options = nlp_options;
+  const bench::ResolvedSolve resolved = bench::ResolveSolveRequest(
+      scene_in, request, [](const std::string& key) { return key; });
+  const Scene& scene = resolved.scene;
   std::string json;
   {
     py::gil_scoped_release release;
     const KinematicModel model(scene.geometry, scene.terrain);
     const Configuration theta = SolveInitialConfiguration(model, scene);
-    QuasiStaticOptions options;
+    QuasiStaticOptions options = resolved.quasi_static;
     options.diagnostics = true;
-    if (nlp_tol) options.residual_tolerance = *nlp_tol;
+    std::unique_ptr<NlpSolver> solver_nlp =
+        NlpSolverRegistry::Create(resolved.nlp);
+    solver_nlp->SetBackendOptions(resolved.nlp_options);
     QuasiStaticSolver solver(model, QuasiStaticParameters::FromScene(scene),
-                             NlpSolverRegistry::Create(nlp), options);
+                             std::move(solver_nlp), options);
     QuasiStaticSolution sol;
     const QuasiStaticStatus status = solver.Solve(theta, &sol);
-    json = SolveJson(scene, nlp, status, sol);
+    json = SolveJson(scene, resolved.nlp, status, sol);
   }
   return json;
 }
@@ -257,7 +254,8 @@ PYBIND11_MODULE(_quasiroll, m) {
       py::arg("path"), "Load and validate a scene YAML file");
   m.def("_pose_json", &PoseText, py::arg("scene"));
   m.def("_solve_json", &SolveText, py::arg("scene"), py::arg("nlp"),
-        py::arg("mu"), py::arg("eps"), py::arg("mode"), py::arg("nlp_tol"));
+        py::arg("mu"), py::arg("eps"), py::arg("mode"), py::arg("nlp_tol"),
+        py::arg("nlp_max_iter"), py::arg("nlp_options"));
   m.def("_run_text", &RunText, py::arg("scene"), py::arg("nlp"), py::arg("dae"),
         py::arg("coupling"), py::arg("dt"), py::arg("t_end"), py::arg("mu"),
         py::arg("eps"), py::arg("mode"), py::arg("rk_method"), py::arg("sigma"),

@@ -147,5 +147,55 @@ TEST(RunRequest, ABackendOptionMayNotShadowARunSetting) {
         << n;
 }
 
+// A suite's run is a RunRequest like the CLI's: the same request given by
+// hand resolves to the same options (shorthands, explicit options, times).
+TEST(RunRequest, ASuiteRunResolvesLikeAnyOtherRequest) {
+  const Suite suite = LoadSuiteFromString(
+      "name: s\nscenes:\n  - {name: paper, file: paper.yaml}\ngroups:\n"
+      "  g:\n    dae: [rk-baumgarte, rk-projection]\n    dt: 0.1\n    t_end: 2\n"
+      "    sigma: 7\n    tol: 1.0e-5\n    substeps: 2\n"
+      "    nlp_max_iter: 40\n    contact_check: 0\n"
+      "    dae_options: {rk_method: dp54}\n",
+      "<test>", kScenes);
+  ASSERT_EQ(suite.runs.size(), 2u);
+  for (const RunSpec& run : suite.runs) {
+    RunRequest byhand;
+    byhand.dae = run.dae;
+    byhand.dt = 0.1;
+    byhand.t_end = 2;
+    byhand.sigma = 7;
+    byhand.tol = 1e-5;
+    byhand.atol = 1e-7;  // atol_ratio 1e-2
+    byhand.substeps = 2;
+    byhand.nlp_max_iter = 40;
+    byhand.contact_check = 0;
+    byhand.dae_index = 2;
+    byhand.dae_options["rk_method"] = "dp54";
+    const ResolvedRun expected = ResolveRunRequest(
+        LoadScene(kScenes + "paper.yaml"), byhand, Same);
+    const ResolvedRun got = ResolveRun(suite, run);
+    EXPECT_EQ(got.options.nlp, expected.options.nlp) << run.run_id;
+    EXPECT_EQ(got.options.dae_options, expected.options.dae_options)
+        << run.run_id;
+    EXPECT_EQ(got.options.nlp_options, expected.options.nlp_options);
+    EXPECT_EQ(got.options.integrator.step, expected.options.integrator.step);
+    EXPECT_EQ(got.options.integrator.rtol, expected.options.integrator.rtol);
+    EXPECT_DOUBLE_EQ(got.options.integrator.atol,
+                     expected.options.integrator.atol);
+    EXPECT_EQ(got.options.quasi_static.max_iterations, 40);
+    EXPECT_EQ(got.options.second_contact_check_every, 0);
+    EXPECT_EQ(got.options.t_end, 2.0);
+    EXPECT_EQ(got.scene.mu, expected.scene.mu);
+    EXPECT_EQ(got.scene.epsilon, expected.scene.epsilon);
+    // The runs.csv fields carry what ran.
+    EXPECT_EQ(run.dae_options, got.options.dae_options);
+    EXPECT_EQ(run.rk_method, "dp54");
+    EXPECT_EQ(run.dae_options.at("rk_method"), "dp54");
+  }
+  // The shorthand reached only the integrator that has the option.
+  EXPECT_EQ(suite.runs[0].dae_options.at("baumgarte_sigma"), "7");
+  EXPECT_EQ(suite.runs[1].dae_options.count("baumgarte_sigma"), 0u);
+}
+
 }  // namespace
 }  // namespace quasiroll::bench

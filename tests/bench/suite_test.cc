@@ -178,7 +178,7 @@ groups:
   // sigma / dae_index are not rk-projection options: not passed.
   EXPECT_EQ(r.dae_options.count("baumgarte_sigma"), 0u);
   EXPECT_EQ(r.dae_options.count("dae_index"), 0u);
-  const SimulationOptions o = r.Options();
+  const SimulationOptions o = ResolveRun(s, r).options;
   EXPECT_EQ(o.nlp_options, r.nlp_options);
   EXPECT_EQ(o.dae_options, r.dae_options);
   // Explicit options are appended to the key (names in order).
@@ -269,7 +269,7 @@ groups:
     nlp_tol: 1.0e-10
 )");
   ASSERT_EQ(s.runs.size(), 2u);
-  const SimulationOptions o = s.runs[1].Options();
+  const SimulationOptions o = ResolveRun(s, s.runs[1]).options;
   EXPECT_EQ(o.integrator.rtol, 1e-6);
   EXPECT_DOUBLE_EQ(o.integrator.atol, 1e-7);
   EXPECT_EQ(o.quasi_static.residual_tolerance, 1e-10);

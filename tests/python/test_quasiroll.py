@@ -89,6 +89,32 @@ def test_failed_solve_has_none_not_zeros_and_equals_cli():
 
 
 @pytest.mark.skipif(not BIN, reason="QUASIROLL_BINARY not set")
+def test_solve_iteration_limit_and_options_equal_cli():
+    # The solve takes a run's quasi-static keys (nlp_max_iter, nlp_options)
+    # with the same rules and effect as `quasiroll solve`'s flags.
+    paper = os.path.join(SCENES, "paper.yaml")
+    full = quasiroll.solve(scene("paper"), "newton")
+    assert full["ok"] and full["iterations"] > 1
+    capped = quasiroll.solve(scene("paper"), "newton", nlp_max_iter=1)
+    c = cli_json("solve", "--scene", paper, "--nlp", "newton",
+                 "--nlp-max-iter", "1")
+    assert capped["status"] == c["status"]
+    assert capped["iterations"] == c["iterations"] < full["iterations"]
+    # newton (dense LU) gives the same bits in both processes.
+    r = quasiroll.solve(scene("paper"), "newton",
+                        nlp_options={"polish_floor": 1e-13})
+    c = cli_json("solve", "--scene", paper, "--nlp", "newton",
+                 "--nlp-opt", "polish_floor=1e-13")
+    assert r["status"] == c["status"] == "OK"
+    np.testing.assert_array_equal(r["twist"], c["twist"])
+    with pytest.raises(ValueError, match="nlp_max_iter"):
+        quasiroll.solve(scene("paper"), nlp_max_iter=0)
+    with pytest.raises(ValueError, match="no_such_option"):
+        quasiroll.solve(scene("paper"), "ipopt",
+                        nlp_options={"no_such_option": 1})
+
+
+@pytest.mark.skipif(not BIN, reason="QUASIROLL_BINARY not set")
 def test_run_equals_cli_run(tmp_path):
     traj, stats = quasiroll.run(scene("paper"), "newton", "rk-baumgarte",
                                 t_end=2, sigma=2.0, rk_method="rk4")

@@ -54,14 +54,34 @@ def pose(scene):
     return _arrays(json.loads(_quasiroll._pose_json(scene)))
 
 
-def solve(scene, nlp=None, *, mu=None, eps=None, mode=None, nlp_tol=None):
+def _given_options(name, value):
+    """A dict of backend options as the option texts `--nlp-opt` takes."""
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise ValueError(f"{name}: must be a dict of option name -> value, "
+                         f"got {type(value).__name__}")
+    out = {}
+    for key, item in value.items():
+        if isinstance(item, bool):
+            item = "true" if item else "false"
+        elif isinstance(item, float):
+            item = repr(item)
+        out[str(key)] = str(item)
+    return out
+
+
+def solve(scene, nlp=None, *, mu=None, eps=None, mode=None, nlp_tol=None,
+          nlp_max_iter=None, nlp_options=None):
     """One quasi-static solve at the scene's initial configuration
     (`quasiroll solve --json`). Returns a dict: status, message, mu_min,
     twist, joint_rates, actuator_torques (numpy; None when the status is not
     OK), gap, iterations, residual, condition_number, wall_s, critical_wheel
     (1-based or None), contacts (list of 3 dicts of numpy arrays, or None)
-    and ok (status == "OK")."""
-    d = json.loads(_quasiroll._solve_json(scene, nlp or "", mu, eps, mode, nlp_tol))
+    and ok (status == "OK"). The keywords are run()'s, with its rules."""
+    d = json.loads(_quasiroll._solve_json(
+        scene, nlp or "", mu, eps, mode, nlp_tol, nlp_max_iter,
+        _given_options("nlp_options", nlp_options)))
     if d["status"] != "OK":
         d["contacts"] = None
     d = _arrays(d)
@@ -85,24 +105,11 @@ def run(scene, nlp=None, dae=None, *, coupling="zoh", dt=None,
     value, as `--nlp-opt` / `--dae-opt`; `quasiroll list --options` lists
     them); an unknown or ill-typed one raises ValueError naming it. The GIL
     is released while the simulation runs; Ctrl-C raises KeyboardInterrupt."""
-    def _given(name, value):
-        if value is None:
-            return {}
-        if not isinstance(value, dict):
-            raise ValueError(f"{name}: must be a dict of option name -> value, "
-                             f"got {type(value).__name__}")
-        out = {}
-        for key, item in value.items():
-            if isinstance(item, bool):
-                item = "true" if item else "false"
-            elif isinstance(item, float):
-                item = repr(item)
-            out[str(key)] = str(item)
-        return out
     csv_text, run_json = _quasiroll._run_text(
         scene, nlp or "", dae or "", coupling, dt, t_end, mu, eps, mode, rk_method, sigma,
         tol, atol, nlp_tol, dae_index, substeps, contact_check, nlp_max_iter,
-        _given("nlp_options", nlp_options), _given("dae_options", dae_options))
+        _given_options("nlp_options", nlp_options),
+        _given_options("dae_options", dae_options))
     stats = json.loads(run_json)
     if as_frame:
         import pandas as pd
