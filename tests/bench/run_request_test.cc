@@ -152,7 +152,8 @@ TEST(RunRequest, ABackendOptionMayNotShadowARunSetting) {
 TEST(RunRequest, ASuiteRunResolvesLikeAnyOtherRequest) {
   const Suite suite = LoadSuiteFromString(
       "name: s\nscenes:\n  - {name: paper, file: paper.yaml}\ngroups:\n"
-      "  g:\n    dae: [rk-baumgarte, rk-projection]\n    dt: 0.1\n    t_end: 2\n"
+      "  g:\n    dae: [rk-baumgarte, rk-projection]\n    dt: 0.1\n    t_end: "
+      "2\n"
       "    sigma: 7\n    tol: 1.0e-5\n    substeps: 2\n"
       "    nlp_max_iter: 40\n    contact_check: 0\n"
       "    dae_options: {rk_method: dp54}\n",
@@ -171,8 +172,8 @@ TEST(RunRequest, ASuiteRunResolvesLikeAnyOtherRequest) {
     byhand.contact_check = 0;
     byhand.dae_index = 2;
     byhand.dae_options["rk_method"] = "dp54";
-    const ResolvedRun expected = ResolveRunRequest(
-        LoadScene(kScenes + "paper.yaml"), byhand, Same);
+    const ResolvedRun expected =
+        ResolveRunRequest(LoadScene(kScenes + "paper.yaml"), byhand, Same);
     const ResolvedRun got = ResolveRun(suite, run);
     EXPECT_EQ(got.options.nlp, expected.options.nlp) << run.run_id;
     EXPECT_EQ(got.options.dae_options, expected.options.dae_options)
