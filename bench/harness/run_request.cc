@@ -117,7 +117,7 @@ void ApplyShorthands(const RunRequest& r, const KeyNamer& namer,
 }  // namespace
 
 std::optional<std::string> ShorthandText(const RunRequest& r,
-                                        const std::string& key) {
+                                         const std::string& key) {
   if (key == "rk_method") return r.rk_method;
   if (key == "sigma" && r.sigma) return Num(*r.sigma);
   if (key == "dae_index" && r.dae_index) return std::to_string(*r.dae_index);

@@ -57,7 +57,7 @@ const std::vector<IntegratorShorthand>& IntegratorShorthands();
 // The value of shorthand `key` in `request` as option text (the number
 // formatter's text for sigma), unset when the request does not give it.
 std::optional<std::string> ShorthandText(const RunRequest& request,
-                                        const std::string& key);
+                                         const std::string& key);
 
 // The run settings' keys are RunSettingNames() (core/options.h): a backend
 // option may not have one of these names (it would act next to the run's
