@@ -18,22 +18,33 @@ std::string DivergenceDetail(const FailureEvidence& e) {
   if (e.gap_max > e.gap_bound) return "gap_blowup";
   return "step_too_large";
 }
+// A run that blew up: its motion (and so its inertia) is the method's.
+bool BlewUp(const FailureEvidence& e) {
+  return !e.known_instability.empty() || e.drift_max > e.drift_bound ||
+         e.gap_max > e.gap_bound;
+}
 }  // namespace
+
+double StopTolerance(const FailureEvidence& e) {
+  return 2.0 * std::max(e.dt * std::max(1, e.contact_check), e.ref_dt);
+}
 
 FailureCause ClassifyFailure(const FailureEvidence& e) {
   const RunStatus st = e.status;
   if (st == RunStatus::kSuccess) return {"", ""};
   if (st == RunStatus::kError) return {"numerical", "error"};
+  // The motion left the quasi-static model's domain before the stop: what
+  // follows (a limit, a solver giving up) is outside what the model can
+  // claim, whichever method ran it.
+  if (e.qs_inertia_ratio > e.qs_inertia_bound && !BlewUp(e))
+    return {"model", "quasi_static_invalid"};
   // A run past its bounds: the root cause when it is known (e.g. sigma h
   // beyond RK4's stability interval), else the symptom.
   if (st == RunStatus::kDriftExceeded || st == RunStatus::kGapExceeded)
     return {"numerical", !e.known_instability.empty()      ? e.known_instability
                          : st == RunStatus::kDriftExceeded ? "drift_blowup"
                                                            : "gap_blowup"};
-  // Stops are detected on the output grid (dt), the sampled second-contact
-  // check only every contact_check samples: two detection intervals.
-  const double tol_t =
-      2.0 * std::max(e.dt * std::max(1, e.contact_check), e.ref_dt);
+  const double tol_t = StopTolerance(e);
   const bool ref_stopped =
       e.has_reference && e.ref_status != RunStatus::kSuccess;
   const bool same_place =

@@ -3,6 +3,7 @@
 // method's), with a detail name. Pure functions of the evidence; no I/O.
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -29,18 +30,31 @@ struct FailureEvidence {
   std::optional<RunStatus> ref_status;
   double ref_t_reached = 0;
   double ref_dt = 0;  // spacing of the reference's samples
+  // Quasi-static inertia ratio of the motion up to the stop (the
+  // reference's up to t_reached + StopTolerance(), else the run's own; NaN
+  // when unknown) and the suite's bound on it.
+  double qs_inertia_ratio = std::numeric_limits<double>::quiet_NaN();
+  double qs_inertia_bound = std::numeric_limits<double>::infinity();
 };
 
+// How far apart two stops may be and still be the same stop: stops are
+// detected on the output grid (dt), the sampled second-contact check only
+// every contact_check samples, the reference on its own grid; two detection
+// intervals, 2 max(dt max(1, contact_check), ref_dt).
+double StopTolerance(const FailureEvidence& e);
+
 struct FailureCause {
-  std::string cause;   // "", "physical" or "numerical"
+  std::string cause;   // "", "physical", "numerical" or "model"
   std::string detail;  // "", friction_limit, ... (docs/harness.md)
 };
 
 // Classifies a non-success row (rules in docs/harness.md, Failure causes):
-// physical when the reference stops at the same place
-// (|t_reached - t_ref| <= 2 max(dt max(1, contact_check), ref_dt)) with a
-// physical status, numerical when the method stops where the reference goes
-// on, breaks the bounds, or its NLP fails (SOLVER_FAILURE).
+// model (quasi_static_invalid) when the motion up to the stop exceeds the
+// quasi-static inertia bound and the run did not blow up; else physical when
+// the reference stops at the same place (|t_reached - t_ref| <=
+// StopTolerance) with a physical status, numerical when the method stops
+// where the reference goes on, breaks the bounds, or its NLP fails
+// (SOLVER_FAILURE).
 FailureCause ClassifyFailure(const FailureEvidence& e);
 
 }  // namespace quasiroll::bench

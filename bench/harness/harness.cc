@@ -171,6 +171,22 @@ FailureEvidence Evidence(const RunSpec& run, RunStatus status, double t_reached,
   return e;
 }
 
+// Quasi-static inertia ratio of the motion up to a run's stop, for its
+// failure cause: the reference's motion up to t_reached + StopTolerance (a
+// property of the problem, not of how well the method followed it), else
+// the run's own.
+double MotionValidityAtStop(const FailureEvidence& e,
+                            const SimulationResult& result, const Scene& scene,
+                            const Reference* reference) {
+  if (!e.has_reference)
+    return QuasiStaticInertiaRatio(result.samples, scene);
+  const double until = e.t_reached + StopTolerance(e) + 1e-9;
+  std::vector<TrajectorySample> motion;
+  for (const TrajectorySample& s : reference->samples)
+    if (s.t <= until) motion.push_back(s);
+  return QuasiStaticInertiaRatio(motion, scene);
+}
+
 // The simulator's stop as a RunStatus. Its statuses are the quasi-static and
 // integrator enums' spellings, all of them RunStatus values
 // (tests/bench/run_status_test.cc): another text is a bug.
@@ -250,6 +266,9 @@ std::vector<std::string> MakeRow(const RunSpec& run,
   FailureEvidence e = Evidence(run, status, result.t_reached, reference);
   e.drift_max = d.drift_max;
   e.gap_max = d.gap_max;
+  e.qs_inertia_bound = run.bounds.qs_inertia;
+  if (status != RunStatus::kSuccess)
+    e.qs_inertia_ratio = MotionValidityAtStop(e, result, scene, reference);
   const FailureCause cause = ClassifyFailure(e);
   b.Set("cause", cause.cause);
   b.Set("cause_detail", cause.detail);
@@ -523,6 +542,9 @@ void WriteMeta(const Suite& suite, const HarnessOptions& options, int jobs,
   w.EndObject();
   w.Key("suite_hash").Value(Hex64(suite.text_hash));
   w.Key("reference").Value(suite.reference.Canonical());
+  // The suite's validity bound (groups may override it: their runs' rows
+  // carry the verdict); the report's threshold.
+  w.Key("qs_inertia_threshold").Value(suite.bounds.qs_inertia);
   WriteReferenceMethod(suite, &w);
   w.Key("commit").Value(GitCommit());
   w.Key("library_versions");

@@ -264,12 +264,15 @@ ReferenceSettings ReadReference(const YAML::Node& node,
 RunBounds ReadBounds(const YAML::Node& node, const std::string& path,
                      RunBounds bounds) {
   if (!node.IsMap())
-    Fail(path, "expected a mapping {drift: ..., gap: ...}, got " +
-                   yaml::DescribeNode(node));
-  yaml::CheckKeys(node, path, {"drift", "gap"});
+    Fail(path,
+         "expected a mapping {drift: ..., gap: ..., qs_inertia: ...}, got " +
+             yaml::DescribeNode(node));
+  yaml::CheckKeys(node, path, {"drift", "gap", "qs_inertia"});
   yaml::ReadOptionalDouble(node, path, "drift", &bounds.drift,
                            Bounds::Positive());
   yaml::ReadOptionalDouble(node, path, "gap", &bounds.gap, Bounds::Positive());
+  yaml::ReadOptionalDouble(node, path, "qs_inertia", &bounds.qs_inertia,
+                           Bounds::Positive());
   return bounds;
 }
 
@@ -297,8 +300,11 @@ std::string CanonicalRunKey(const RunSpec& r) {
   for (const auto& [name, value] : r.dae_options_explicit)
     os << ";dae_options." << name << "=" << value;
   // Likewise non-default verdict bounds (they change the row, not the run).
-  if (!(r.bounds == RunBounds{}))
+  const RunBounds defaults;
+  if (r.bounds.drift != defaults.drift || r.bounds.gap != defaults.gap)
     os << ";bounds=" << Num(r.bounds.drift) << "," << Num(r.bounds.gap);
+  if (r.bounds.qs_inertia != defaults.qs_inertia)
+    os << ";bounds.qs_inertia=" << Num(r.bounds.qs_inertia);
   return os.str();
 }
 

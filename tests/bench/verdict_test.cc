@@ -184,6 +184,49 @@ TEST(FailureCauses, BlowUpIsNeverAFrictionLimit) {
   EXPECT_EQ(ClassifyFailure(e).cause, "numerical");
 }
 
+// stability.yaml on R1 at roughness 12: every method and the reference stop
+// on the friction limit at 2.55 s after a motion whose inertia ratio reaches
+// 0.15, fifteen times the 0.01 bound; the stop is the model's, not the
+// method's or a physical limit the model can vouch for.
+TEST(FailureCauses, StopBeyondQuasiStaticValidityIsTheModels) {
+  FailureEvidence e =
+      Evidence("INFEASIBLE_FRICTION", 2.55, "INFEASIBLE_FRICTION", 2.55);
+  e.qs_inertia_bound = 0.01;
+  EXPECT_EQ(ClassifyFailure(e).cause, "physical");  // NaN: unknown
+  e.qs_inertia_ratio = 0.009;
+  EXPECT_EQ(ClassifyFailure(e).cause, "physical");
+  e.qs_inertia_ratio = 0.15;
+  FailureCause c = ClassifyFailure(e);
+  EXPECT_EQ(c.cause, "model");
+  EXPECT_EQ(c.detail, "quasi_static_invalid");
+  // Whatever the status: a solver that gives up in that motion too.
+  e.status = RunStatus::kSolverFailure;
+  EXPECT_EQ(ClassifyFailure(e).detail, "quasi_static_invalid");
+  // A run that blew up made its own violent motion: the other rules judge
+  // it, as if the validity were unknown.
+  auto without_validity = [](FailureEvidence x) {
+    x.qs_inertia_ratio = kNaN;
+    return ClassifyFailure(x);
+  };
+  e.status = RunStatus::kInfeasibleFriction;
+  e.ref_status = RunStatus::kSuccess;
+  e.ref_t_reached = 20;
+  e.drift_max = 0.5;
+  c = ClassifyFailure(e);
+  EXPECT_EQ(c.cause, "numerical");
+  EXPECT_EQ(c.detail, without_validity(e).detail);
+  EXPECT_EQ(c.detail, "drift_blowup");
+  e.drift_max = 1e-12;
+  e.known_instability = "baumgarte_instability";
+  EXPECT_EQ(ClassifyFailure(e).detail, "baumgarte_instability");
+  // Successes and errors keep theirs.
+  e.known_instability.clear();
+  e.status = RunStatus::kSuccess;
+  EXPECT_EQ(ClassifyFailure(e).cause, "");
+  e.status = RunStatus::kError;
+  EXPECT_EQ(ClassifyFailure(e).detail, "error");
+}
+
 TEST(FailureCauses, SolverIntegratorBoundsAndErrors) {
   EXPECT_EQ(
       ClassifyFailure(Evidence("SOLVER_FAILURE", 2.6, "success", 20)).detail,
