@@ -178,8 +178,7 @@ FailureEvidence Evidence(const RunSpec& run, RunStatus status, double t_reached,
 double MotionValidityAtStop(const FailureEvidence& e,
                             const SimulationResult& result, const Scene& scene,
                             const Reference* reference) {
-  if (!e.has_reference)
-    return QuasiStaticInertiaRatio(result.samples, scene);
+  if (!e.has_reference) return QuasiStaticInertiaRatio(result.samples, scene);
   const double until = e.t_reached + StopTolerance(e) + 1e-9;
   std::vector<TrajectorySample> motion;
   for (const TrajectorySample& s : reference->samples)
