@@ -11,7 +11,9 @@ first); a μ sweep on `paper` and `paper_pvc` (pvc slips ~1000x less and needs
 stability_dt (with a blow-up that ends in INFEASIBLE_FRICTION but is classed
 numerical/drift_blowup), stability_sigma_dt, stability_mu and
 stability_roughness; a method (ceres/rk-baumgarte/coupled) whose runs all
-fail; the issue-#14 columns (timing spread, causes, ref_mu_min, ref_err_est,
+fail; an option variant of newton/rk-projection/zoh in the zoh ladder
+(VARIANT_OPTIONS: faster at the same error); the `method` column and the
+issue-#14 columns (timing spread, causes, ref_mu_min, ref_err_est,
 qs_inertia_ratio, kkt_residual, host) unless --legacy; trajectories for every
 successful run; meta.json with a suite file and scene under inputs/;
 terrains/*.json.
@@ -56,6 +58,12 @@ METHODS = {
     ("slsqp", "ida", "coupled"): (2.0, 4e-2, 0.6, 1e-9),
 }
 FAILING_METHOD = ("ceres", "rk-baumgarte", "coupled")
+# An option variant of a pair (docs/harness.md, "Method identity"): same
+# error, VARIANT_WALL x the wall time, so the 'fastest' findings must name
+# it by its full method id and never credit the pair with its speed.
+VARIANT = ("newton", "rk-projection", "zoh")
+VARIANT_OPTIONS = [("projection_tolerance", "1e-08")]
+VARIANT_WALL = 0.5
 
 
 # ------------------------------------------------------------------ terrain
@@ -157,6 +165,18 @@ def base_run(run_id, group, method, dt, mu, scene="paper", t_end=T_END):
             "host": "fixture-host", "cpu_model": "synthetic CPU"}
 
 
+def method_id(run):
+    """runs.csv `method` as the harness writes it: non-default integrator
+    options (here baumgarte_sigma of the Baumgarte integrator and the
+    variant's options) sorted by name in brackets."""
+    options = list(run.get("_options", []))
+    if run["dae"] == "rk-baumgarte" and run["sigma"] != 5.0:
+        options.append(("baumgarte_sigma", f"{run['sigma']:g}"))
+    listed = ",".join(f"{k}={v}" for k, v in sorted(options))
+    return (f"{run['nlp']}/{run['dae']}" + (f"[{listed}]" if listed else "")
+            + f"/{run['coupling']}")
+
+
 def ref_hash(run):
     """The fixture's stand-in for the harness's reference hash: one per
     problem (scene, μ, roughness, t_end)."""
@@ -205,6 +225,11 @@ def plan_runs():
                                   "work_precision", method, dt, 0.5), None))
     # The coupled ladder of the default suite is a shorter problem (5 s there,
     # T_END_CPL here): its runs must never share a chart with the ones above.
+    for dt in ladders[VARIANT[1]]:
+        run = base_run(f"wpv-{VARIANT[0]}-{VARIANT[1]}-dt{dt:g}", "work_precision",
+                       VARIANT, dt, 0.5)
+        run["_options"] = VARIANT_OPTIONS
+        plan.append((run, None))
     for method in list(METHODS)[:2]:
         cpl = (method[0], method[1], "coupled")
         for dt in (0.1, 0.05):
@@ -322,6 +347,8 @@ def build_fixture(out_dir, seed=7, legacy=False):
         if outcome is None:
             drift = METHODS[base][3]
             run.update(success_fields(rng, base, run["dt"], drift, run["t_end"]))
+            if run.get("_options"):
+                run["wall_s"] *= VARIANT_WALL
             order, err_c, _, _ = METHODS[base]
             cols = synth_trajectory(rng, terrain, run["dt"], run["mu"],
                                     err_c * run["dt"] ** order, drift, run["t_end"],
@@ -331,6 +358,7 @@ def build_fixture(out_dir, seed=7, legacy=False):
         else:
             run.update(failure_fields(*outcome))
         run.update(trust_fields(run, rng))
+        run["method"] = method_id(run)
         rows.append(run)
     columns = runs_csv_columns(rows, legacy)
     with open(os.path.join(out_dir, "runs.csv"), "w", newline="") as handle:

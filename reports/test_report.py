@@ -15,6 +15,7 @@ import subprocess
 import sys
 import tempfile
 import unittest
+from html import escape
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -26,6 +27,7 @@ import numpy as np  # noqa: E402
 from quasiroll_report import plotting  # noqa: E402
 from quasiroll_report import robot  # noqa: E402
 from quasiroll_report import problems  # noqa: E402
+from quasiroll_report import data  # noqa: E402
 from quasiroll_report.data import read_meta, read_references, read_runs  # noqa: E402
 from quasiroll_report.report import FIGURE_NAMES  # noqa: E402
 
@@ -37,6 +39,10 @@ DRAWN_FIGURES = [n for n in FIGURE_NAMES if n != "fig_stability"] + STABILITY_FI
 PYTHON = "/usr/bin/python3"
 MAKE_REPORT = os.path.join(HERE, "make_report.py")
 FAILED_ONLY = "ceres/rk-baumgarte/coupled"
+# The fixture's σ = 30 run fails: an option variant, so a method of its own.
+FAILED_VARIANT = "ipopt/rk-baumgarte[baumgarte_sigma=30]/zoh"
+# The fixture's option variant of newton/rk-projection/zoh (make_fixture.py).
+VARIANT = "newton/rk-projection[projection_tolerance=1e-08]/zoh"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
@@ -380,7 +386,7 @@ class SelectionTest(unittest.TestCase):
 
     def test_failed_only_method_not_in_work_precision_data(self):
         runs = self.runs()
-        self.assertEqual(sel.failed_only_methods(runs), [FAILED_ONLY])
+        self.assertEqual(sel.failed_only_methods(runs), [FAILED_ONLY, FAILED_VARIANT])
         self.assertIn(FAILED_ONLY, [row["method"] for row in sel.method_summary(runs)])
         problems = sel.work_precision_problems(runs)
         self.assertEqual([p["t_end"] for p in problems],
@@ -388,7 +394,7 @@ class SelectionTest(unittest.TestCase):
         for metric in ("err_pos_rms", "err_force_rms"):
             series = sel.work_precision_series(runs, metric, rows=problems[0]["rows"])
             self.assertNotIn(FAILED_ONLY, series)
-            self.assertEqual(len(series), 3)
+            self.assertEqual(len(series), 4)  # three pairs and a variant
             for points in series.values():
                 self.assertEqual(len(points), 3)
 
@@ -432,6 +438,82 @@ class SelectionTest(unittest.TestCase):
         self.assertEqual(run["scene"], "paper")
         self.assertAlmostEqual(run["mu"], 0.5)
         self.assertEqual(run["status"], "success")
+
+
+class MethodIdentityTest(unittest.TestCase):
+    """Issue #20: a method is what ran, its backend options included; option
+    variants are never pooled with their pair."""
+
+    def runs(self):
+        problems.use_backends(read_meta(Fixture.good))
+        return read_runs(Fixture.good)[0]
+
+    def test_variant_is_its_own_line_not_pooled(self):
+        runs = self.runs()
+        self.assertIn(VARIANT, sel.method_names(runs))
+        problem = sel.work_precision_problems(runs)[0]
+        series = sel.work_precision_series(runs, "err_pos_rms", rows=problem["rows"])
+        pair = data.method_base(VARIANT)
+        self.assertEqual(len(series[VARIANT]), 3)
+        self.assertEqual(len(series[pair]), 3)
+        for point in series[VARIANT]:
+            self.assertEqual(point["n"], 1)
+            self.assertTrue(point["run"]["run_id"].startswith("wpv-"), point["run"]["run_id"])
+        for point in series[pair]:
+            self.assertEqual(point["n"], 1)
+            self.assertFalse(point["run"]["run_id"].startswith("wpv-"))
+        with open(os.path.join(Fixture.good, "report", "figures.json")) as handle:
+            manifest = {entry["name"]: entry for entry in json.load(handle)}
+        lines = manifest["fig_work_precision"]["data"]["panels"][0]["lines"]
+        self.assertIn(VARIANT, lines)
+        self.assertIn(pair, lines)
+
+    def test_fastest_finding_names_the_variant(self):
+        runs = self.runs()
+        problem = sel.work_precision_problems(runs)[0]
+        best = sel.fastest_within(problem["rows"], 1e-4)
+        self.assertEqual(best["method"], VARIANT)
+        with open(os.path.join(Fixture.good, "report", "index.html"), encoding="utf-8") as f:
+            html = f.read()
+        findings = html.split('id="findings"')[1].split("</ul>")[0]
+        self.assertIn(f"the fastest method is {escape(VARIANT)} (", findings)
+        # never credited to the pair under its plain name
+        self.assertNotIn(f"the fastest method is {escape(data.method_base(VARIANT))} (",
+                         findings)
+
+    def test_variant_keeps_pair_colour_hollow_with_own_dashes(self):
+        styles = sel.method_styles(self.runs())
+        variant, pair = styles[VARIANT], styles[data.method_base(VARIANT)]
+        self.assertEqual((variant.colour, variant.marker), (pair.colour, pair.marker))
+        self.assertEqual(pair.facecolor, pair.colour)
+        self.assertNotEqual(variant.facecolor, variant.colour)
+        self.assertNotEqual(variant.linestyle, pair.linestyle)
+        self.assertNotIn(variant.linestyle, problems.COUPLING_LINES.values())
+
+    def test_method_ids_parse_and_derive(self):
+        self.assertEqual(data.parse_method("a[x=1,y=2]/b[z=dp54]/coupled"),
+                         ("a", [("x", "1"), ("y", "2")], "b", [("z", "dp54")], "coupled"))
+        self.assertEqual(data.method_without("a/b[s=20,t=1]/zoh", {"s"}), "a/b[t=1]/zoh")
+        self.assertEqual(data.method_base("a/b[s=20]/zoh"), "a/b/zoh")
+        self.assertFalse(data.is_variant("a/b/zoh"))
+        # Older runs.csv without `method`: from the shorthand columns.
+        row = {"nlp": "a", "dae": "b", "coupling": "zoh", "rk_method": "dp54",
+               "sigma": 20.0, "dae_index": 2.0}
+        self.assertEqual(data.method_name(row), "a/b[baumgarte_sigma=20,rk_method=dp54]/zoh")
+        # ... only the options the integrator has, when dae_options says so
+        row["dae_options"] = '{"rk_method":"dp54","projection_tolerance":1e-12}'
+        self.assertEqual(data.method_name(row), "a/b[rk_method=dp54]/zoh")
+        row.update(rk_method="rk4", sigma=5.0)
+        self.assertEqual(data.method_name(row), "a/b/zoh")
+        self.assertEqual(data.method_name(dict(row, method="a[k=v]/b/zoh")), "a[k=v]/b/zoh")
+
+    def test_legacy_runs_derive_the_sigma_variants(self):
+        legacy = read_runs(Fixture.legacy)[0]
+        self.assertIn(FAILED_VARIANT, sel.method_names(legacy))
+        # the sigma axis is the chart's columns: its rows are the pairs
+        charts = {c["group"]: c for c in sel.stability_charts(legacy)}
+        self.assertEqual([p["rows"] for p in charts["stability_sigma_dt"]["panels"]],
+                         [["ipopt/rk-baumgarte/zoh"]])
 
 
 class BadInputTest(unittest.TestCase):

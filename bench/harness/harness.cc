@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "quasiroll/bench/harness/failure_causes.h"
+#include "quasiroll/bench/harness/method_id.h"
 #include "quasiroll/bench/harness/metrics.h"
 #include "quasiroll/bench/harness/run_status.h"
 #include "quasiroll/bench/harness/shard.h"
@@ -99,6 +100,7 @@ void SetParameters(const RunSpec& run, const std::string& terrain_id,
   b->Set("nlp", run.nlp);
   b->Set("dae", run.dae);
   b->Set("coupling", ToString(run.coupling));
+  b->Set("method", MethodId(run));
   b->Set("rk_method", run.rk_method);
   b->Set("dt", run.dt);
   b->Set("tol", run.tol);

@@ -101,8 +101,121 @@ def is_finite(value):
     return value is not None and isinstance(value, float) and math.isfinite(value)
 
 
+# ------------------------------------------------------------------ methods
+#
+# A method is what ran (docs/harness.md, "Method identity"): runs.csv
+# `method` = "<nlp>[opts]/<dae>[opts]/<coupling>", [opts] the backend options
+# that differ from the backend's defaults, "name=value" sorted by name, e.g.
+# "newton/rk-projection[rk_method=dp54]/coupled". Option variants of a pair
+# are different methods: never pooled.
+
+# Older runs.csv without `method`: the shorthand columns name these
+# integrator options, at the built-in integrators' defaults (docs/harness.md).
+# A value other than the default joins the method, if the row's
+# `dae_options` (when written) shows that the integrator has the option.
+# Other backend options of such files are not recovered.
+LEGACY_OPTION_COLUMNS = [("rk_method", "rk_method", "rk4"),
+                         ("sigma", "baumgarte_sigma", 5.0),
+                         ("dae_index", "dae_index", 2.0)]
+
+
+def number_text(value):
+    """A number as the harness writes it (Num: shortest round trip, 15 not 15.0)."""
+    text = repr(float(value))
+    return text[:-2] if text.endswith(".0") else text
+
+
+def _split_outside_brackets(text, sep):
+    parts, depth, start = [], 0, 0
+    for i, char in enumerate(text):
+        depth += {"[": 1, "]": -1}.get(char, 0)
+        if char == sep and depth == 0:
+            parts.append(text[start:i])
+            start = i + 1
+    return parts + [text[start:]]
+
+
+def _backend_part(part):
+    name, bracket, rest = part.partition("[")
+    options = []
+    if bracket:
+        for item in _split_outside_brackets(rest[:-1] if rest.endswith("]") else rest, ","):
+            key, _, value = item.partition("=")
+            if key:
+                options.append((key, value))
+    return name, options
+
+
+def parse_method(method):
+    """(nlp, nlp_options, dae, dae_options, coupling) of a method id; options
+    as [(name, value)] in the id's order."""
+    parts = _split_outside_brackets(method, "/") + ["", "", ""]
+    nlp, nlp_options = _backend_part(parts[0])
+    dae, dae_options = _backend_part(parts[1])
+    return nlp, nlp_options, dae, dae_options, parts[2]
+
+
+def format_method(nlp, nlp_options, dae, dae_options, coupling):
+    def part(name, options):
+        listed = ",".join(f"{k}={v}" for k, v in sorted(options))
+        return name + (f"[{listed}]" if listed else "")
+    return f"{part(nlp, nlp_options)}/{part(dae, dae_options)}/{coupling}"
+
+
+def method_base(method):
+    """The backend pair and coupling of a method, without its options."""
+    nlp, _, dae, _, coupling = parse_method(method)
+    return f"{nlp}/{dae}/{coupling}"
+
+
+def is_variant(method):
+    """True for a method with a backend option off its default."""
+    return method != method_base(method)
+
+
+def method_options(method):
+    """{name: value} of every non-default option of the method (both backends)."""
+    _, nlp_options, _, dae_options, _ = parse_method(method)
+    return dict(nlp_options + dae_options)
+
+
+def method_without(method, names):
+    """The method without the options `names` (e.g. a chart axis sweeping one)."""
+    nlp, nlp_options, dae, dae_options, coupling = parse_method(method)
+    keep = [(k, v) for k, v in nlp_options if k not in names]
+    return format_method(nlp, keep, dae,
+                         [(k, v) for k, v in dae_options if k not in names], coupling)
+
+
+def _legacy_dae_options(run):
+    names = None
+    try:
+        used = json.loads(run.get("dae_options") or "null")
+        names = set(used) if isinstance(used, dict) else None
+    except ValueError:
+        pass
+    options = []
+    for column, option, default in LEGACY_OPTION_COLUMNS:
+        value = run.get(column)
+        if value is None or value == "" or (names is not None and option not in names):
+            continue
+        if isinstance(value, float):
+            if not math.isfinite(value) or value == default:
+                continue
+            value = number_text(value)
+        elif value == default:
+            continue
+        options.append((option, value))
+    return options
+
+
 def method_name(run):
-    return f"{run['nlp']}/{run['dae']}/{run['coupling']}"
+    """runs.csv `method`; for older files derived from nlp/dae/coupling and
+    the shorthand columns (LEGACY_OPTION_COLUMNS)."""
+    if run.get("method"):
+        return run["method"]
+    return format_method(run["nlp"], [], run["dae"], _legacy_dae_options(run),
+                         run["coupling"])
 
 
 def is_success(run):
@@ -153,8 +266,9 @@ def _typed_run(record, line_no):
 def read_runs(results_dir):
     """All rows of DIR/runs.csv as dicts with typed values.
 
-    Adds `method` ("nlp/dae/coupling"), a `run_id` when the column is
-    missing, and nan for absent optional numeric columns.
+    Sets `method` (the column, or derived for older files: method_name), a
+    `run_id` when the column is missing, and nan for absent optional numeric
+    columns.
     """
     path = os.path.join(results_dir, "runs.csv")
     header, body = _read_csv_rows(path, "runs.csv")

@@ -13,7 +13,9 @@ from .data import is_finite
 from .plotting import (MissingData, NOT_RUN_COLOUR, UNKNOWN_COLOUR, cause_colour,
                        fmt, new_figure, no_data, positive, save_figure,
                        text_colour)
-from .problems import coupling_line, dae_marker, nlp_colour, problem_label
+from .data import is_variant
+from .problems import (coupling_line, dae_marker, method_style, nlp_colour, plot_style,
+                       problem_label)
 
 WP_METRICS = [
     ("err_pos_rms", "RMS position error vs reference [m]"),
@@ -28,8 +30,9 @@ def _failed_note(ctx):
             + ", ".join(ctx.failed_only) + ".")
 
 
-def style_legend_handles(rows, extra=()):
-    """Legend proxies: colour = NLP, marker = integrator, line = coupling."""
+def style_legend_handles(rows, extra=(), styles=None):
+    """Legend proxies: colour = NLP, marker = integrator, line = coupling,
+    then one entry per option variant (hollow marker, its own dashes)."""
     handles = []
     for nlp in sorted({r["nlp"] for r in rows}):
         handles.append(Line2D([], [], color=nlp_colour(nlp), linewidth=3,
@@ -40,6 +43,9 @@ def style_legend_handles(rows, extra=()):
     for coupling in sorted({r["coupling"] for r in rows}):
         handles.append(Line2D([], [], color="#444444", linestyle=coupling_line(coupling),
                               label=f"coupling {coupling}"))
+    for method in sorted({r["method"] for r in rows if is_variant(r["method"])}):
+        style = (styles or {}).get(method) or method_style(method)
+        handles.append(Line2D([], [], label=method, **plot_style(style)))
     return handles + list(extra)
 
 
@@ -53,21 +59,16 @@ def _legend_axes(fig, gs_cell, handles, title=None):
 
 # ---------------------------------------------------------- work-precision
 
-def _plot_series(ax, series):
+def _plot_series(ax, series, styles):
     points = []
     for line, rungs in series.items():
-        first = rungs[0]
-        colour = nlp_colour(first["nlp"])
-        adaptive = "(" in line
+        style = styles.get(rungs[0]["method"]) or method_style(rungs[0]["method"])
         errs = np.array([p["err"] for p in rungs])
         walls = np.array([p["wall"] for p in rungs])
         spread = np.array([[p["wall"] - p["wall_lo"] for p in rungs],
                            [p["wall_hi"] - p["wall"] for p in rungs]])
         ax.errorbar(errs, walls, yerr=spread if np.any(spread > 0) else None,
-                    color=colour, marker=dae_marker(first["dae"]),
-                    linestyle=coupling_line(first["coupling"]),
-                    markerfacecolor="white" if adaptive else colour,
-                    capsize=2, elinewidth=0.8, label=line)
+                    capsize=2, elinewidth=0.8, label=line, **plot_style(style))
         points += list(zip(errs.tolist(), walls.tolist()))
     return points
 
@@ -87,9 +88,9 @@ def _draw_floor(ax, estimate):
     return True
 
 
-def _work_precision_panel(ax, problem, metric, label, spread):
+def _work_precision_panel(ax, problem, metric, label, spread, styles):
     series = sel.work_precision_series(None, metric, rows=problem["rows"])
-    points = _plot_series(ax, series)
+    points = _plot_series(ax, series, styles)
     ax.set_title(f"{problem['label']} — {metric}", fontsize=9)
     if not points:
         no_data(ax, f"no successful run with finite {metric}")
@@ -124,7 +125,8 @@ def figure_work_precision(ctx):
     for i, problem in enumerate(problems):
         for j, (metric, label) in enumerate(WP_METRICS):
             ax = fig.add_subplot(gs[i, j])
-            series, front = _work_precision_panel(ax, problem, metric, label, spread)
+            series, front = _work_precision_panel(ax, problem, metric, label, spread,
+                                                  ctx.styles)
             if metric == "err_pos_rms":
                 details.append((problem, series, front))
             panels.append({"problem": problem["label"], "metric": metric,
@@ -136,14 +138,12 @@ def figure_work_precision(ctx):
                            "lines": list(series), "front": [list(p) for p in front],
                            "ref_err_est": problem["ref_err_est"]})
     extra = [Line2D([], [], color="black", linestyle=(0, (4, 2)),
-                    label="Pareto front (this problem)"),
-             Line2D([], [], color="#444444", marker="o", markerfacecolor="white",
-                    linestyle="none", label="adaptive RK (tolerance ladder)")]
+                    label="Pareto front (this problem)")]
     if any(is_finite(p["ref_err_est"]) for p in problems):
         extra.append(Patch(facecolor="#bbbbbb", alpha=0.5,
                            label="below the reference's\nestimated error"))
     rows = [r for p in problems for r in p["rows"]]
-    _legend_axes(fig, gs[:, 2], style_legend_handles(rows, extra))
+    _legend_axes(fig, gs[:, 2], style_legend_handles(rows, extra, ctx.styles))
     parts = []
     for problem, series, front in details:
         best = min(front, key=lambda p: p[0]) if front else None
@@ -164,7 +164,9 @@ def figure_work_precision(ctx):
         "Work-precision diagrams, one row per problem (scene, mode, μ, terrain, "
         "t_end: runs of different problems are never on one chart or front). "
         "Each line is one method through its Δt (or rtol) ladder, median error "
-        "over repeats; dashed black step = that problem's Pareto front. "
+        "over repeats; a method with non-default backend options (e.g. an "
+        "adaptive RK scheme) is a line of its own, hollow markers, its own "
+        "dashes; dashed black step = that problem's Pareto front. "
         + timing_text + " The right axis is the same time per simulated second. "
         "Errors are against the problem's reference; a zoh method holds the "
         "quasi-static twist over each Δt, so its error falls only as O(Δt) "
@@ -187,10 +189,8 @@ def _plot_drift_vs_time(ax, ctx):
         traj = ctx.trajectories.get(run)
         if traj is None:
             continue
-        colour, marker, line = ctx.styles[run["method"]]
         drift = positive(traj["drift"])
-        ax.plot(traj["t"], drift, color=colour, marker=marker, linestyle=line,
-                markevery=0.1,
+        ax.plot(traj["t"], drift, markevery=0.1, **plot_style(ctx.styles[run["method"]]),
                 label=f"{run['method']}, Δt={fmt(run['dt'])} s ({problem_label(run, ctx.references)})")
         summary.append((dae, np.nanmax(drift) if np.any(np.isfinite(drift)) else math.nan))
     if not summary:
@@ -211,9 +211,7 @@ def _plot_drift_vs_dt(ax, ctx, problem):
         mine = [r for r in rows if sel.line_key(r) == line]
         dts = sorted({r["dt"] for r in mine})
         med = [float(np.median([r["drift_max"] for r in mine if r["dt"] == dt])) for dt in dts]
-        colour, marker, style = ctx.styles[mine[0]["method"]]
-        ax.plot(dts, med, color=colour, marker=marker, linestyle=style,
-                markerfacecolor="white" if "(" in line else colour)
+        ax.plot(dts, med, **plot_style(ctx.styles[mine[0]["method"]]))
     ax.set_title(f"drift_max vs Δt — {problem['label']}", fontsize=9)
     if not rows:
         no_data(ax, "no finite drift_max")
@@ -236,7 +234,8 @@ def figure_drift(ctx):
     if not summary and not n_rows:
         raise MissingData("no successful run for figure 'drift'")
     rows = [r for p in problems for r in p["rows"]]
-    _legend_axes(fig, gs[0, n], style_legend_handles(rows or sel.successful(ctx.runs)))
+    _legend_axes(fig, gs[0, n], style_legend_handles(rows or sel.successful(ctx.runs),
+                                                     styles=ctx.styles))
     parts = [f"{dae} max {fmt(v)}" for dae, v in summary]
     caption = (
         "Loop-closure constraint drift ‖H(Θ)‖∞: left over time for one "
@@ -333,7 +332,8 @@ def _stability_figure(ctx, chart):
                         if chart["axis"] == "mu" and is_finite(p["mu_min"]))
     caption = (
         f"Stability along {chart['axis_label'].split(' [')[0]} (group {chart['group']}): "
-        "rows are the methods that ran (nlp/dae/coupling), columns the axis "
+        "rows are the methods that ran (nlp/dae/coupling with non-default "
+        "backend options, less an option the axis sweeps), columns the axis "
         "values; colour = outcome (green success; cool colours physical causes, "
         "where the reference or the analytic μ_min fails at the same place; warm "
         "colours numerical causes, where the method fails and the reference "

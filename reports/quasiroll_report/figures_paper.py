@@ -15,7 +15,7 @@ from .plotting import (COMPONENT_STYLES, MissingData, WHEEL_STYLES, fmt,
                        spans_decades)
 from .figures_methods import style_legend_handles
 from . import robot
-from .problems import method_style, robot_geometry, scene_mode
+from .problems import method_style, plot_style, robot_geometry, scene_mode
 from .terrain import describe_terrain, terrain_height
 
 WHEELS = (1, 2, 3)
@@ -374,15 +374,15 @@ def _scene_mu_min(ctx, scene):
     return value
 
 
-def _per_method_curve(ax, ok, metrics, key):
+def _per_method_curve(ax, ok, metrics, key, styles):
     curves = {}
     for method in sel.method_names(ok):
         mine = sorted((r["mu"], metrics[r["run_id"]][key]) for r in ok
                       if r["method"] == method)
         mus = sorted({m for m, _ in mine})
         vals = [float(np.nanmedian([v for m, v in mine if m == mu])) for mu in mus]
-        colour, marker, line = method_style(method)
-        ax.plot(mus, vals, color=colour, marker=marker, linestyle=line, label=method)
+        style = styles.get(method) or method_style(method)
+        ax.plot(mus, vals, label=method, **plot_style(style))
         curves[method] = list(zip(mus, vals))
     return curves
 
@@ -427,14 +427,15 @@ def _scene_title(ctx, scene, rows):
     return f"{scene}" + (f" ({mode} mode)" if mode else "")
 
 
-def _sweep_legend(fig, gs_cell, ok, failed):
+def _sweep_legend(fig, gs_cell, ok, failed, styles):
     extra = [Line2D([], [], color="grey", linestyle=":", label="μ_min(ref): friction\nthe scene needs")]
     if failed:
         extra.append(Line2D([], [], marker="x", color="#444444", markeredgewidth=2,
                             linestyle="none", label="failed at this μ"))
     ax = fig.add_subplot(gs_cell)
     ax.axis("off")
-    ax.legend(handles=style_legend_handles(ok, extra), loc="upper left", frameon=False)
+    ax.legend(handles=style_legend_handles(ok, extra, styles), loc="upper left",
+              frameon=False)
 
 
 def _common_mu_ratio(ctx, scenes, ok, metrics, key):
@@ -463,7 +464,8 @@ def figure_traction_vs_mu(ctx):
         ax_total = fig.add_subplot(gs[0, k], sharey=share_total)
         ax_wheel = fig.add_subplot(gs[1, k], sharey=share_wheel)
         share_total, share_wheel = share_total or ax_total, share_wheel or ax_wheel
-        curves = _per_method_curve(ax_total, mine_ok, metrics, "mean_total_traction")
+        curves = _per_method_curve(ax_total, mine_ok, metrics, "mean_total_traction",
+                                   ctx.styles)
         _mark_failures(ax_total, mine_failed)
         mu_min = _scene_mu_min(ctx, scene)
         _mu_min_line(ax_total, mu_min)
@@ -489,7 +491,7 @@ def figure_traction_vs_mu(ctx):
         ax_wheel.legend(loc="best", fontsize=7)
         panels.append({"scene": scene, "methods": sorted(curves), "mu_min": mu_min,
                        "curves": {m: c for m, c in curves.items()}})
-    _sweep_legend(fig, gs[:, n], ok, failed)
+    _sweep_legend(fig, gs[:, n], ok, failed, ctx.styles)
     mu, values = _common_mu_ratio(ctx, scenes, ok, metrics, "mean_total_traction")
     compare = (", ".join(f"{s} {fmt(v)} N" for s, v in values.items()) + f" at μ={fmt(mu)}"
                if values else "no μ where every scene succeeded")
@@ -530,7 +532,7 @@ def figure_total_slip_vs_mu(ctx):
         ax = fig.add_subplot(gs[0, k], sharey=share)
         share = share or ax
         mine_ok = [r for r in ok if r["scene"] == scene]
-        curves = _per_method_curve(ax, mine_ok, metrics, "total_slip")
+        curves = _per_method_curve(ax, mine_ok, metrics, "total_slip", ctx.styles)
         _mark_failures(ax, [r for r in failed if r["scene"] == scene])
         mu_min = _scene_mu_min(ctx, scene)
         _mu_min_line(ax, mu_min)
@@ -543,7 +545,7 @@ def figure_total_slip_vs_mu(ctx):
             no_data(ax, "no successful run")
         panels.append({"scene": scene, "methods": sorted(curves), "mu_min": mu_min,
                        "curves": curves})
-    _sweep_legend(fig, gs[0, n], ok, failed)
+    _sweep_legend(fig, gs[0, n], ok, failed, ctx.styles)
     mu, per_scene = _common_mu_ratio(ctx, scenes, ok, metrics, "total_slip")
     headline = ""
     if len(per_scene) >= 2:
@@ -581,9 +583,7 @@ def figure_stabilisation(ctx):
     parts = []
     for run in pair:
         traj = ctx.trajectories.get(run)
-        colour, marker, line = ctx.styles[run["method"]]
-        ax.plot(traj["t"], positive(traj["drift"]), color=colour, marker=marker,
-                linestyle=line,
+        ax.plot(traj["t"], positive(traj["drift"]), **plot_style(ctx.styles[run["method"]]),
                 markevery=0.1, label=f"{run['dae']} ({run['method']}, "
                 f"Δt={fmt(run['dt'])} s"
                 + (f", σ={fmt(run['sigma'])} 1/s)" if is_finite(run["sigma"]) else ")"))

@@ -4,7 +4,7 @@ sentences with numbers), and the per-problem tables that back them."""
 import math
 
 from . import selection as sel
-from .data import is_finite, is_success
+from .data import is_finite, is_success, method_options
 from .plotting import fmt
 from .problems import problem_label
 
@@ -34,8 +34,9 @@ def _speed_text(run):
         else math.nan
     kind = "median" if is_finite(run.get("wall_s_median", math.nan)) else "min"
     ladder = f"Δt={fmt(run['dt'])} s"
-    if run.get("rk_method") and run["rk_method"] != "rk4" and run["dae"].startswith("rk"):
-        ladder += f", {run['rk_method']} rtol={fmt(run['tol'])}"
+    if "rk_method" in method_options(run["method"]):  # an adaptive scheme's rung
+        ladder += f", rtol={fmt(run['tol'])}"
+    # The full method id: an option variant is named as such, never as its pair.
     return f"{run['method']} ({ladder}): {fmt(wall)} s {kind} wall, {fmt(per)} s per simulated s"
 
 

@@ -15,6 +15,9 @@ from .repro import command_lines, copy_inputs, environment
 
 MARKER_GLYPHS = {"o": "●", "s": "■", "^": "▲", "D": "◆", "v": "▼", "P": "✚",
                  "X": "✖", "*": "★", "<": "◀", ">": "▶", "h": "⬢", "p": "⬟"}
+# Option variants: the hollow glyph of their pair's marker.
+HOLLOW_GLYPHS = {"o": "○", "s": "□", "^": "△", "D": "◇", "v": "▽", "P": "✛",
+                 "X": "✕", "*": "☆", "<": "◁", ">": "▷", "h": "⬡", "p": "⬠"}
 
 CSS = """
 body { font-family: sans-serif; margin: 1.5em auto; max-width: 1200px;
@@ -82,18 +85,23 @@ def metadata_table(meta):
     return "\n".join(out)
 
 
-def _style_swatch(colour, marker, line):
-    dash = "solid" if line == "-" else "dashed"
+def _style_swatch(style):
+    """A MethodStyle in text: glyph (hollow for a variant), underline style."""
+    colour, marker, line, face = style
+    variant = face != colour
+    dash = "solid" if line == "-" else "dotted" if variant else "dashed"
+    glyph = (HOLLOW_GLYPHS if variant else MARKER_GLYPHS).get(marker, "○" if variant else "●")
     return (f'<span class="swatch" style="color:{colour};border-bottom:2px {dash} {colour}">'
-            f'{MARKER_GLYPHS.get(marker, "●")}</span>')
+            f'{glyph}</span>')
 
 
 def _swatch(styles, method):
-    return _style_swatch(*styles[method])
+    return _style_swatch(styles[method])
 
 
 def summary_table(summary, styles, failed_only):
-    out = ["<table>", "<tr><th></th><th>method (nlp/dae/coupling)</th><th>runs</th>"
+    out = ["<table>", "<tr><th></th><th>method (nlp[options]/dae[options]/coupling)</th>"
+           "<th>runs</th>"
            "<th>status counts</th><th>failures: physical / numerical / unclassified</th>"
            "<th>max drift ‖H‖∞ (successes)</th><th>max KKT residual (successes)</th></tr>"]
     for row in summary:
@@ -278,7 +286,9 @@ def style_key(ctx):
              for n in nlps]
     parts += [f"{MARKER_GLYPHS.get(dae_marker(d), '●')} {escape(d)}" for d in daes]
     return ("<p>Styles in every figure: colour = NLP backend, marker = integrator, "
-            "solid line = zoh, dashed = coupled. " + " &nbsp; ".join(parts) + "</p>")
+            "solid line = zoh, dashed = coupled; a method with non-default backend "
+            "options (nlp[options]/dae[options]/coupling) has its pair's colour, a "
+            "hollow marker and dashes of its own. " + " &nbsp; ".join(parts) + "</p>")
 
 
 def hosts_note(ctx):

@@ -7,7 +7,9 @@ share a chart, a Pareto front or a table row. Results without `ref_hash`
 fall back to the tuple of those columns.
 
 Styles: colour = NLP backend, marker = integrator, line style = coupling,
-so a method looks the same in every figure. Backends are styled by their
+so a method looks the same in every figure. An option variant of a backend
+pair (a method with non-default backend options, data.parse_method) keeps
+the pair's colour and marker, hollow, with a dash pattern of its own. Backends are styled by their
 position in the build's backend list (meta.json "backends", written from the
 registry in name order, see use_backends), so every report of one build
 styles them alike; a name not in that list gets a stable pick from its hash.
@@ -17,14 +19,19 @@ No backend is named here.
 import math
 import re
 import zlib
+from collections import namedtuple
 
-from .data import is_finite
+from .data import is_finite, is_variant, parse_method
 
 REFERENCE_COLOUR = "#000000"
 _COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#8c564b", "#9467bd",
             "#e377c2", "#17becf", "#bcbd22", "#7f7f7f", "#393b79"]
 _MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*", "h", "p", "<", ">"]
 COUPLING_LINES = {"zoh": "-", "coupled": "--"}
+# Dash patterns of option variants, unlike the coupling lines.
+VARIANT_DASHES = [(0, (7, 2, 1, 2)), (0, (1, 1)), (0, (9, 2, 2, 2, 2, 2)),
+                  (0, (4, 1, 1, 1, 1, 1)), (0, (12, 3)), (0, (2, 2, 6, 2))]
+VARIANT_FACE = "white"
 # Backend names in the build's order (use_backends); empty until a report
 # reads its meta.json.
 _BACKENDS = {"nlp": [], "dae": []}
@@ -62,14 +69,26 @@ def coupling_line(coupling):
     return COUPLING_LINES.get(coupling, ":")
 
 
-def run_style(run):
-    """(colour, marker, linestyle) of a run's method."""
-    return nlp_colour(run["nlp"]), dae_marker(run["dae"]), coupling_line(run["coupling"])
+MethodStyle = namedtuple("MethodStyle", "colour marker linestyle facecolor")
 
 
-def method_style(method):
-    nlp, dae, coupling = (method.split("/") + ["", "", ""])[:3]
-    return nlp_colour(nlp), dae_marker(dae), coupling_line(coupling)
+def method_style(method, variant_rank=None):
+    """The MethodStyle of a method id. A variant's dash pattern is
+    VARIANT_DASHES[variant_rank] (selection.method_styles ranks the variants
+    of each pair), else a stable pick from its options."""
+    nlp, _, dae, _, coupling = parse_method(method)
+    colour, marker = nlp_colour(nlp), dae_marker(dae)
+    if not is_variant(method):
+        return MethodStyle(colour, marker, coupling_line(coupling), colour)
+    dash = (VARIANT_DASHES[variant_rank % len(VARIANT_DASHES)]
+            if variant_rank is not None else _stable_pick(method, VARIANT_DASHES))
+    return MethodStyle(colour, marker, dash, VARIANT_FACE)
+
+
+def plot_style(style):
+    """Keyword arguments of Axes.plot / errorbar for a MethodStyle."""
+    return {"color": style.colour, "marker": style.marker,
+            "linestyle": style.linestyle, "markerfacecolor": style.facecolor}
 
 
 # ------------------------------------------------------------------ problems

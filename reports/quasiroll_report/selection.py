@@ -6,7 +6,7 @@ from collections import Counter, OrderedDict
 
 import numpy as np
 
-from .data import is_finite, is_success
+from .data import is_finite, is_success, is_variant, method_base, method_without
 from .problems import group_by_problem, method_style, problem_label, scene_mode
 
 PAPER_SCENE = "paper"
@@ -23,9 +23,15 @@ def method_names(runs):
 
 
 def method_styles(runs):
-    """{method: (colour, marker, linestyle)}: colour per NLP, marker per
-    integrator, line style per coupling, the same in every report."""
-    return OrderedDict((m, method_style(m)) for m in method_names(runs))
+    """{method: MethodStyle}: colour per NLP, marker per integrator, line
+    style per coupling, the same in every report; an option variant hollow,
+    with a dash pattern of its own among the variants of its pair."""
+    names = method_names(runs)
+    rank = {}
+    for base in sorted({method_base(m) for m in names}):
+        variants = [m for m in names if is_variant(m) and method_base(m) == base]
+        rank.update((m, i) for i, m in enumerate(variants))
+    return OrderedDict((m, method_style(m, rank.get(m))) for m in names)
 
 
 def failed_only_methods(runs):
@@ -110,11 +116,8 @@ def _ladder_key(run):
 
 
 def line_key(run):
-    """A work-precision line: the method, plus the RK scheme when it is not
-    the default RK4 (a DP5(4) tolerance ladder is a different method)."""
-    scheme = run.get("rk_method", "")
-    if run["dae"].startswith("rk") and scheme and scheme != "rk4":
-        return f"{run['method']} ({scheme})"
+    """A work-precision line: the method (with its options, so a DP5(4)
+    tolerance ladder is a line of its own)."""
     return run["method"]
 
 
@@ -150,7 +153,7 @@ def work_precision_series(runs, metric, rows=None):
                 "wall_hi": float(max(m[3] for m in members)),
                 "t_end": first.get("t_end", math.nan),
                 "t_reached": float(np.median([m[4]["t_reached"] for m in members])),
-                "n": len(members), "run": first,
+                "n": len(members), "run": first, "method": first["method"],
                 "nlp": first["nlp"], "dae": first["dae"],
                 "coupling": first["coupling"]})
         series[line] = points
@@ -312,7 +315,7 @@ def paper_run(runs, has_trajectory, scene=PAPER_SCENE):
 
 def _preference(run, scene):
     dt = run["dt"] if is_finite(run["dt"]) else math.inf
-    return (run["scene"] != scene, run["coupling"] != "zoh",
+    return (is_variant(run["method"]), run["scene"] != scene, run["coupling"] != "zoh",
             not mu_equals(run, PAPER_MU), dt, run["run_id"])
 
 
@@ -374,13 +377,14 @@ AXES = [
      lambda r: r.get("roughness", math.nan)),
     ("seed", "terrain seed", lambda r: r.get("seed", "")),
 ]
-# Method parameters that, when they vary within a stability group besides its
-# axis, split a method into several rows.
+# Run settings that, when they vary within a stability group besides its
+# axis, split a method into several rows (backend options, e.g. rk_method or
+# baumgarte_sigma, are in the method already).
 _ROW_PARAMETERS = [("dt", "Δt", lambda r: r["dt"]), ("tol", "rtol", lambda r: r["tol"]),
-                   ("sigma", "σ", lambda r: r["sigma"]), ("eps", "ε", lambda r: r["eps"]),
-                   ("rk_method", "", lambda r: r.get("rk_method", ""))]
-_AXIS_OWNS = {"sigma_dt": {"sigma", "dt"}, "sigma": {"sigma", "dt"}, "dt": {"dt"},
-              "tol": {"tol"}}
+                   ("eps", "ε", lambda r: r["eps"])]
+_AXIS_OWNS = {"sigma_dt": {"dt"}, "sigma": {"dt"}, "dt": {"dt"}, "tol": {"tol"}}
+# Backend options an axis sweeps: its columns, so not part of a row's method.
+_AXIS_OPTIONS = {"sigma_dt": {"baumgarte_sigma"}, "sigma": {"baumgarte_sigma"}}
 
 
 def _value_key(value):
@@ -457,9 +461,9 @@ def stability_cell(rows):
             "run_id": worst["run_id"]}
 
 
-def _row_label(run, extra):
-    parts = [run["method"]] + [f"{lab}={format_value(get(run))}" if lab else
-                               format_value(get(run)) for _, lab, get in extra]
+def _row_label(run, extra, options=()):
+    parts = [method_without(run["method"], options)] + [
+        f"{lab}={format_value(get(run))}" for _, lab, get in extra]
     return " ".join(parts)
 
 
@@ -482,19 +486,22 @@ def stability_charts(runs, references=None):
         name, label, getter = axis
         rows = in_group(runs, group)
         owned = _AXIS_OWNS.get(name, set())
+        options = _AXIS_OPTIONS.get(name, set())
         panels = []
         for scene in sorted({r["scene"] for r in rows}):
             mine = [r for r in rows if r["scene"] == scene]
+            row_methods = {method_without(r["method"], options) for r in mine}
             extra = [p for p in _ROW_PARAMETERS if p[0] not in owned and any(
-                _varies([p[2](r) for r in mine if r["method"] == m])
-                for m in method_names(mine))]
+                _varies([p[2](r) for r in mine
+                         if method_without(r["method"], options) == m])
+                for m in sorted(row_methods))]
             values = sorted({_value_key(getter(r)): getter(r) for r in mine}.items())
             values = [v for _, v in values]
-            row_names = sorted({_row_label(r, extra) for r in mine})
+            row_names = sorted({_row_label(r, extra, options) for r in mine})
             cells = {}
             for row_name in row_names:
                 for i, value in enumerate(values):
-                    members = [r for r in mine if _row_label(r, extra) == row_name
+                    members = [r for r in mine if _row_label(r, extra, options) == row_name
                                and _same(getter(r), value)]
                     if members:
                         cells[(row_name, i)] = stability_cell(members)

@@ -14,6 +14,7 @@
 #include <map>
 #include <sstream>
 
+#include "quasiroll/bench/harness/method_id.h"
 #include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/bench/io/csv.h"
 #include "test_support.h"
@@ -172,6 +173,8 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
   for (std::size_t i = 0; i < t.rows.size(); ++i) {
     const auto& r = t.rows[i];
     EXPECT_EQ(r.at("run_id"), suite_.runs[i].run_id);  // grid order
+    // The method that ran (docs/harness.md, "Method identity").
+    EXPECT_EQ(r.at("method"), MethodId(suite_.runs[i]));
     EXPECT_TRUE(
         fs::exists(root_ / "j1" / "trajectories" / (r.at("run_id") + ".csv")));
     EXPECT_TRUE(fs::exists(root_ / "j1" / "runs" / (r.at("run_id") + ".csv")));
@@ -212,6 +215,8 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
             << r.at("nlp_options");
       }
       EXPECT_EQ(r.at("scene_fields"), "");
+      // Default options: the method is its backends and coupling.
+      EXPECT_EQ(r.at("method"), r.at("nlp") + "/" + r.at("dae") + "/zoh");
       EXPECT_EQ(r.at("ref_kind"),
                 r.at("scene") == "flat" ? "analytic:flat" : "numerical");
       EXPECT_EQ(r.at("ref_status"), "success");
@@ -232,6 +237,9 @@ TEST_F(BenchHarness, FailuresAndErrorsAreRowsAndTheSuiteFinishes) {
   const Table t = ReadTable(root_ / "j1" / "runs.csv");
   const auto& unstable = t.rows[20];
   EXPECT_EQ(unstable.at("suite_group"), "unstable");
+  // sigma 200 is not rk-baumgarte's default: another method.
+  EXPECT_EQ(unstable.at("method"),
+            "newton/rk-baumgarte[baumgarte_sigma=200]/zoh");
   EXPECT_NE(unstable.at("status"), "success");
   EXPECT_FALSE(unstable.at("stop_reason").empty());
   EXPECT_LT(std::stod(unstable.at("t_reached")), 0.5);
