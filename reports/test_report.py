@@ -433,6 +433,35 @@ class SelectionTest(unittest.TestCase):
         self.assertAlmostEqual(panels["paper_pvc"]["mu_min"], 0.43)
         self.assertEqual(sel.value_position([0.1, 0.3, 0.5], 0.4), 1.5)
 
+    def test_validity_counts_failed_problems_not_blowups(self):
+        # Issue #21 item 6: validity over every problem, failed runs up to
+        # their stop included; a blow-up's motion is the method's, not counted.
+        from quasiroll_report import findings
+        base = dict(self.runs()[0], cause="", cause_detail="", status="success")
+        ok = dict(base, run_id="a", qs_inertia_ratio=0.005)
+        model = dict(base, run_id="b", status="INFEASIBLE_FRICTION", cause="model",
+                     cause_detail="quasi_static_invalid", qs_inertia_ratio=0.15)
+        blowup = dict(base, run_id="c", status="drift_exceeded", cause="numerical",
+                      cause_detail="drift_blowup", qs_inertia_ratio=50.0)
+        other = dict(base, run_id="d", ref_hash="another", status="SOLVER_FAILURE",
+                     cause="numerical", cause_detail="solver_failure",
+                     qs_inertia_ratio=0.001)
+        rows = findings.qs_rows([ok, model, blowup, other], {})
+        self.assertEqual(len(rows), 2)
+        counted = {r[2]: r for r in rows}
+        self.assertEqual(counted[2][3], 0.15)  # the failed run, not the blow-up
+        self.assertTrue(np.isnan(counted[0][3]))  # named, with no measure
+        text = findings.qs_findings([ok, model, blowup, other], {},
+                                    {"qs_inertia_threshold": 0.01})[0]
+        self.assertIn("1 of 1 measured problems exceed it", text)
+        self.assertIn("1 without a measure", text)
+        self.assertEqual(sel.failure_cause(model), ("model", "quasi_static_invalid"))
+        self.assertEqual(plotting.cause_colour("model", "quasi_static_invalid"),
+                         plotting.MODEL_COLOUR)
+        # A chart cell: the model's limit ranks above a physical stop.
+        physical = dict(model, cause="physical", cause_detail="friction_limit")
+        self.assertEqual(sel.stability_cell([physical, model])["cls"], "model")
+
     def test_paper_run_is_most_accurate_at_mu_half(self):
         run = sel.paper_run(self.runs(), lambda r: True)
         self.assertEqual(run["scene"], "paper")

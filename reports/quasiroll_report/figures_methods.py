@@ -296,7 +296,7 @@ def _cause_handles(charts):
         for panel in chart["panels"]:
             for cell in panel["cells"].values():
                 present[(cell["cls"], cell["detail"])] = _cell_colour(cell)
-    order = {"success": 0, "physical": 1, "numerical": 2, "unknown": 3}
+    order = {"success": 0, "physical": 1, "model": 2, "numerical": 3, "unknown": 4}
     handles = []
     for (cls, detail), colour in sorted(present.items(),
                                         key=lambda kv: (order[kv[0][0]], kv[0][1])):
@@ -304,6 +304,8 @@ def _cause_handles(charts):
             label = "success"
         elif cls == "unknown":
             label = f"cause not recorded ({detail})"
+        elif cls == sel.MODEL:
+            label = f"model: {detail} (left the quasi-static domain)"
         else:
             label = f"{cls}: {detail}"
         handles.append(Patch(facecolor=colour, edgecolor="#777777", label=label))
@@ -326,7 +328,7 @@ def _stability_figure(ctx, chart):
     _legend_axes(fig, gs[:, 1], _cause_handles([chart]), title="cell colour = outcome")
     cells = [c for p in panels for c in p["cells"].values()]
     counts = {cls: sum(1 for c in cells if c["cls"] == cls)
-              for cls in ("success", "physical", "numerical", "unknown")}
+              for cls in ("success",) + sel.CAUSE_CLASSES}
     methods = sorted({r["method"] for r in sel.in_group(ctx.runs, chart["group"])})
     mu_text = "; ".join(f"{p['scene']}: μ_min(ref) {fmt(p['mu_min'])}" for p in panels
                         if chart["axis"] == "mu" and is_finite(p["mu_min"]))
@@ -337,11 +339,15 @@ def _stability_figure(ctx, chart):
         "values; colour = outcome (green success; cool colours physical causes, "
         "where the reference or the analytic μ_min fails at the same place; warm "
         "colours numerical causes, where the method fails and the reference "
-        "does not; grey = the harness did not classify the failure); text = "
+        "does not; olive = the model's limit: the motion before the stop "
+        "exceeded the quasi-static inertia bound, so neither the stop nor the "
+        "method can be judged by this model; grey = the harness did not "
+        "classify the failure); text = "
         "fraction of t_end reached (worst run of the cell, k/n failed when "
         f"repeats differ). This run: {len(methods)} methods, {counts['success']} "
         f"cells succeeded, {counts['physical']} physical, {counts['numerical']} "
-        f"numerical, {counts['unknown']} unclassified."
+        f"numerical, {counts['model']} beyond the model, {counts['unknown']} "
+        "unclassified."
         + (f" Dotted line: the friction the scene needs, {mu_text} (the solver's "
            "μ_min maximised over the reference trajectory)." if mu_text else "")
         + (" Unclassified failures (old results without the `cause` column) "

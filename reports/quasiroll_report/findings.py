@@ -96,9 +96,13 @@ def stability_findings(runs, references):
         numerical = [c for c in cells if c[3]["cls"] == sel.NUMERICAL]
         physical = [c for c in cells if c[3]["cls"] == sel.PHYSICAL]
         unknown = [c for c in cells if c[3]["cls"] == sel.UNKNOWN]
+        model = [c for c in cells if c[3]["cls"] == sel.MODEL]
         axis = chart["axis_label"].split(" [")[0]
         text = (f"Stability along {axis} ({chart['group']}): {len(cells)} cells, "
                 f"{len(numerical)} numerical failures, {len(physical)} physical")
+        if model:
+            text += (f", {len(model)} beyond the quasi-static model (stops after "
+                     "a motion above the inertia bound)")
         if unknown:
             text += f", {len(unknown)} unclassified"
         if numerical:
@@ -113,16 +117,28 @@ def stability_findings(runs, references):
     return out
 
 
+def _motion_counts(run):
+    """Whether a run's qs_inertia_ratio measures the problem's motion: every
+    run up to its t_reached, failed ones included, except numerical failures
+    (a blow-up's motion is the method's, not the problem's)."""
+    return (is_finite(run.get("qs_inertia_ratio", math.nan))
+            and sel.failure_cause(run)[0] != sel.NUMERICAL)
+
+
 def qs_rows(runs, references):
-    """[(problem label, scene, n, max ratio, median ratio)] per problem with a
-    finite qs_inertia_ratio on a successful run."""
+    """[(problem label, scene, n, max ratio, median ratio)] for every problem
+    in the results: n counts its runs with a measure (successes and
+    non-numerical failures, up to t_reached); a problem without any has
+    n = 0 and NaN ratios, so it is named rather than dropped."""
     table = []
-    ok = [r for r in sel.successful(runs) if is_finite(r.get("qs_inertia_ratio", math.nan))]
     from .problems import group_by_problem
-    for _, rows in group_by_problem(ok):
-        values = sorted(r["qs_inertia_ratio"] for r in rows)
+    for _, rows in group_by_problem(runs):
+        values = sorted(r["qs_inertia_ratio"] for r in rows if _motion_counts(r))
         table.append((problem_label(rows[0], references), rows[0]["scene"], len(values),
-                      values[-1], values[len(values) // 2]))
+                      values[-1] if values else math.nan,
+                      values[len(values) // 2] if values else math.nan))
+    if not any(row[2] for row in table):
+        return []  # no qs_inertia_ratio column (older results)
     return table
 
 
@@ -131,14 +147,25 @@ def qs_findings(runs, references, meta):
     if not rows:
         return []
     threshold, _ = qs_threshold(meta)
-    over = [r for r in rows if r[3] > threshold]
-    worst = max(rows, key=lambda r: r[3])
-    text = (f"Quasi-static validity: the largest inertial/contact load ratio is "
-            f"{fmt(worst[3])} ({worst[0]}); threshold {fmt(threshold)}")
+    measured = [r for r in rows if r[2]]
+    unmeasured = [r for r in rows if not r[2]]
+    over = [r for r in measured if r[3] > threshold]
+    worst = max(measured, key=lambda r: r[3])
+    text = (f"Quasi-static validity over all {len(rows)} problems (failed runs "
+            f"up to their stop included, numerical failures not): the largest "
+            f"inertial/contact load ratio is {fmt(worst[3])} ({worst[0]}); "
+            f"threshold {fmt(threshold)}")
     if over:
-        text += f"; {len(over)} of {len(rows)} problems exceed it (dynamics matter there)"
+        text += (f"; {len(over)} of {len(measured)} measured problems exceed it "
+                 "(dynamics matter there: "
+                 + ", ".join(r[0] for r in over[:4])
+                 + (", ..." if len(over) > 4 else "") + ")")
     else:
-        text += f"; all {len(rows)} problems are below it"
+        text += f"; all {len(measured)} measured problems are below it"
+    if unmeasured:
+        text += (f"; {len(unmeasured)} without a measure (every run a numerical "
+                 "failure): " + ", ".join(r[0] for r in unmeasured[:4])
+                 + (", ..." if len(unmeasured) > 4 else ""))
     return [text + "."]
 
 

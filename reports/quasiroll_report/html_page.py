@@ -102,7 +102,7 @@ def _swatch(styles, method):
 def summary_table(summary, styles, failed_only):
     out = ["<table>", "<tr><th></th><th>method (nlp[options]/dae[options]/coupling)</th>"
            "<th>runs</th>"
-           "<th>status counts</th><th>failures: physical / numerical / unclassified</th>"
+           "<th>status counts</th><th>failures: physical / numerical / model / unclassified</th>"
            "<th>max drift ‖H‖∞ (successes)</th><th>max KKT residual (successes)</th></tr>"]
     for row in summary:
         counts = ", ".join(f"{escape(s)} {n}" for s, n in
@@ -116,7 +116,7 @@ def summary_table(summary, styles, failed_only):
             f"<td>{escape(row['method'])}{note}</td>"
             f'<td class="num">{row["runs"]}</td><td>{counts}</td>'
             f'<td class="num">{causes.get("physical", 0)} / {causes.get("numerical", 0)}'
-            f' / {causes.get("unknown", 0)}</td>'
+            f' / {causes.get("model", 0)} / {causes.get("unknown", 0)}</td>'
             + _num(row["max_drift"]) + _num(row["max_kkt"]) + "</tr>")
     out.append("</table>")
     return "\n".join(out)
@@ -212,7 +212,8 @@ def references_table(ctx):
             f"<td>{escape(spec.get('kind', run.get('ref_kind', '')) or 'unknown')}</td>"
             f"<td>{escape(_reference_method(spec) if spec else 'references/' + ref_hash + '.json missing')}</td>"
             f"<td>{escape(str(spec.get('status', run.get('ref_status', ''))))}</td>"
-            + _num(spec.get("t_reached", math.nan) if isinstance(spec.get("t_reached"), float)
+            + _num(float(spec["t_reached"]) if isinstance(spec.get("t_reached"), (int, float))
+                   and not isinstance(spec.get("t_reached"), bool)
                    else math.nan) + _num(est) + _num(mu_min)
             + f'<td class="num">{len(rows)}</td></tr>')
     out.append("</table>")
@@ -230,15 +231,22 @@ def qs_table(ctx):
            "friction-limit conclusions, by about that fraction — 1 % is an order of "
            "magnitude below the friction margins this study resolves (pvc needs "
            "μ ≳ 0.43 on R1 against μ = 0.5); above it the scene needs a dynamic "
-           "model.</p>")
+           "model. Every problem is listed; its runs count up to their stop, failed "
+           "ones included (a stop after such a motion is cause <code>model</code>), "
+           "numerical failures not (a blow-up's motion is the method's).</p>")
     if not rows:
         return why + ('<p class="note">No <code>qs_inertia_ratio</code> column in these '
                       "results: validity not shown.</p>")
     out = [why, "<table>", "<tr><th>problem</th><th>runs</th><th>max ratio</th>"
            "<th>median ratio</th><th>verdict</th></tr>"]
     for label, _, count, worst, median in rows:
-        verdict = "quasi-static valid" if worst <= threshold else \
-            '<span class="note">exceeds the threshold: needs dynamics</span>'
+        if not count:
+            verdict = ('<span class="note">no measure: every run failed '
+                       "numerically</span>")
+        elif worst <= threshold:
+            verdict = "quasi-static valid"
+        else:
+            verdict = '<span class="note">exceeds the threshold: needs dynamics</span>'
         out.append(f"<tr><td>{escape(label)}</td><td class=\"num\">{count}</td>"
                    + _num(worst) + _num(median) + f"<td>{verdict}</td></tr>")
     out.append("</table>")

@@ -54,7 +54,8 @@ _EXTRA_STATUS_COLOURS = ["#843c39", "#637939", "#7b4173", "#3182bd",
 NOT_RUN_COLOUR = "#f0f0f0"
 
 # Failure causes (docs/harness.md `cause`, `cause_detail`): physical causes in
-# cool colours, numerical ones in warm colours, unclassified in grey.
+# cool colours, numerical ones in warm colours, the model's limit
+# (quasi_static_invalid) olive, unclassified in grey.
 SUCCESS_COLOUR = "#4daf4a"
 PHYSICAL_COLOURS = {"friction_limit": "#377eb8", "lift_off": "#80b1d3",
                     "degenerate_contact": "#984ea3"}
@@ -66,6 +67,7 @@ NUMERICAL_COLOURS = {"step_too_large": "#e41a1c", "baumgarte_instability": "#ff7
                      "error": "#333333"}
 NUMERICAL_OTHER = "#fb8072"
 UNKNOWN_COLOUR = "#9e9e9e"
+MODEL_COLOUR = "#8c8c1a"
 
 
 def cause_colour(cls, detail):
@@ -75,6 +77,8 @@ def cause_colour(cls, detail):
         return PHYSICAL_COLOURS.get(detail, PHYSICAL_OTHER)
     if cls == "numerical":
         return NUMERICAL_COLOURS.get(detail, NUMERICAL_OTHER)
+    if cls == "model":
+        return MODEL_COLOUR
     return UNKNOWN_COLOUR
 
 

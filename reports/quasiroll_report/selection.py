@@ -199,6 +199,10 @@ def _max(values):
 
 
 PHYSICAL, NUMERICAL, UNKNOWN = "physical", "numerical", "unknown"
+# The model's own limit (docs/harness.md, Failure causes): the motion left
+# the quasi-static domain before the stop (cause_detail quasi_static_invalid).
+MODEL = "model"
+CAUSE_CLASSES = (PHYSICAL, NUMERICAL, MODEL, UNKNOWN)
 
 
 def has_causes(runs):
@@ -208,13 +212,13 @@ def has_causes(runs):
 
 def failure_cause(run):
     """(class, detail) of a run: ("success", "") for a success; ("physical" |
-    "numerical", cause_detail) when the harness classified it; else
+    "numerical" | "model", cause_detail) when the harness classified it; else
     ("unknown", status): an unclassified status is never presented as
     physical (INFEASIBLE_FRICTION from a blow-up looks like a friction limit)."""
     if is_success(run):
         return "success", ""
     cause = run.get("cause", "")
-    if cause in (PHYSICAL, NUMERICAL):
+    if cause in (PHYSICAL, NUMERICAL, MODEL):
         return cause, run.get("cause_detail", "") or "unspecified"
     return UNKNOWN, run["status"]
 
@@ -438,8 +442,9 @@ def t_fraction(run):
 def stability_cell(rows):
     """One chart cell: dict(cls, detail, frac, label, n, failed). The worst
     row decides (a failure over a success; among failures numerical, then
-    unknown, then physical; then the smallest t_reached fraction)."""
-    rank = {NUMERICAL: 0, UNKNOWN: 1, PHYSICAL: 2, "success": 3}
+    unknown, then the model's limit, then physical; then the smallest
+    t_reached fraction)."""
+    rank = {NUMERICAL: 0, UNKNOWN: 1, MODEL: 2, PHYSICAL: 3, "success": 4}
     scored = sorted(rows, key=lambda r: (rank[failure_cause(r)[0]],
                                          t_fraction(r) if is_finite(t_fraction(r)) else 2.0,
                                          r["run_id"]))
