@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/slip_regimes.h"
 
 namespace quasiroll {
 
@@ -252,7 +253,8 @@ void Simulator::Record(double t, const Configuration& theta,
   s.gap_max = GeometricGap(*model_, theta);
   s.nlp_status = ToString(sol.status);
   s.nlp_iterations = sol.nlp_iterations;
-  (void)index;
+  if (index > 0 && !result->samples.empty())
+    AccumulateSlipDistances(result->samples.back(), scene_.epsilon, &s);
   result->samples.push_back(std::move(s));
 }
 

@@ -52,6 +52,10 @@ struct ContactSample {
   double normal_force = 0, traction_lon = 0, traction_lat = 0;
   double slip = 0;  // |s_i| [m/s]
   double friction_use = 0;
+  // Cumulative since the start, int |s_i| dt split by regime
+  // (core/slip_regimes.h): while on the friction cone, and the
+  // regularisation's creep below it (proportional to epsilon) [m].
+  double sliding_distance = 0, creep_distance = 0;
 };
 
 // One output row (docs/formats.md, trajectory.csv).

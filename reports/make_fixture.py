@@ -304,6 +304,10 @@ def trust_fields(run, rng):
               "qs_inertia_ratio": (0.08 if run["scene"] == "rough" else 0.004)
               * (1 + 0.1 * rng.random()) if run["status"] == "success" else "",
               "kkt_residual": 1e-11 * (1 + rng.random()) if run["status"] == "success" else ""}
+    if run["status"] == "success":  # pvc never slides; creep ~ eps (model.md §7.5)
+        pvc = run["scene"].endswith("pvc")
+        fields["sliding_distance"] = 0.0 if pvc else 2.2e-4 * (1 + 0.1 * rng.random())
+        fields["creep_distance"] = (30.0 if pvc else 40.0) * run["eps"] * (1 + 0.1 * rng.random())
     wall = float(run["wall_s"])
     repeats = [wall * 1.3, wall, wall * 1.08]
     fields.update({"wall_s_all": ";".join(f"{w:.6g}" for w in repeats),

@@ -249,7 +249,14 @@ class GoodReportTest(unittest.TestCase):
         pvc = slip["panels"][1]["curves"]
         for curve in pvc.values():
             self.assertTrue(all(mu > make_fixture.REF_MU_MIN["paper_pvc"] for mu, _ in curve))
-        self.assertIn("slips", self.html())
+        # Sliding and creep apart (issue #21 item 4): pvc is stated as creep,
+        # never as a slip ratio against paper mode's sliding.
+        html = self.html()
+        self.assertIn("paper_pvc no sliding; creep", html)
+        self.assertIn("proportional to ε", html)
+        self.assertNotIn("less than paper", html)
+        self.assertNotIn("paper_pvc slips", html)
+        self.assertIn("paper slides", html)
 
     def test_blowup_is_numerical_not_friction_limit(self):
         data = self.manifest()["fig_stability_dt"]["data"]
@@ -432,6 +439,24 @@ class SelectionTest(unittest.TestCase):
         self.assertAlmostEqual(panels["paper"]["mu_min"], 0.27)
         self.assertAlmostEqual(panels["paper_pvc"]["mu_min"], 0.43)
         self.assertEqual(sel.value_position([0.1, 0.3, 0.5], 0.4), 1.5)
+
+    def test_epsilon_ladder_reads_sliding_and_creep_apart(self):
+        # Issue #21 item 4, on made-up rows: pvc creeps in proportion to ε and
+        # never slides; paper mode's sliding converges.
+        from quasiroll_report import findings
+        base = dict(self.runs()[0], suite_group="epsilon", status="success",
+                    cause="", cause_detail="")
+        rows = []
+        for eps, slide in ((1e-7, 1.024e-3), (1e-8, 1.0672e-3), (1e-9, 1.0680e-3)):
+            rows.append(dict(base, scene="paper", eps=eps, sliding_distance=slide,
+                             creep_distance=60 * eps))
+            rows.append(dict(base, scene="paper_pvc", eps=eps, sliding_distance=0.0,
+                             creep_distance=25 * eps))
+        paper, pvc = findings.epsilon_findings(rows)
+        self.assertIn("sliding distance 0.001024, 0.0010672, 0.001068 m", paper)
+        self.assertIn("no sliding at any ε", pvc)
+        self.assertIn("creep/ε constant within 0", pvc)
+        self.assertNotIn("sliding distance", pvc)
 
     def test_validity_counts_failed_problems_not_blowups(self):
         # Issue #21 item 6: validity over every problem, failed runs up to

@@ -18,8 +18,12 @@ Golden outputs (a suite's results recorded once, e.g. before a refactoring
 that must not change them; ctest bench_golden_smoke). Columns added to
 runs.csv since (an additive change) are not compared:
     compare-bench-outputs.py --record-golden OUT GOLDEN   writes GOLDEN/runs.csv
-        (timing and host columns dropped) and GOLDEN/trajectories.sha256
+        (timing and host columns dropped), GOLDEN/trajectories.sha256 and
+        GOLDEN/trajectories.columns (the trajectory.csv header)
     compare-bench-outputs.py --golden GOLDEN OUT          compares OUT with them
+Columns added to trajectory.csv since (at its end) are not compared either:
+the digests are taken over the recorded columns (GOLDEN/trajectories.columns;
+a golden without it was recorded before any was added: whole files).
 """
 import hashlib
 import csv
@@ -52,13 +56,38 @@ def meta_without_invocation(path):
     return [(k, v) for k, v in meta.items() if k not in INVOCATION_META_KEYS]
 
 
-def trajectory_digests(directory, rows):
+def trajectory_text(path, columns=None):
+    """A trajectory file's bytes, cut to `columns` (a header line) when given;
+    trajectory.csv has no quoted fields, so the cut is exact."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if columns is None:
+        return data
+    lines = data.decode().split("\n")
+    header = lines[0].split(",")
+    names = columns.split(",")
+    if header[:len(names)] == names:  # added columns sit at the end
+        return "\n".join(",".join(line.split(",")[:len(names)]) if line else line
+                         for line in lines).encode()
+    keep = [header.index(n) for n in names]
+    return "\n".join(",".join(line.split(",")[k] for k in keep) if line else line
+                     for line in lines).encode()
+
+
+def trajectory_digests(directory, rows, columns=None):
     lines = []
     for r in rows[1:]:
         name = os.path.join("trajectories", r[0] + ".csv")
-        with open(os.path.join(directory, name), "rb") as f:
-            lines.append(f"{hashlib.sha256(f.read()).hexdigest()}  {name}")
+        text = trajectory_text(os.path.join(directory, name), columns)
+        lines.append(f"{hashlib.sha256(text).hexdigest()}  {name}")
     return lines
+
+
+def trajectory_header(directory, rows):
+    for r in rows[1:]:
+        with open(os.path.join(directory, "trajectories", r[0] + ".csv")) as f:
+            return f.readline().rstrip("\n")
+    return None
 
 
 def record_golden(out, golden):
@@ -68,6 +97,10 @@ def record_golden(out, golden):
         f.write("\n".join(stripped) + "\n")
     with open(os.path.join(golden, "trajectories.sha256"), "w") as f:
         f.write("\n".join(trajectory_digests(out, rows)) + "\n")
+    header = trajectory_header(out, rows)
+    if header is not None:
+        with open(os.path.join(golden, "trajectories.columns"), "w") as f:
+            f.write(header + "\n")
     print(f"compare-bench-outputs: recorded {len(rows) - 1} rows of {out} in {golden}")
     return 0
 
@@ -106,7 +139,12 @@ def compare_golden(golden, out):
         for k, (x, y) in enumerate(zip(expected, stripped)):
             if x != y:
                 problems.append(f"runs.csv line {k + 1} differs:\n  golden {x}\n  now    {y}")
-    digests = trajectory_digests(out, rows) if not problems else []
+    columns_file = os.path.join(golden, "trajectories.columns")
+    columns = None
+    if os.path.exists(columns_file):
+        with open(columns_file) as f:
+            columns = f.read().strip()
+    digests = trajectory_digests(out, rows, columns) if not problems else []
     for x, y in zip(expected_digests, digests):
         if x != y:
             problems.append(f"{y.split()[-1]} differs from the golden one")

@@ -31,6 +31,7 @@
 #include "quasiroll/bench/io/runs_schema.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/quasi_static_validity.h"
+#include "quasiroll/core/slip_regimes.h"
 
 namespace quasiroll::bench {
 
@@ -284,6 +285,9 @@ std::vector<std::string> MakeRow(const RunSpec& run,
                               ? timing.median / result.t_reached
                               : std::numeric_limits<double>::quiet_NaN());
   b.Set("qs_inertia_ratio", QuasiStaticInertiaRatio(result.samples, scene));
+  const SlipDistances slip = TotalSlipDistances(result.samples);
+  b.Set("sliding_distance", slip.sliding);
+  b.Set("creep_distance", slip.creep);
   return b.values();
 }
 
@@ -307,7 +311,8 @@ std::vector<std::string> ErrorRow(const RunSpec& run,
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (const char* c :
        {"kkt_residual", "t_reached_frac", "wall_s_median", "wall_s_min",
-        "wall_s_max", "wall_per_sim_s", "qs_inertia_ratio"})
+        "wall_s_max", "wall_per_sim_s", "qs_inertia_ratio", "sliding_distance",
+        "creep_distance"})
     b.Set(c, nan);
   const FailureCause cause =
       ClassifyFailure(Evidence(run, RunStatus::kError, nan, reference));

@@ -19,6 +19,7 @@
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/plugin_loader.h"
 #include "quasiroll/core/quasi_static_validity.h"
+#include "quasiroll/core/slip_regimes.h"
 #include "quasiroll_git_commit.h"
 
 namespace quasiroll {
@@ -86,6 +87,11 @@ std::string TrajectoryCsvHeader() {
          s + "_lat,slip" + s + ",use" + s;
   }
   h += ",drift,gap_max,nlp_status,nlp_iters";
+  // Added later, at the end (trajectory.csv changes only additively).
+  for (int i = 1; i <= 3; ++i) {
+    const std::string s = std::to_string(i);
+    h += ",sliding_distance" + s + ",creep_distance" + s;
+  }
   return h;
 }
 
@@ -115,6 +121,10 @@ std::string TrajectoryCsv(const SimulationResult& result) {
     add(s.drift);
     add(s.gap_max);
     row += ',' + s.nlp_status + ',' + std::to_string(s.nlp_iterations);
+    for (const ContactSample& c : s.contacts) {
+      add(c.sliding_distance);
+      add(c.creep_distance);
+    }
     out += row;
     out += '\n';
   }
@@ -317,6 +327,9 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.Key("wall_s").Value(r.wall_seconds);
   j.Key("kkt_residual").Value(r.kkt_residual);
   j.Key("qs_inertia_ratio").Value(QuasiStaticInertiaRatio(r.samples, scene));
+  const SlipDistances slip = TotalSlipDistances(r.samples);
+  j.Key("sliding_distance").Value(slip.sliding);
+  j.Key("creep_distance").Value(slip.creep);
   j.Key("scene").BeginObject();
   j.Key("name").Value(scene.name);
   j.Key("file").Value(scene.source_path);

@@ -70,7 +70,8 @@ DEFAULTED_COLUMNS = [
     "mu_min", "roughness", "t_end", "kkt_residual", "t_reached_frac",
     "wall_s_median", "wall_s_min", "wall_s_max", "wall_per_sim_s",
     "qs_inertia_ratio", "ref_mu_min", "ref_err_est", "cause", "cause_detail",
-    "wall_s_all", "host", "cpu_model", "ref_hash", "terrain", "rk_method"]
+    "wall_s_all", "host", "cpu_model", "ref_hash", "terrain", "rk_method",
+    "sliding_distance", "creep_distance"]
 
 for _name in REQUIRED_COLUMNS + DEFAULTED_COLUMNS:
     assert _name in RUNS_COLUMNS, f"{_name} is no runs.csv column ({RUNS_SCHEMA_PATH})"

@@ -438,6 +438,32 @@ def _sweep_legend(fig, gs_cell, ok, failed, styles):
               frameon=False)
 
 
+def _slip_regimes(ok, mu):
+    """{scene: (median sliding_distance, median creep_distance, eps)} of the
+    successful runs at μ = mu; {} for results without the columns."""
+    out = {}
+    for scene in sorted({r["scene"] for r in ok}):
+        rows = [r for r in ok if r["scene"] == scene and r["mu"] == mu
+                and is_finite(r.get("sliding_distance", math.nan))]
+        if rows:
+            out[scene] = (float(np.median([r["sliding_distance"] for r in rows])),
+                          float(np.median([r["creep_distance"] for r in rows])),
+                          rows[0].get("eps", math.nan))
+    return out
+
+
+def slip_regime_text(scene, total, regime):
+    """How a scene's slip reads: sliding with its creep, or 'no sliding;
+    creep X m, proportional to ε' (never a ratio against sliding)."""
+    if regime is None:
+        return f"{scene} total slip {fmt(total)} m"
+    sliding, creep, eps = regime
+    if sliding <= 0:
+        return (f"{scene} no sliding; creep {fmt(creep)} m, proportional to "
+                f"ε = {fmt(eps)} m/s (the regularisation, not physics)")
+    return f"{scene} slides {fmt(sliding)} m (plus creep {fmt(creep)} m)"
+
+
 def _common_mu_ratio(ctx, scenes, ok, metrics, key):
     """(μ, {scene: median value}) at the μ closest to 0.5 where every scene
     has a successful run; (nan, {}) if none."""
@@ -547,26 +573,35 @@ def figure_total_slip_vs_mu(ctx):
                        "curves": curves})
     _sweep_legend(fig, gs[0, n], ok, failed, ctx.styles)
     mu, per_scene = _common_mu_ratio(ctx, scenes, ok, metrics, "total_slip")
+    regimes = _slip_regimes(ok, mu)
     headline = ""
-    if len(per_scene) >= 2:
-        ordered = sorted(per_scene.items(), key=lambda kv: kv[1])
+    if per_scene:
+        headline = f" At μ={fmt(mu)}: " + "; ".join(
+            slip_regime_text(s, v, regimes.get(s)) for s, v in per_scene.items()) + "."
+    sliding = {s: reg[0] for s, reg in regimes.items() if reg[0] > 0}
+    if len(sliding) >= 2:
+        ordered = sorted(sliding.items(), key=lambda kv: kv[1])
         (low_s, low_v), (high_s, high_v) = ordered[0], ordered[-1]
-        ratio = high_v / low_v if low_v > 0 else math.inf
-        headline = (f" At μ={fmt(mu)}: {', '.join(f'{s} {fmt(v)} m' for s, v in per_scene.items())}"
-                    f" — {low_s} slips {fmt(ratio, 2)}× less than {high_s}.")
+        headline += f" {low_s} slides {fmt(high_v / low_v, 2)}× less than {high_s}."
     needs = "; ".join(f"{p['scene']} needs μ ≥ {fmt(p['mu_min'])}" for p in panels
                       if is_finite(p["mu_min"]))
     caption = (
         "Fig. 14 — the paper shows the accumulated slip falling as μ grows and "
         "the passive variable camber slipping far less than the fixed camber, "
         "at the price of needing more friction. One panel per scene/mode on a "
-        "shared axis (never averaged over them), one curve per method." + headline
+        "shared axis (never averaged over them), one curve per method. The "
+        "total slip holds two regimes (docs/model.md §7.5): sliding on the "
+        "friction cone, and creep below it, which is the friction "
+        "regularisation (proportional to ε), not physics; a pvc robot never "
+        "slides, so its curve is creep only and is not compared with paper "
+        "mode's sliding." + headline
         + (f" {needs} (μ_min(ref), dotted)." if needs else
            " μ_min not drawn (these results carry no ref_mu_min column).")
         + f" {_failed_text(failed)}.")
     record = save_figure(fig, ctx.out_dir, "fig14_total_slip_vs_mu",
                          "Fig. 14 — total slip vs μ", caption)
-    record.data = {"panels": panels, "compare_mu": mu, "per_scene": per_scene}
+    record.data = {"panels": panels, "compare_mu": mu, "per_scene": per_scene,
+                   "regimes": regimes}
     return record
 
 

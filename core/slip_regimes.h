@@ -1,0 +1,42 @@
+// Sliding and creep (docs/model.md §7.5, "Sliding and creep"): the two
+// regimes of the regularised Coulomb law C, sigma_i f_ti + mu f_ni s_i = 0
+// with sigma_i = sqrt(|s_i|^2 + eps^2) (§7.2). C gives a wheel's friction
+// use u = |f_t| / (mu f_n) = |s| / sqrt(|s|^2 + eps^2), i.e.
+//   |s| = eps u / sqrt(1 - u^2).
+// A wheel below its friction cone (u bounded away from 1 by the statics)
+// creeps at a speed proportional to eps: the regularisation's stand-in for
+// sticking, not physics. A wheel on its cone slides at a speed the
+// kinematics sets, independent of eps, with u -> 1. A sample is sliding when
+// |s| >= kSlidingSlipOverEpsilon eps (u >= 0.99995): for eps -> 0 every slide
+// passes and every creep stays below.
+#pragma once
+
+#include <vector>
+
+#include "quasiroll/core/simulator.h"
+
+namespace quasiroll {
+
+// |s| / eps above which a contact counts as sliding (u >= 1 - 5e-5).
+inline constexpr double kSlidingSlipOverEpsilon = 100.0;
+
+inline bool IsSliding(double slip_speed, double epsilon) {
+  return slip_speed >= kSlidingSlipOverEpsilon * epsilon;
+}
+
+// The per-wheel cumulative distances of `current` (ContactSample::
+// sliding_distance, creep_distance): those of `previous` plus the trapezoid
+// rule over [previous.t, current.t], each end's half going to its own
+// regime, int |s_i| dt. A sample without a slip (NaN: failed solve) adds
+// nothing.
+void AccumulateSlipDistances(const TrajectorySample& previous, double epsilon,
+                             TrajectorySample* current);
+
+// Sum over the wheels of the last sample's cumulative distances (0 for no
+// samples): a run's sliding and creep distance [m].
+struct SlipDistances {
+  double sliding = 0, creep = 0;
+};
+SlipDistances TotalSlipDistances(const std::vector<TrajectorySample>& run);
+
+}  // namespace quasiroll
