@@ -30,9 +30,8 @@ struct FailureEvidence {
   std::optional<RunStatus> ref_status;
   double ref_t_reached = 0;
   double ref_dt = 0;  // spacing of the reference's samples
-  // Quasi-static inertia ratio of the motion up to the stop (the
-  // reference's up to t_reached + StopTolerance(), else the run's own; NaN
-  // when unknown) and the suite's bound on it.
+  // Quasi-static inertia ratio of the run's motion up to its stop (runs.csv
+  // qs_inertia_ratio; NaN when unknown) and the suite's bound on it.
   double qs_inertia_ratio = std::numeric_limits<double>::quiet_NaN();
   double qs_inertia_bound = std::numeric_limits<double>::infinity();
 };

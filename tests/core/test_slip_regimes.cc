@@ -1,7 +1,5 @@
 // Sliding and creep (docs/model.md §7.5, core/slip_regimes.h): the split of
 // the integrated slip by the regularised friction law's two regimes.
-#include "quasiroll/core/slip_regimes.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +9,7 @@
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/scene.h"
+#include "quasiroll/core/slip_regimes.h"
 
 namespace quasiroll {
 namespace {
@@ -48,18 +47,17 @@ TEST(SlipRegimes, TrapezoidSplitByRegime) {
   EXPECT_TRUE(IsSliding(100 * eps, eps));
   EXPECT_FALSE(IsSliding(99 * eps, eps));
   const SlipDistances total = TotalSlipDistances({a, b, c});
-  EXPECT_DOUBLE_EQ(total.sliding,
-                   c.contacts[0].sliding_distance +
-                       c.contacts[1].sliding_distance +
-                       c.contacts[2].sliding_distance);
+  EXPECT_DOUBLE_EQ(total.sliding, c.contacts[0].sliding_distance +
+                                      c.contacts[1].sliding_distance +
+                                      c.contacts[2].sliding_distance);
   EXPECT_EQ(TotalSlipDistances({}).sliding, 0.0);
 }
 
 SlipDistances Simulate(ActuationMode mode, double eps) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
-  Scene scene = LoadScene(std::string(QUASIROLL_SOURCE_DIR) +
-                          "/bench/scenes/paper.yaml");
+  Scene scene =
+      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
   scene.mode = mode;
   scene.epsilon = eps;
   scene.t_end = 5.0;
