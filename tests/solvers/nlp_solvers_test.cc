@@ -140,6 +140,20 @@ INSTANTIATE_TEST_SUITE_P(
 // ------------------------------------------------------ per-backend tests ---
 class BackendTest : public ::testing::TestWithParam<std::string> {
  protected:
+  // Whether this backend takes problem p (a square system if it needs one).
+  bool Takes(const ReferenceProblem& p) const {
+    return !solver_->RequiresSquareSystem() || p.IsSquareSystem();
+  }
+  // Solves p from its starting point; success iff kConverged.
+  ::testing::AssertionResult SolvesFromStart(const ReferenceProblem& p,
+                                             const NlpOptions& options,
+                                             NlpResult* r) {
+    const NlpStatus status = solver_->Solve(p, p.starting_point(), options, r);
+    if (status == NlpStatus::kConverged) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure()
+           << p.name() << ": " << ToString(status) << " " << r->backend_status;
+  }
+
   std::unique_ptr<NlpSolver> solver_ = NlpSolverRegistry::Create(GetParam());
 };
 
@@ -152,9 +166,7 @@ TEST_P(BackendTest, SquareSystemsToOneEMinus12) {
   for (const char* name : {"circle_line", "contact_like_18"}) {
     auto p = MakeReferenceProblem(name);
     NlpResult r;
-    ASSERT_EQ(solver_->Solve(*p, p->starting_point(), options, &r),
-              NlpStatus::kConverged)
-        << name << ": " << r.backend_status;
+    ASSERT_TRUE(SolvesFromStart(*p, options, &r));
     Report(GetParam(), *p, r);
     EXPECT_LE(r.max_constraint_violation, 1e-12) << name;
     // Nonsingular Jacobian with O(1) entries: |x - x*| ~ |residual|.
@@ -166,13 +178,11 @@ TEST_P(BackendTest, SquareSystemsToOneEMinus12) {
 TEST_P(BackendTest, WarmStartTakesNoMoreIterations) {
   for (const char* name : {"hs071", "contact_like_18"}) {
     auto p = MakeReferenceProblem(name);
-    if (solver_->RequiresSquareSystem() && !p->IsSquareSystem()) continue;
+    if (!Takes(*p)) continue;
     NlpOptions options;
     options.max_iterations = 500;
     NlpResult r;
-    ASSERT_EQ(solver_->Solve(*p, p->starting_point(), options, &r),
-              NlpStatus::kConverged)
-        << name << ": " << r.backend_status;
+    ASSERT_TRUE(SolvesFromStart(*p, options, &r));
     const int cold = r.iterations;
     const Eigen::VectorXd x_cold = r.x;
     options.warm_start_multipliers = true;  // r.multipliers from the cold solve
@@ -195,7 +205,7 @@ TEST_P(BackendTest, ReuseAcrossProblemsMatchesFreshSolver) {
   options.max_iterations = 500;
   for (int pass = 0; pass < 2; ++pass) {
     for (const auto& p : MakeReferenceProblems()) {
-      if (solver_->RequiresSquareSystem() && !p->IsSquareSystem()) continue;
+      if (!Takes(*p)) continue;
       NlpResult reused, fresh;
       const NlpStatus s1 =
           solver_->Solve(*p, p->starting_point(), options, &reused);
@@ -372,15 +382,13 @@ TEST_P(BackendTest, OptionTableIsWellFormedAndEnforced) {
 // newton count exactly their accepted iterates natively.
 TEST_P(BackendTest, ConvergedResultsCarryMultipliersAndComparableCounts) {
   const std::string& backend = GetParam();
+  NlpOptions options;
+  options.max_iterations = 500;
   for (const char* name : {"hs071", "hs040", "contact_like_18"}) {
     auto p = MakeReferenceProblem(name);
-    if (solver_->RequiresSquareSystem() && !p->IsSquareSystem()) continue;
-    NlpOptions options;
-    options.max_iterations = 500;
+    if (!Takes(*p)) continue;
     NlpResult r;
-    ASSERT_EQ(solver_->Solve(*p, p->starting_point(), options, &r),
-              NlpStatus::kConverged)
-        << name << ": " << r.backend_status;
+    ASSERT_TRUE(SolvesFromStart(*p, options, &r));
     std::printf("[nlp] %-7s %-16s iterations %d native %d multipliers %s\n",
                 backend.c_str(), name, r.iterations, r.native_iterations,
                 r.multipliers_estimated ? "estimated" : "own");
