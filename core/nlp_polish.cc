@@ -194,6 +194,27 @@ void EqualityRows(const NlpBounds& bounds, std::vector<int>* rows) {
     if (bounds.g_lb(i) == bounds.g_ub(i)) rows->push_back(i);
 }
 
+void ClassifyRows(const NlpBounds& bounds, std::vector<int>* eq_rows,
+                  std::vector<int>* side_rows, std::vector<double>* side_sign) {
+  eq_rows->clear();
+  side_rows->clear();
+  side_sign->clear();
+  for (int i = 0; i < bounds.g_lb.size(); ++i) {
+    if (bounds.g_lb(i) == bounds.g_ub(i)) {
+      eq_rows->push_back(i);
+      continue;
+    }
+    if (std::isfinite(bounds.g_lb(i))) {
+      side_rows->push_back(i);
+      side_sign->push_back(-1.0);
+    }
+    if (std::isfinite(bounds.g_ub(i))) {
+      side_rows->push_back(i);
+      side_sign->push_back(+1.0);
+    }
+  }
+}
+
 bool EqualityResidual(const Eigen::VectorXd& g, const Eigen::VectorXd& g_lb,
                       const std::vector<int>& rows, Eigen::VectorXd* r) {
   for (std::size_t k = 0; k < rows.size(); ++k)

@@ -101,6 +101,11 @@ bool LooksLocallyInfeasible(const NlpProblem& problem, const NlpBounds& bounds,
 //                      false, with kNumericalFailure set, when r is
 //                      non-finite.
 void EqualityRows(const NlpBounds& bounds, std::vector<int>* rows);
+// Every row of g by kind, in row order: the equalities into *eq_rows, each
+// finite side of the others into *side_rows with *side_sign -1 for
+// g_lb_i <= g_i (listed first) and +1 for g_i <= g_ub_i.
+void ClassifyRows(const NlpBounds& bounds, std::vector<int>* eq_rows,
+                  std::vector<int>* side_rows, std::vector<double>* side_sign);
 bool EqualityResidual(const Eigen::VectorXd& g, const Eigen::VectorXd& g_lb,
                       const std::vector<int>& rows, Eigen::VectorXd* r);
 bool StartSquareSystem(const NlpProblem& problem,
