@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "quasiroll/conformance/nlp_reference_problems.h"
+#include "quasiroll/conformance/option_table_conformance.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/nlp_polish.h"
 #ifdef QUASIROLL_HAVE_IPOPT
@@ -334,22 +335,12 @@ TEST_P(BackendTest, IterationLimitIsReported) {
 // the settings as they were; setting every option to its default changes no
 // answer (the table's defaults are the backend's behaviour).
 TEST_P(BackendTest, OptionTableIsWellFormedAndEnforced) {
+  auto p = MakeReferenceProblem("contact_like_18");
+  NlpResult a, b;
+  solver_->Solve(*p, p->starting_point(), NlpOptions(), &a);
+  // Well formed, the defaults accepted as text, an unknown option rejected.
+  conformance::ExpectBackendOptionTableValid(*solver_);
   const OptionTable table = solver_->option_table();
-  std::set<std::string> names;
-  GivenOptions defaults;
-  for (const OptionSpec& spec : table) {
-    std::string why;
-    EXPECT_TRUE(spec.Accepts(spec.default_value, &why))
-        << spec.name << ": " << why;
-    EXPECT_TRUE(names.insert(spec.name).second) << spec.name;
-    EXPECT_FALSE(spec.doc.empty()) << spec.name;
-    for (char c : spec.name)
-      EXPECT_TRUE(std::islower(static_cast<unsigned char>(c)) ||
-                  std::isdigit(static_cast<unsigned char>(c)) || c == '_')
-          << spec.name;
-    defaults[spec.name] = OptionValueText(spec.default_value);
-  }
-  EXPECT_EQ(solver_->backend_options().values().size(), table.size());
   try {
     solver_->SetBackendOptions({{"no_such_option", "1"}});
     ADD_FAILURE() << "unknown option accepted";
@@ -361,10 +352,7 @@ TEST_P(BackendTest, OptionTableIsWellFormedAndEnforced) {
       EXPECT_NE(msg.find(table.front().name), std::string::npos) << msg;
     }
   }
-  auto p = MakeReferenceProblem("contact_like_18");
-  NlpResult a, b;
-  solver_->Solve(*p, p->starting_point(), NlpOptions(), &a);
-  solver_->SetBackendOptions(defaults);
+  solver_->SetBackendOptions(conformance::DefaultsAsGiven(table));
   solver_->Solve(*p, p->starting_point(), NlpOptions(), &b);
   EXPECT_EQ(a.status, b.status);
   EXPECT_EQ(a.iterations, b.iterations);
