@@ -6,6 +6,9 @@
 #                                 exit 77 (ctest's skip code)
 #   make_fixture_report ROOT DIR  a synthetic results DIR
 #                                 (reports/make_fixture.py) and its report
+#   page_path NAME FILE HINT      prints FILE's absolute path; if it does not
+#                                 exist, "NAME: FILE not found (HINT)" and
+#                                 exit 2 (use as x=$(page_path ...))
 
 screenshot_usage() {
   if [ $# -lt 1 ] || [ $# -gt 2 ]; then
@@ -29,4 +32,12 @@ find_chromium() {
 make_fixture_report() {
   /usr/bin/python3 "$1/reports/make_fixture.py" "$2" > /dev/null
   /usr/bin/python3 "$1/reports/make_report.py" "$2" > /dev/null
+}
+
+page_path() {
+  if [ ! -f "$2" ]; then
+    echo "$1: $2 not found ($3)" >&2
+    exit 2
+  fi
+  echo "$(cd "$(dirname "$2")" && pwd)/$(basename "$2")"
 }

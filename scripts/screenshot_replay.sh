@@ -27,12 +27,8 @@ if [ "$dir" = "--fixture" ]; then
   dir="$work/results"
   make_fixture_report "$root" "$dir"
 fi
-page="$dir/report/replay/index.html"
-if [ ! -f "$page" ]; then
-  echo "screenshot_replay: $page not found (report written without libjs-three?)" >&2
-  exit 2
-fi
-page=$(cd "$(dirname "$page")" && pwd)/index.html
+page=$(page_path screenshot_replay "$dir/report/replay/index.html" \
+  "report written without libjs-three?")
 out=${2:-$work/replay.png}
 
 chrome() {

@@ -21,12 +21,8 @@ if [ "$dir" = "--fixture" ]; then
   dir="$tmp_fixture/results"
   make_fixture_report "$root" "$dir"
 fi
-index="$dir/report/index.html"
-if [ ! -f "$index" ]; then
-  echo "screenshot_report: $index not found (run reports/make_report.py $dir first)" >&2
-  exit 2
-fi
-index=$(cd "$(dirname "$index")" && pwd)/index.html
+index=$(page_path screenshot_report "$dir/report/index.html" \
+  "run reports/make_report.py $dir first")
 out=${2:-$(dirname "$index")/screenshot.png}
 
 find_chromium screenshot_report

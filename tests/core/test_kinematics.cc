@@ -319,17 +319,24 @@ TEST(InitialConfiguration, FlatGroundGivesDesignHeight) {
   }
 }
 
+// Platform pose (R, p) of the initial configuration at (x0, y0, yaw0) with
+// zero joint angles on an incline of slope beta ascending towards `ascent`.
+void InclineStart(double beta, double ascent, double x0, double y0, double yaw0,
+                  Mat3* R, Vec3* p) {
+  const KinematicModel model(RobotGeometry{},
+                             std::make_shared<InclineTerrain>(beta, ascent));
+  const Configuration theta =
+      SolveInitialConfiguration(model, x0, y0, yaw0, {0, 0, 0, 0, 0, 0});
+  model.PlatformPose(theta, R, p);
+}
+
 TEST(InitialConfiguration, InclineGivesSlopePitchAndRoll) {
   const double beta = 10.0 * M_PI / 180;
+  Mat3 R;
+  Vec3 p;
   // Straight uphill: nose up by beta (pitch = -beta with R = Rz Ry Rx).
   {
-    const KinematicModel model(RobotGeometry{},
-                               std::make_shared<InclineTerrain>(beta, 0.0));
-    const Configuration theta =
-        SolveInitialConfiguration(model, 0, 0, 0, {0, 0, 0, 0, 0, 0});
-    Mat3 R;
-    Vec3 p;
-    model.PlatformPose(theta, &R, &p);
+    InclineStart(beta, 0.0, 0, 0, 0, &R, &p);
     const Vec3 rpy = RpyFromRotation(R);
     EXPECT_NEAR(rpy(0), 0.0, 1e-10);
     EXPECT_NEAR(rpy(1), -beta, 1e-10);
@@ -338,27 +345,15 @@ TEST(InitialConfiguration, InclineGivesSlopePitchAndRoll) {
   }
   // Across the slope (heading +x, ascent along +y): roll = -beta (left up).
   {
-    const KinematicModel model(
-        RobotGeometry{}, std::make_shared<InclineTerrain>(beta, M_PI / 2));
-    const Configuration theta =
-        SolveInitialConfiguration(model, 0, 0, 0, {0, 0, 0, 0, 0, 0});
-    Mat3 R;
-    Vec3 p;
-    model.PlatformPose(theta, &R, &p);
+    InclineStart(beta, M_PI / 2, 0, 0, 0, &R, &p);
     const Vec3 rpy = RpyFromRotation(R);
     EXPECT_NEAR(rpy(0), beta, 1e-10);
     EXPECT_NEAR(rpy(1), 0.0, 1e-10);
   }
   // Oblique: the platform z axis is the plane normal.
   {
-    auto terrain = std::make_shared<InclineTerrain>(beta, 0.7);
-    const KinematicModel model(RobotGeometry{}, terrain);
-    const Configuration theta =
-        SolveInitialConfiguration(model, 0.1, -0.2, 1.9, {0, 0, 0, 0, 0, 0});
-    Mat3 R;
-    Vec3 p;
-    model.PlatformPose(theta, &R, &p);
-    const TerrainJet jet = terrain->Evaluate(0, 0);
+    InclineStart(beta, 0.7, 0.1, -0.2, 1.9, &R, &p);
+    const TerrainJet jet = InclineTerrain(beta, 0.7).Evaluate(0, 0);
     const Vec3 n = Vec3(-jet.hx, -jet.hy, 1).normalized();
     EXPECT_LT((R.col(2) - n).norm(), 1e-10);
   }
