@@ -258,22 +258,22 @@ OptionTable IdaIntegrator::option_table() const {
       OptionSpec::Double("baumgarte_sigma", 5.0,
                          "Baumgarte gain sigma [1/s] of the index-1 form")
           .AtLeast(0),
+  };
+  const OptionTable projection = ProjectionSettings::Options(
+      "index 2: initial and final projection until ||H||_inf <= this");
+  table.insert(table.end(), projection.begin(), projection.end());
+  table.push_back(
       OptionSpec::Double("multiplier_atol", 1e3,
                          "absolute tolerance of the multipliers nu in IDA's "
                          "Newton test (they are excluded from the error test)")
-          .GreaterThan(0),
-      OptionSpec::Bool("suppress_alg", true,
-                       "exclude the algebraic variables from the error test "
-                       "(IDASetSuppressAlg)"),
-  };
-  // In the documented order: dae_index, baumgarte_sigma, the projection's
-  // two, multiplier_atol, the step controls, suppress_alg.
-  const OptionTable projection = ProjectionSettings::Options(
-      "index 2: initial and final projection until ||H||_inf <= this");
+          .GreaterThan(0));
   const OptionTable controls =
       sundials_internal::StepControlOptions(kIdaStepControls, "IDASet");
-  table.insert(table.begin() + 2, projection.begin(), projection.end());
-  table.insert(table.end() - 1, controls.begin(), controls.end());
+  table.insert(table.end(), controls.begin(), controls.end());
+  table.push_back(
+      OptionSpec::Bool("suppress_alg", true,
+                       "exclude the algebraic variables from the error test "
+                       "(IDASetSuppressAlg)"));
   return table;
 }
 
