@@ -144,51 +144,11 @@ IntegratorStatus Integrator::Integrate(ConstrainedOde& ode, double t0,
   return result->status;
 }
 
-namespace {
-Registry<Integrator>& IntegratorRegistryInstance() {
+template <>
+Registry<Integrator>& BackendRegistry<Integrator>::Instance() {
   static Registry<Integrator> registry("integrator backend");
   return registry;
 }
-}  // namespace
-
-void IntegratorRegistry::Register(const std::string& name,
-                                  const std::string& description,
-                                  Factory factory) {
-  BackendInfo info;
-  info.description = description;
-  IntegratorRegistryInstance().Register(name, std::move(info),
-                                        std::move(factory));
-}
-
-void IntegratorRegistry::Register(const std::string& name, BackendInfo info,
-                                  Factory factory) {
-  IntegratorRegistryInstance().Register(name, std::move(info),
-                                        std::move(factory));
-}
-
-std::unique_ptr<Integrator> IntegratorRegistry::Create(
-    const std::string& name) {
-  return IntegratorRegistryInstance().Create(name);
-}
-
-bool IntegratorRegistry::Has(const std::string& name) {
-  return IntegratorRegistryInstance().Has(name);
-}
-
-std::vector<std::string> IntegratorRegistry::Names() {
-  return IntegratorRegistryInstance().Names();
-}
-
-std::string IntegratorRegistry::Description(const std::string& name) {
-  return IntegratorRegistryInstance().Description(name);
-}
-
-BackendInfo IntegratorRegistry::Info(const std::string& name) {
-  return IntegratorRegistryInstance().Info(name);
-}
-
-std::string IntegratorRegistry::WithRole(BackendRole role) {
-  return IntegratorRegistryInstance().WithRole(role);
-}
+template class BackendRegistry<Integrator>;
 
 }  // namespace quasiroll

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "quasiroll/core/backend_info.h"
+#include "quasiroll/core/backend_registry.h"
 #include "quasiroll/core/options.h"
 
 namespace quasiroll {
@@ -195,24 +196,9 @@ class Integrator {
                            IntegratorResult* result) = 0;
 };
 
-class IntegratorRegistry {
- public:
-  using Factory = std::function<std::unique_ptr<Integrator>()>;
-  static void Register(const std::string& name, const std::string& description,
-                       Factory factory);
-  static std::unique_ptr<Integrator> Create(const std::string& name);
-  static bool Has(const std::string& name);
-  static std::vector<std::string> Names();
-  static std::string Description(const std::string& name);
-  // With the info a backend registers about itself (core/backend_info.h).
-  static void Register(const std::string& name, BackendInfo info,
-                       Factory factory);
-  // Empty for an unknown name.
-  static BackendInfo Info(const std::string& name);
-  // The first registered name (in name order) with `role`; throws
-  // std::invalid_argument when none has it.
-  static std::string WithRole(BackendRole role);
-};
+// Name -> factory registry of integrator backends
+// (core/backend_registry.h).
+using IntegratorRegistry = BackendRegistry<Integrator>;
 
 // Defined in integrators/registry.cc. Idempotent; call once before Create().
 void RegisterBuiltinIntegrators();

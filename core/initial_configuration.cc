@@ -31,26 +31,39 @@ void WheelPose(const KinematicModel& model, const Placement& pl, const Mat3& R,
   *p_W = p + R * p_PW;
 }
 
+// Wheel i at the contact variables q: its pose in world (platform pose from
+// q(0..2)) and the wheel and ground forms at its contact coordinates
+// q(k..k+3), k = 3 + 4 i. The ground point must be in the terrain's domain.
+struct WheelContact {
+  Mat3 R_GW;
+  Vec3 p_W;
+  SurfaceForms wheel, ground;
+};
+WheelContact EvaluateWheelContact(const KinematicModel& model,
+                                  const Placement& pl, const Vec15& q, int i) {
+  const Mat3 R = RotationFromRpy(q(1), q(2), pl.yaw0);
+  const Vec3 p(pl.x0, pl.y0, q(0));
+  const RobotGeometry& g = model.geometry();
+  const int k = 3 + 4 * i;
+  WheelContact c;
+  WheelPose(model, pl, R, p, i, &c.R_GW, &c.p_W);
+  c.wheel = TorusForms(g.major_radius, g.tube_radius, q(k), q(k + 1));
+  c.ground = TerrainForms(model.terrain().Evaluate(q(k + 2), q(k + 3)),
+                          q(k + 2), q(k + 3));
+  return c;
+}
+
 // Residual of (C1), (C2) for all three wheels; false if a contact point left
 // the terrain's domain.
 bool ContactResidual(const KinematicModel& model, const Placement& pl,
                      const Vec15& q, Vec15* res) {
-  const Mat3 R = RotationFromRpy(q(1), q(2), pl.yaw0);
-  const Vec3 p(pl.x0, pl.y0, q(0));
-  const RobotGeometry& g = model.geometry();
   for (int i = 0; i < 3; ++i) {
     const int k = 3 + 4 * i;
-    Mat3 R_GW;
-    Vec3 p_W;
-    WheelPose(model, pl, R, p, i, &R_GW, &p_W);
-    const SurfaceForms wheel =
-        TorusForms(g.major_radius, g.tube_radius, q(k), q(k + 1));
     if (!model.terrain().Contains(q(k + 2), q(k + 3))) return false;
-    const SurfaceForms ground = TerrainForms(
-        model.terrain().Evaluate(q(k + 2), q(k + 3)), q(k + 2), q(k + 3));
-    res->segment<3>(5 * i) = p_W + R_GW * wheel.point - ground.point;
-    const Vec3 n_w = R_GW * wheel.frame.col(2);
-    res->segment<2>(5 * i + 3) = ground.frame.leftCols<2>().transpose() * n_w;
+    const WheelContact c = EvaluateWheelContact(model, pl, q, i);
+    res->segment<3>(5 * i) = c.p_W + c.R_GW * c.wheel.point - c.ground.point;
+    const Vec3 n_w = c.R_GW * c.wheel.frame.col(2);
+    res->segment<2>(5 * i + 3) = c.ground.frame.leftCols<2>().transpose() * n_w;
   }
   return res->allFinite();
 }
@@ -167,21 +180,13 @@ int SolveContacts(const KinematicModel& model, const Placement& pl,
 // with its inner side, which the contact model does not describe.
 Configuration AssembleConfiguration(const KinematicModel& model,
                                     const Placement& pl, const Vec15& q) {
-  const RobotGeometry& g = model.geometry();
   Configuration theta;
-  const Mat3 R = RotationFromRpy(q(1), q(2), pl.yaw0);
-  const Vec3 p(pl.x0, pl.y0, q(0));
   for (int i = 0; i < 3; ++i) {
     const int k = 3 + 4 * i;
-    Mat3 R_GW;
-    Vec3 p_W;
-    WheelPose(model, pl, R, p, i, &R_GW, &p_W);
-    const SurfaceForms wheel =
-        TorusForms(g.major_radius, g.tube_radius, q(k), q(k + 1));
-    const SurfaceForms ground = TerrainForms(
-        model.terrain().Evaluate(q(k + 2), q(k + 3)), q(k + 2), q(k + 3));
-    const Vec3 x_w = R_GW * wheel.frame.col(0);
-    const Vec3 n_w = R_GW * wheel.frame.col(2);
+    const WheelContact c = EvaluateWheelContact(model, pl, q, i);
+    const SurfaceForms& ground = c.ground;
+    const Vec3 x_w = c.R_GW * c.wheel.frame.col(0);
+    const Vec3 n_w = c.R_GW * c.wheel.frame.col(2);
     if (!(n_w.dot(ground.frame.col(2)) < 0)) {
       throw GeometryError("initial: wheel " + std::to_string(i + 1) +
                           " touches the terrain with its inner side "

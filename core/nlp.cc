@@ -507,50 +507,11 @@ void NlpSolver::CheckAnswer(const NlpProblem& problem,
   }
 }
 
-namespace {
-Registry<NlpSolver>& NlpSolverRegistryInstance() {
+template <>
+Registry<NlpSolver>& BackendRegistry<NlpSolver>::Instance() {
   static Registry<NlpSolver> registry("NLP backend");
   return registry;
 }
-}  // namespace
-
-void NlpSolverRegistry::Register(const std::string& name,
-                                 const std::string& description,
-                                 Factory factory) {
-  BackendInfo info;
-  info.description = description;
-  NlpSolverRegistryInstance().Register(name, std::move(info),
-                                       std::move(factory));
-}
-
-void NlpSolverRegistry::Register(const std::string& name, BackendInfo info,
-                                 Factory factory) {
-  NlpSolverRegistryInstance().Register(name, std::move(info),
-                                       std::move(factory));
-}
-
-std::unique_ptr<NlpSolver> NlpSolverRegistry::Create(const std::string& name) {
-  return NlpSolverRegistryInstance().Create(name);
-}
-
-bool NlpSolverRegistry::Has(const std::string& name) {
-  return NlpSolverRegistryInstance().Has(name);
-}
-
-std::vector<std::string> NlpSolverRegistry::Names() {
-  return NlpSolverRegistryInstance().Names();
-}
-
-std::string NlpSolverRegistry::Description(const std::string& name) {
-  return NlpSolverRegistryInstance().Description(name);
-}
-
-BackendInfo NlpSolverRegistry::Info(const std::string& name) {
-  return NlpSolverRegistryInstance().Info(name);
-}
-
-std::string NlpSolverRegistry::WithRole(BackendRole role) {
-  return NlpSolverRegistryInstance().WithRole(role);
-}
+template class BackendRegistry<NlpSolver>;
 
 }  // namespace quasiroll

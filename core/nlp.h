@@ -59,6 +59,7 @@
 #include <vector>
 
 #include "quasiroll/core/backend_info.h"
+#include "quasiroll/core/backend_registry.h"
 #include "quasiroll/core/options.h"
 
 namespace quasiroll {
@@ -302,28 +303,8 @@ double MaxConstraintViolation(const Eigen::Ref<const Eigen::VectorXd>& x,
                               const Eigen::Ref<const Eigen::VectorXd>& g_lb,
                               const Eigen::Ref<const Eigen::VectorXd>& g_ub);
 
-// Name -> factory registry. Built-in backends are added by
-// RegisterBuiltinNlpSolvers() (solvers/registry.cc, one line each); plugins
-// call Register() themselves.
-class NlpSolverRegistry {
- public:
-  using Factory = std::function<std::unique_ptr<NlpSolver>()>;
-  static void Register(const std::string& name, const std::string& description,
-                       Factory factory);
-  // Throws std::invalid_argument naming the unknown backend and the known ones.
-  static std::unique_ptr<NlpSolver> Create(const std::string& name);
-  static bool Has(const std::string& name);
-  static std::vector<std::string> Names();
-  static std::string Description(const std::string& name);
-  // With the info a backend registers about itself (core/backend_info.h).
-  static void Register(const std::string& name, BackendInfo info,
-                       Factory factory);
-  // Empty for an unknown name.
-  static BackendInfo Info(const std::string& name);
-  // The first registered name (in name order) with `role`; throws
-  // std::invalid_argument when none has it.
-  static std::string WithRole(BackendRole role);
-};
+// Name -> factory registry of NLP backends (core/backend_registry.h).
+using NlpSolverRegistry = BackendRegistry<NlpSolver>;
 
 // Defined in solvers/registry.cc (library quasiroll::solvers): registers every
 // backend compiled in. Idempotent and thread-safe; call once before Create().

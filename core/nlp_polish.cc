@@ -188,6 +188,54 @@ bool LooksLocallyInfeasible(const NlpProblem& problem, const NlpBounds& b,
   return grad.lpNorm<Eigen::Infinity>() <= kInfeasibleStationarity * scale;
 }
 
+void EqualityRows(const NlpBounds& bounds, std::vector<int>* rows) {
+  rows->clear();
+  for (int i = 0; i < bounds.g_lb.size(); ++i)
+    if (bounds.g_lb(i) == bounds.g_ub(i)) rows->push_back(i);
+}
+
+void ClassifyRows(const NlpBounds& bounds, std::vector<int>* eq_rows,
+                  std::vector<int>* side_rows, std::vector<double>* side_sign) {
+  eq_rows->clear();
+  side_rows->clear();
+  side_sign->clear();
+  for (int i = 0; i < bounds.g_lb.size(); ++i) {
+    if (bounds.g_lb(i) == bounds.g_ub(i)) {
+      eq_rows->push_back(i);
+      continue;
+    }
+    if (std::isfinite(bounds.g_lb(i))) {
+      side_rows->push_back(i);
+      side_sign->push_back(-1.0);
+    }
+    if (std::isfinite(bounds.g_ub(i))) {
+      side_rows->push_back(i);
+      side_sign->push_back(+1.0);
+    }
+  }
+}
+
+bool EqualityResidual(const Eigen::VectorXd& g, const Eigen::VectorXd& g_lb,
+                      const std::vector<int>& rows, Eigen::VectorXd* r) {
+  for (std::size_t k = 0; k < rows.size(); ++k)
+    (*r)(static_cast<Eigen::Index>(k)) = g(rows[k]) - g_lb(rows[k]);
+  return r->allFinite();
+}
+
+bool StartSquareSystem(const NlpProblem& problem,
+                       const Eigen::Ref<const Eigen::VectorXd>& x0,
+                       const NlpBounds& bounds, const std::vector<int>& rows,
+                       Eigen::VectorXd* g, Eigen::VectorXd* r,
+                       NlpResult* result) {
+  result->x = x0;
+  problem.Constraints(result->x, *g);
+  ++result->constraint_evaluations;
+  if (EqualityResidual(*g, bounds.g_lb, rows, r)) return true;
+  result->status = NlpStatus::kNumericalFailure;
+  result->backend_status = "non-finite residual at the starting point";
+  return false;
+}
+
 NlpStatus ClassifySquareSystemRoot(const NlpBounds& b,
                                    const Eigen::Ref<const Eigen::VectorXd>& x,
                                    const Eigen::Ref<const Eigen::VectorXd>& g,

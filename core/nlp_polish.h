@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <vector>
 
 #include "quasiroll/core/nlp.h"
 
@@ -89,6 +90,30 @@ bool LooksLocallyInfeasible(const NlpProblem& problem, const NlpBounds& bounds,
 // Sets result->status and result->backend_status ("converged in <iterations>
 // iterations, |r|_inf = <residual_inf>" or "root found in <iterations>
 // iterations violates bounds/inequalities by <viol>"); returns the status.
+// Newton-type backends on a square equality system (newton, the example
+// plugin's lm) work on the equality rows E = {i : g_lb_i == g_ub_i} and
+// their residual r = g_E - g_lb_E:
+//   EqualityRows:      *rows = E, in row order (allocation-free once
+//                      reserved);
+//   EqualityResidual:  *r = g_E - g_lb_E (r sized |E|); false if non-finite;
+//   StartSquareSystem: result->x = x0, *g = g(x0) (counted in
+//                      result->constraint_evaluations), *r its residual;
+//                      false, with kNumericalFailure set, when r is
+//                      non-finite.
+void EqualityRows(const NlpBounds& bounds, std::vector<int>* rows);
+// Every row of g by kind, in row order: the equalities into *eq_rows, each
+// finite side of the others into *side_rows with *side_sign -1 for
+// g_lb_i <= g_i (listed first) and +1 for g_i <= g_ub_i.
+void ClassifyRows(const NlpBounds& bounds, std::vector<int>* eq_rows,
+                  std::vector<int>* side_rows, std::vector<double>* side_sign);
+bool EqualityResidual(const Eigen::VectorXd& g, const Eigen::VectorXd& g_lb,
+                      const std::vector<int>& rows, Eigen::VectorXd* r);
+bool StartSquareSystem(const NlpProblem& problem,
+                       const Eigen::Ref<const Eigen::VectorXd>& x0,
+                       const NlpBounds& bounds, const std::vector<int>& rows,
+                       Eigen::VectorXd* g, Eigen::VectorXd* r,
+                       NlpResult* result);
+
 NlpStatus ClassifySquareSystemRoot(const NlpBounds& bounds,
                                    const Eigen::Ref<const Eigen::VectorXd>& x,
                                    const Eigen::Ref<const Eigen::VectorXd>& g,

@@ -1,6 +1,7 @@
 // Name -> (BackendInfo, factory) registry shared by the NLP and integrator
 // plugin registries (NlpSolverRegistry in nlp.h, IntegratorRegistry in
-// dae.h). Thread-safe.
+// dae.h), and the members of their static facade BackendRegistry<Product>
+// (backend_registry.h). Thread-safe.
 #pragma once
 
 #include <functional>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "quasiroll/core/backend_info.h"
+#include "quasiroll/core/backend_registry.h"
 
 namespace quasiroll {
 
@@ -103,5 +105,53 @@ class Registry {
   mutable std::mutex mutex_;
   std::map<std::string, Entry> table_;
 };
+
+// BackendRegistry<Product>: forwards to Instance(), which nlp.cc / dae.cc
+// specialise.
+template <typename Product>
+void BackendRegistry<Product>::Register(const std::string& name,
+                                        const std::string& description,
+                                        Factory factory) {
+  BackendInfo info;
+  info.description = description;
+  Instance().Register(name, std::move(info), std::move(factory));
+}
+
+template <typename Product>
+void BackendRegistry<Product>::Register(const std::string& name,
+                                        BackendInfo info, Factory factory) {
+  Instance().Register(name, std::move(info), std::move(factory));
+}
+
+template <typename Product>
+std::unique_ptr<Product> BackendRegistry<Product>::Create(
+    const std::string& name) {
+  return Instance().Create(name);
+}
+
+template <typename Product>
+bool BackendRegistry<Product>::Has(const std::string& name) {
+  return Instance().Has(name);
+}
+
+template <typename Product>
+std::vector<std::string> BackendRegistry<Product>::Names() {
+  return Instance().Names();
+}
+
+template <typename Product>
+std::string BackendRegistry<Product>::Description(const std::string& name) {
+  return Instance().Description(name);
+}
+
+template <typename Product>
+BackendInfo BackendRegistry<Product>::Info(const std::string& name) {
+  return Instance().Info(name);
+}
+
+template <typename Product>
+std::string BackendRegistry<Product>::WithRole(BackendRole role) {
+  return Instance().WithRole(role);
+}
 
 }  // namespace quasiroll

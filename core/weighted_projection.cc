@@ -7,6 +7,25 @@
 
 namespace quasiroll {
 
+OptionTable ProjectionSettings::Options(const std::string& tolerance_doc,
+                                        const std::string& iterations_doc) {
+  const ProjectionSettings defaults;
+  return {OptionSpec::Double("projection_tolerance", defaults.tolerance,
+                             tolerance_doc)
+              .GreaterThan(0),
+          OptionSpec::Int("max_projection_iterations", defaults.max_iterations,
+                          iterations_doc)
+              .AtLeast(1)};
+}
+
+ProjectionSettings ProjectionSettings::From(const OptionValues& values) {
+  ProjectionSettings settings;
+  settings.tolerance = values.GetDouble("projection_tolerance");
+  settings.max_iterations =
+      static_cast<int>(values.GetInt("max_projection_iterations"));
+  return settings;
+}
+
 void WeightedProjection::Begin(const ConstrainedOde& ode) {
   const int n = ode.state_size(), m = ode.num_constraints();
   if (n != n_ || m != m_) {

@@ -31,6 +31,23 @@
 
 namespace quasiroll {
 
+// The two backend options of a Newton projection, spelled alike by every
+// backend that projects (rk-projection, cvode-projection, ida, plugins):
+//   projection_tolerance       > 0: stop when ||H||_inf <= this
+//   max_projection_iterations  >= 1: corrections per projection
+struct ProjectionSettings {
+  double tolerance = 1e-12;
+  int max_iterations = 10;
+
+  // The two OptionSpecs, with the defaults above and the given docs.
+  static OptionTable Options(
+      const std::string& tolerance_doc =
+          "projection stops when ||H||_inf <= this",
+      const std::string& iterations_doc = "Newton corrections per projection");
+  // The two settings from resolved backend options.
+  static ProjectionSettings From(const OptionValues& values);
+};
+
 class WeightedProjection {
  public:
   // Sizes the workspaces and loads the weights d from ode (call once per
@@ -61,6 +78,13 @@ class WeightedProjection {
                            Eigen::Ref<Eigen::VectorXd> y, double tol,
                            int max_iterations, IntegratorResult* result,
                            bool* moved);
+  IntegratorStatus Project(const ConstrainedOde& ode,
+                           Eigen::Ref<Eigen::VectorXd> y,
+                           const ProjectionSettings& settings,
+                           IntegratorResult* result, bool* moved) {
+    return Project(ode, y, settings.tolerance, settings.max_iterations, result,
+                   moved);
+  }
 
   // Why the last Factorize() / Project() failed. The caller decides where it
   // goes (result->message, or a backend's own record when the failure is

@@ -16,6 +16,11 @@ using Eigen::Map;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
+namespace {
+// CVODE's own defaults of the step controls.
+constexpr sundials_internal::StepControls kCvodeStepControls{5, 3, 10, 7};
+}  // namespace
+
 struct CvodeProjectionIntegrator::Impl {
   Impl() : context("cvode-projection") {}
   ~Impl() { Free(); }
@@ -62,9 +67,8 @@ struct CvodeProjectionIntegrator::Impl {
   // in last_message) on failure.
   bool Project(Eigen::Ref<VectorXd> state) {
     bool moved = false;
-    if (projection.Project(*ode, state, projection_tolerance,
-                           max_projection_iterations, result,
-                           &moved) == IntegratorStatus::kSuccess)
+    if (projection.Project(*ode, state, projection_settings, result, &moved) ==
+        IntegratorStatus::kSuccess)
       return true;
     last_message = projection.message();
     return false;
@@ -124,12 +128,8 @@ struct CvodeProjectionIntegrator::Impl {
   }
 
   // Backend options.
-  double projection_tolerance = 1e-12;
-  int max_projection_iterations = 10;
-  int max_order = 5;
-  int max_nonlin_iters = 3;
-  int max_conv_fails = 10;
-  int max_err_test_fails = 7;
+  ProjectionSettings projection_settings;
+  sundials_internal::StepControls controls = kCvodeStepControls;
   bool proj_err_est = true;
   long proj_frequency = 1;
   int max_proj_fails = 10;
@@ -161,26 +161,13 @@ CvodeProjectionIntegrator::CvodeProjectionIntegrator()
 CvodeProjectionIntegrator::~CvodeProjectionIntegrator() = default;
 
 OptionTable CvodeProjectionIntegrator::option_table() const {
-  return {
-      OptionSpec::Double("projection_tolerance", 1e-12,
-                         "projection stops when ||H||_inf <= this")
-          .GreaterThan(0),
-      OptionSpec::Int("max_projection_iterations", 10,
-                      "Newton corrections per projection (more: a "
-                      "recoverable projection failure)")
-          .AtLeast(1),
-      OptionSpec::Int("max_order", 5, "largest BDF order (CVodeSetMaxOrd)")
-          .AtLeast(1)
-          .AtMost(5),
-      OptionSpec::Int("max_nonlin_iters", 3,
-                      "Newton iterations per step (CVodeSetMaxNonlinIters)")
-          .AtLeast(1),
-      OptionSpec::Int("max_conv_fails", 10,
-                      "Newton failures per step (CVodeSetMaxConvFails)")
-          .AtLeast(1),
-      OptionSpec::Int("max_err_test_fails", 7,
-                      "error-test failures per step (CVodeSetMaxErrTestFails)")
-          .AtLeast(1),
+  OptionTable table = ProjectionSettings::Options(
+      "projection stops when ||H||_inf <= this",
+      "Newton corrections per projection (more: a recoverable projection "
+      "failure)");
+  const OptionTable controls =
+      sundials_internal::StepControlOptions(kCvodeStepControls, "CVodeSet");
+  const OptionTable projection_controls = {
       OptionSpec::Bool("proj_err_est", true,
                        "project the local error estimate too "
                        "(CVodeSetProjErrEst)"),
@@ -197,18 +184,17 @@ OptionTable CvodeProjectionIntegrator::option_table() const {
           .GreaterThan(0)
           .AtMost(1),
   };
+  table.insert(table.end(), controls.begin(), controls.end());
+  table.insert(table.end(), projection_controls.begin(),
+               projection_controls.end());
+  return table;
 }
 
 void CvodeProjectionIntegrator::ApplyBackendOptions(
     const OptionValues& values) {
   Impl& s = *impl_;
-  s.projection_tolerance = values.GetDouble("projection_tolerance");
-  s.max_projection_iterations =
-      static_cast<int>(values.GetInt("max_projection_iterations"));
-  s.max_order = static_cast<int>(values.GetInt("max_order"));
-  s.max_nonlin_iters = static_cast<int>(values.GetInt("max_nonlin_iters"));
-  s.max_conv_fails = static_cast<int>(values.GetInt("max_conv_fails"));
-  s.max_err_test_fails = static_cast<int>(values.GetInt("max_err_test_fails"));
+  s.projection_settings = ProjectionSettings::From(values);
+  s.controls = sundials_internal::StepControlsFrom(values);
   s.proj_err_est = values.GetBool("proj_err_est");
   s.proj_frequency = static_cast<long>(values.GetInt("proj_frequency"));
   s.max_proj_fails = static_cast<int>(values.GetInt("max_proj_fails"));
@@ -271,9 +257,8 @@ int CvodeProjectionIntegrator::Impl::Configure(
       &CVodeSetMaxNumSteps,  &CVodeSetMinStep,        &CVodeSetInitStep,
       &CVodeSetStopTime,     &CVodeSetMaxOrd,         &CVodeSetMaxNonlinIters,
       &CVodeSetMaxConvFails, &CVodeSetMaxErrTestFails};
-  flag = sundials_internal::ApplyStepControls(
-      kSetters, mem, options, t1,
-      {max_order, max_nonlin_iters, max_conv_fails, max_err_test_fails}, flag);
+  flag = sundials_internal::ApplyStepControls(kSetters, mem, options, t1,
+                                              controls, flag);
   if (flag == CV_SUCCESS && ode->num_constraints() > 0) {
     flag = CVodeSetProjErrEst(mem, proj_err_est ? SUNTRUE : SUNFALSE);
     if (flag == CV_SUCCESS) flag = CVodeSetProjFrequency(mem, proj_frequency);

@@ -17,6 +17,11 @@ using Eigen::Map;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
+namespace {
+// IDA's own defaults of the step controls.
+constexpr sundials_internal::StepControls kIdaStepControls{5, 4, 10, 10};
+}  // namespace
+
 struct IdaIntegrator::Impl {
   Impl() : context("ida") {}
   ~Impl() { Free(); }
@@ -64,13 +69,9 @@ struct IdaIntegrator::Impl {
   struct Settings {
     int dae_index = 2;
     double sigma = 5.0;
-    double projection_tolerance = 1e-12;
-    int max_projection_iterations = 10;
+    ProjectionSettings projection;
     double multiplier_atol = 1e3;
-    int max_order = 5;
-    int max_nonlin_iters = 4;
-    int max_conv_fails = 10;
-    int max_err_test_fails = 10;
+    sundials_internal::StepControls controls = kIdaStepControls;
     bool suppress_alg = true;
   } settings;
 
@@ -248,7 +249,7 @@ int IdaIntegrator::Impl::RootFunction(double t, N_Vector yy, N_Vector /*yp*/,
 IdaIntegrator::IdaIntegrator() : impl_(std::make_unique<Impl>()) {}
 
 OptionTable IdaIntegrator::option_table() const {
-  return {
+  OptionTable table = {
       OptionSpec::Int("dae_index", 2,
                       "2: index-2 GGL residual (H = 0 exact); 1: index-1 "
                       "Baumgarte residual J x' + sigma H = 0")
@@ -257,47 +258,32 @@ OptionTable IdaIntegrator::option_table() const {
       OptionSpec::Double("baumgarte_sigma", 5.0,
                          "Baumgarte gain sigma [1/s] of the index-1 form")
           .AtLeast(0),
-      OptionSpec::Double("projection_tolerance", 1e-12,
-                         "index 2: initial and final projection until "
-                         "||H||_inf <= this")
-          .GreaterThan(0),
-      OptionSpec::Int("max_projection_iterations", 10,
-                      "Newton corrections per projection")
-          .AtLeast(1),
+  };
+  const OptionTable projection = ProjectionSettings::Options(
+      "index 2: initial and final projection until ||H||_inf <= this");
+  table.insert(table.end(), projection.begin(), projection.end());
+  table.push_back(
       OptionSpec::Double("multiplier_atol", 1e3,
                          "absolute tolerance of the multipliers nu in IDA's "
                          "Newton test (they are excluded from the error test)")
-          .GreaterThan(0),
-      OptionSpec::Int("max_order", 5, "largest BDF order (IDASetMaxOrd)")
-          .AtLeast(1)
-          .AtMost(5),
-      OptionSpec::Int("max_nonlin_iters", 4,
-                      "Newton iterations per step (IDASetMaxNonlinIters)")
-          .AtLeast(1),
-      OptionSpec::Int("max_conv_fails", 10,
-                      "Newton failures per step (IDASetMaxConvFails)")
-          .AtLeast(1),
-      OptionSpec::Int("max_err_test_fails", 10,
-                      "error-test failures per step (IDASetMaxErrTestFails)")
-          .AtLeast(1),
+          .GreaterThan(0));
+  const OptionTable controls =
+      sundials_internal::StepControlOptions(kIdaStepControls, "IDASet");
+  table.insert(table.end(), controls.begin(), controls.end());
+  table.push_back(
       OptionSpec::Bool("suppress_alg", true,
                        "exclude the algebraic variables from the error test "
-                       "(IDASetSuppressAlg)"),
-  };
+                       "(IDASetSuppressAlg)"));
+  return table;
 }
 
 void IdaIntegrator::ApplyBackendOptions(const OptionValues& values) {
   Impl::Settings& s = impl_->settings;
   s.dae_index = static_cast<int>(values.GetInt("dae_index"));
   s.sigma = values.GetDouble("baumgarte_sigma");
-  s.projection_tolerance = values.GetDouble("projection_tolerance");
-  s.max_projection_iterations =
-      static_cast<int>(values.GetInt("max_projection_iterations"));
+  s.projection = ProjectionSettings::From(values);
   s.multiplier_atol = values.GetDouble("multiplier_atol");
-  s.max_order = static_cast<int>(values.GetInt("max_order"));
-  s.max_nonlin_iters = static_cast<int>(values.GetInt("max_nonlin_iters"));
-  s.max_conv_fails = static_cast<int>(values.GetInt("max_conv_fails"));
-  s.max_err_test_fails = static_cast<int>(values.GetInt("max_err_test_fails"));
+  s.controls = sundials_internal::StepControlsFrom(values);
   s.suppress_alg = values.GetBool("suppress_alg");
 }
 IdaIntegrator::~IdaIntegrator() = default;
@@ -372,9 +358,8 @@ void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
   if ((status == IntegratorStatus::kSuccess ||
        status == IntegratorStatus::kEvent) &&
       s.settings.dae_index == 2 && m > 0) {
-    const IntegratorStatus projected = s.correction.Project(
-        ode, y, s.settings.projection_tolerance,
-        s.settings.max_projection_iterations, result, &moved);
+    const IntegratorStatus projected =
+        s.correction.Project(ode, y, s.settings.projection, result, &moved);
     if (projected != IntegratorStatus::kSuccess) {
       status = projected;
       result->message = "final projection: " + s.correction.message();
@@ -461,9 +446,8 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
   // --- consistent initial values (x, nu, x') ---
   bool moved = false;
   if (s.settings.dae_index == 2 && m > 0) {
-    const IntegratorStatus status = s.correction.Project(
-        ode, y, s.settings.projection_tolerance,
-        s.settings.max_projection_iterations, result, &moved);
+    const IntegratorStatus status =
+        s.correction.Project(ode, y, s.settings.projection, result, &moved);
     if (status != IntegratorStatus::kSuccess)
       return fail(status, "initial state: " + s.correction.message());
   }
@@ -530,11 +514,8 @@ void IdaIntegrator::ConfigureAndSolve(Impl& s, ConstrainedOde& ode, int flag,
       &IDASetMaxNumSteps,  &IDASetMinStep,        &IDASetInitStep,
       &IDASetStopTime,     &IDASetMaxOrd,         &IDASetMaxNonlinIters,
       &IDASetMaxConvFails, &IDASetMaxErrTestFails};
-  flag = sundials_internal::ApplyStepControls(
-      kSetters, s.mem, options, t1,
-      {s.settings.max_order, s.settings.max_nonlin_iters,
-       s.settings.max_conv_fails, s.settings.max_err_test_fails},
-      flag);
+  flag = sundials_internal::ApplyStepControls(kSetters, s.mem, options, t1,
+                                              s.settings.controls, flag);
   if (flag == IDA_SUCCESS && !s.residual_form)
     flag =
         IDASetSuppressAlg(s.mem, s.settings.suppress_alg ? SUNTRUE : SUNFALSE);

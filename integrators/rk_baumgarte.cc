@@ -24,14 +24,11 @@ IntegratorStatus RkBaumgarteIntegrator::CorrectedField::Field(
 }
 
 OptionTable RkBaumgarteIntegrator::option_table() const {
-  OptionTable table = {
-      OptionSpec::Double("baumgarte_sigma", 5.0,
-                         "Baumgarte gain sigma [1/s]: J y' = -sigma H (RK4 "
-                         "is stable for sigma h < 2.785)")
-          .AtLeast(0)};
-  for (OptionSpec& s : integrators_internal::RkOptionTable())
-    table.push_back(std::move(s));
-  return table;
+  return integrators_internal::RkOptionTable(
+      {OptionSpec::Double("baumgarte_sigma", 5.0,
+                          "Baumgarte gain sigma [1/s]: J y' = -sigma H (RK4 "
+                          "is stable for sigma h < 2.785)")
+           .AtLeast(0)});
 }
 
 void RkBaumgarteIntegrator::ApplyBackendOptions(const OptionValues& values) {

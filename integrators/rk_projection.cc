@@ -12,31 +12,21 @@ IntegratorStatus RkProjectionIntegrator::System::PostStep(
     double /*t*/, Eigen::Ref<Eigen::VectorXd> y, IntegratorResult* result,
     bool* moved) {
   const IntegratorStatus status =
-      correction.Project(*ode, y, tolerance, max_iterations, result, moved);
+      correction.Project(*ode, y, projection, result, moved);
   if (status != IntegratorStatus::kSuccess)
     result->message = correction.message();
   return status;
 }
 
 OptionTable RkProjectionIntegrator::option_table() const {
-  OptionTable table = {
-      OptionSpec::Double("projection_tolerance", 1e-12,
-                         "projection stops when ||H||_inf <= this")
-          .GreaterThan(0),
-      OptionSpec::Int("max_projection_iterations", 10,
-                      "Newton corrections per projection before "
-                      "constraint_failure")
-          .AtLeast(1)};
-  for (OptionSpec& s : integrators_internal::RkOptionTable())
-    table.push_back(std::move(s));
-  return table;
+  return integrators_internal::RkOptionTable(ProjectionSettings::Options(
+      "projection stops when ||H||_inf <= this",
+      "Newton corrections per projection before constraint_failure"));
 }
 
 void RkProjectionIntegrator::ApplyBackendOptions(const OptionValues& values) {
   settings_ = integrators_internal::RkSettingsFrom(values);
-  projection_tolerance_ = values.GetDouble("projection_tolerance");
-  max_projection_iterations_ =
-      static_cast<int>(values.GetInt("max_projection_iterations"));
+  projection_ = ProjectionSettings::From(values);
 }
 
 void RkProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
@@ -45,8 +35,7 @@ void RkProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
                                          const IntegratorOptions& options,
                                          IntegratorResult* result) {
   system_.ode = &ode;
-  system_.tolerance = projection_tolerance_;
-  system_.max_iterations = max_projection_iterations_;
+  system_.projection = projection_;
   system_.correction.Begin(ode);
   bool moved = false;
   const IntegratorStatus status = system_.PostStep(t0, y, result, &moved);

@@ -41,8 +41,7 @@ class RkProjectionIntegrator final : public Integrator {
     IntegratorStatus PostStep(double t, Eigen::Ref<Eigen::VectorXd> y,
                               IntegratorResult* result, bool* moved) override;
     ConstrainedOde* ode = nullptr;
-    double tolerance = 0.0;
-    int max_iterations = 0;
+    ProjectionSettings projection;
     WeightedProjection correction;
   };
 
@@ -53,8 +52,7 @@ class RkProjectionIntegrator final : public Integrator {
 
   System system_;
   integrators_internal::RkSettings settings_;
-  double projection_tolerance_ = 1e-12;
-  int max_projection_iterations_ = 10;
+  ProjectionSettings projection_;
   integrators_internal::RungeKuttaDriver driver_;
 };
 

@@ -5,77 +5,66 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 namespace quasiroll::integrators_internal {
 namespace {
 
-ButcherTableau MakeRk4() {
+// An explicit tableau from the rows 2..s of A below the diagonal (row i has
+// i - 1 entries), the weights b (for an FSAL pair: empty, b is then the last
+// row of A), the nodes c and the embedded weights b_hat (empty: none).
+ButcherTableau Explicit(int order, int embedded_order,
+                        const std::vector<std::vector<double>>& lower,
+                        const std::vector<double>& b,
+                        const std::vector<double>& c,
+                        const std::vector<double>& b_hat) {
   ButcherTableau t;
-  t.stages = 4;
-  t.order = 4;
-  t.a = Eigen::MatrixXd::Zero(4, 4);
-  t.a(1, 0) = 0.5;
-  t.a(2, 1) = 0.5;
-  t.a(3, 2) = 1.0;
-  t.b = Eigen::Vector4d(1.0 / 6, 1.0 / 3, 1.0 / 3, 1.0 / 6);
-  t.c = Eigen::Vector4d(0.0, 0.5, 0.5, 1.0);
+  t.stages = static_cast<int>(c.size());
+  t.order = order;
+  t.embedded_order = embedded_order;
+  t.fsal = b.empty();
+  t.a = Eigen::MatrixXd::Zero(t.stages, t.stages);
+  for (int i = 1; i < t.stages; ++i)
+    for (int j = 0; j < i; ++j)
+      t.a(i, j) =
+          lower[static_cast<std::size_t>(i - 1)][static_cast<std::size_t>(j)];
+  if (t.fsal)
+    t.b = t.a.row(t.stages - 1).transpose();
+  else
+    t.b = Eigen::Map<const Eigen::VectorXd>(b.data(), t.stages);
+  t.c = Eigen::Map<const Eigen::VectorXd>(c.data(), t.stages);
+  t.b_hat = Eigen::Map<const Eigen::VectorXd>(
+      b_hat.data(), static_cast<Eigen::Index>(b_hat.size()));
   return t;
+}
+
+ButcherTableau MakeRk4() {
+  return Explicit(4, 0, {{0.5}, {0.0, 0.5}, {0.0, 0.0, 1.0}},
+                  {1.0 / 6, 1.0 / 3, 1.0 / 3, 1.0 / 6}, {0.0, 0.5, 0.5, 1.0},
+                  {});
 }
 
 // Dormand & Prince (1980), "A family of embedded Runge-Kutta formulae".
 ButcherTableau MakeDormandPrince54() {
-  ButcherTableau t;
-  t.stages = 7;
-  t.order = 5;
-  t.embedded_order = 4;
-  t.fsal = true;
-  t.a = Eigen::MatrixXd::Zero(7, 7);
-  t.a(1, 0) = 1.0 / 5;
-  t.a(2, 0) = 3.0 / 40;
-  t.a(2, 1) = 9.0 / 40;
-  t.a(3, 0) = 44.0 / 45;
-  t.a(3, 1) = -56.0 / 15;
-  t.a(3, 2) = 32.0 / 9;
-  t.a(4, 0) = 19372.0 / 6561;
-  t.a(4, 1) = -25360.0 / 2187;
-  t.a(4, 2) = 64448.0 / 6561;
-  t.a(4, 3) = -212.0 / 729;
-  t.a(5, 0) = 9017.0 / 3168;
-  t.a(5, 1) = -355.0 / 33;
-  t.a(5, 2) = 46732.0 / 5247;
-  t.a(5, 3) = 49.0 / 176;
-  t.a(5, 4) = -5103.0 / 18656;
-  t.a(6, 0) = 35.0 / 384;
-  t.a(6, 2) = 500.0 / 1113;
-  t.a(6, 3) = 125.0 / 192;
-  t.a(6, 4) = -2187.0 / 6784;
-  t.a(6, 5) = 11.0 / 84;
-  t.b = t.a.row(6).transpose();
-  t.b_hat.resize(7);
-  t.b_hat << 5179.0 / 57600, 0.0, 7571.0 / 16695, 393.0 / 640,
-      -92097.0 / 339200, 187.0 / 2100, 1.0 / 40;
-  t.c.resize(7);
-  t.c << 0.0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1.0, 1.0;
-  return t;
+  return Explicit(
+      5, 4,
+      {{1.0 / 5},
+       {3.0 / 40, 9.0 / 40},
+       {44.0 / 45, -56.0 / 15, 32.0 / 9},
+       {19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729},
+       {9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176,
+        -5103.0 / 18656},
+       {35.0 / 384, 0.0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84}},
+      {}, {0.0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1.0, 1.0},
+      {5179.0 / 57600, 0.0, 7571.0 / 16695, 393.0 / 640, -92097.0 / 339200,
+       187.0 / 2100, 1.0 / 40});
 }
 
 // Bogacki & Shampine (1989), "A 3(2) pair of Runge-Kutta formulas".
 ButcherTableau MakeBogackiShampine32() {
-  ButcherTableau t;
-  t.stages = 4;
-  t.order = 3;
-  t.embedded_order = 2;
-  t.fsal = true;
-  t.a = Eigen::MatrixXd::Zero(4, 4);
-  t.a(1, 0) = 1.0 / 2;
-  t.a(2, 1) = 3.0 / 4;
-  t.a(3, 0) = 2.0 / 9;
-  t.a(3, 1) = 1.0 / 3;
-  t.a(3, 2) = 4.0 / 9;
-  t.b = t.a.row(3).transpose();
-  t.b_hat = Eigen::Vector4d(7.0 / 24, 1.0 / 4, 1.0 / 3, 1.0 / 8);
-  t.c = Eigen::Vector4d(0.0, 1.0 / 2, 3.0 / 4, 1.0);
-  return t;
+  return Explicit(
+      3, 2, {{1.0 / 2}, {0.0, 3.0 / 4}, {2.0 / 9, 1.0 / 3, 4.0 / 9}}, {},
+      {0.0, 1.0 / 2, 3.0 / 4, 1.0}, {7.0 / 24, 1.0 / 4, 1.0 / 3, 1.0 / 8});
 }
 
 }  // namespace
@@ -100,8 +89,8 @@ RkMethod RkMethodFromString(const std::string& name) {
                               "' (known: rk4, dp54, bs32)");
 }
 
-OptionTable RkOptionTable() {
-  return {
+OptionTable RkOptionTable(OptionTable own) {
+  const OptionTable shared = {
       OptionSpec::Choice("rk_method", "rk4", {"rk4", "dp54", "bs32"},
                          "RK scheme: classic RK4 (fixed step) or the "
                          "embedded pairs DP5(4), BS3(2) (adaptive)"),
@@ -125,6 +114,8 @@ OptionTable RkOptionTable() {
           .GreaterThan(0)
           .LessThan(1),
   };
+  own.insert(own.end(), shared.begin(), shared.end());
+  return own;
 }
 
 RkSettings RkSettingsFrom(const OptionValues& values) {

@@ -56,9 +56,9 @@ struct RkSettings {
   double max_shrink = 0.2;
   double stage_failure_shrink = 0.25;
 };
-// The options shared by the RK backends: rk_method, safety, max_growth,
-// max_shrink, stage_failure_shrink.
-OptionTable RkOptionTable();
+// A backend's own options followed by those shared by the RK backends:
+// rk_method, safety, max_growth, max_shrink, stage_failure_shrink.
+OptionTable RkOptionTable(OptionTable own);
 RkSettings RkSettingsFrom(const OptionValues& values);
 
 // Butcher tableau, explicit (a strictly lower triangular).

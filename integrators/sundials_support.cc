@@ -67,6 +67,39 @@ int ApplyStepControls(const StepControlSetters& set, void* mem,
   return flag;
 }
 
+OptionTable StepControlOptions(const StepControls& defaults,
+                               const std::string& set_prefix) {
+  return {
+      OptionSpec::Int("max_order", defaults.max_order,
+                      "largest BDF order (" + set_prefix + "MaxOrd)")
+          .AtLeast(1)
+          .AtMost(5),
+      OptionSpec::Int(
+          "max_nonlin_iters", defaults.max_nonlin_iters,
+          "Newton iterations per step (" + set_prefix + "MaxNonlinIters)")
+          .AtLeast(1),
+      OptionSpec::Int(
+          "max_conv_fails", defaults.max_conv_fails,
+          "Newton failures per step (" + set_prefix + "MaxConvFails)")
+          .AtLeast(1),
+      OptionSpec::Int(
+          "max_err_test_fails", defaults.max_err_test_fails,
+          "error-test failures per step (" + set_prefix + "MaxErrTestFails)")
+          .AtLeast(1),
+  };
+}
+
+StepControls StepControlsFrom(const OptionValues& values) {
+  StepControls controls;
+  controls.max_order = static_cast<int>(values.GetInt("max_order"));
+  controls.max_nonlin_iters =
+      static_cast<int>(values.GetInt("max_nonlin_iters"));
+  controls.max_conv_fails = static_cast<int>(values.GetInt("max_conv_fails"));
+  controls.max_err_test_fails =
+      static_cast<int>(values.GetInt("max_err_test_fails"));
+  return controls;
+}
+
 std::string FlagName(char* name, const char* solver, int flag) {
   std::string out = name != nullptr
                         ? name

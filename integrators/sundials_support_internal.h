@@ -121,6 +121,13 @@ struct StepControls {
   int max_conv_fails = 10;
   int max_err_test_fails = 10;
 };
+// The backend options max_order, max_nonlin_iters, max_conv_fails and
+// max_err_test_fails with `defaults` (the solver's own) as defaults;
+// `set_prefix` ("CVodeSet", "IDASet") names the Set functions in the docs.
+OptionTable StepControlOptions(const StepControls& defaults,
+                               const std::string& set_prefix);
+// Those four from resolved backend options.
+StepControls StepControlsFrom(const OptionValues& values);
 int ApplyStepControls(const StepControlSetters& set, void* mem,
                       const IntegratorOptions& options, double t1,
                       const StepControls& controls, int flag);

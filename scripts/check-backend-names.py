@@ -20,6 +20,8 @@ import re
 import subprocess
 import sys
 
+from source_checks import default_root, tracked_files, verdict
+
 EXEMPT = re.compile(r"^(bench/micro/|reports/test_[^/]*\.py$|reports/make_fixture\.py$)")
 CODE = re.compile(r"\.(cc|h|py|js)$")
 
@@ -29,13 +31,12 @@ def main(argv):
         print(__doc__, file=sys.stderr)
         return 2
     cli = argv[0]
-    root = argv[1] if len(argv) > 1 else os.path.join(os.path.dirname(__file__), "..")
+    root = argv[1] if len(argv) > 1 else default_root(__file__)
     listing = json.loads(subprocess.run([cli, "list", "--json"], capture_output=True,
                                         text=True, check=True).stdout)
     names = sorted({b["name"] for kind in ("nlp", "dae") for b in listing[kind]})
     quoted = re.compile("|".join(f"[\"']{re.escape(n)}[\"']" for n in names))
-    files = subprocess.run(["git", "-C", root, "ls-files", "bench", "reports"],
-                           capture_output=True, text=True, check=True).stdout.split()
+    files = tracked_files(root, "bench", "reports")
     hits = []
     for path in files:
         if not CODE.search(path) or EXEMPT.match(path):
@@ -44,15 +45,10 @@ def main(argv):
             for number, line in enumerate(f, 1):
                 if quoted.search(line):
                     hits.append(f"{path}:{number}: {line.strip()}")
-    for hit in hits:
-        print(hit)
-    if hits:
-        print(f"check-backend-names: {len(hits)} line(s) name a backend "
-              f"({', '.join(names)})", file=sys.stderr)
-        return 1
-    print(f"check-backend-names: no backend name in bench/ or reports/ code "
-          f"({len(names)} backends)")
-    return 0
+    return verdict(hits, f"check-backend-names: {len(hits)} line(s) name a backend "
+                         f"({', '.join(names)})",
+                   f"check-backend-names: no backend name in bench/ or reports/ code "
+                   f"({len(names)} backends)")
 
 
 if __name__ == "__main__":

@@ -14,8 +14,9 @@ braces inside them do not count. Exit 1 listing each offender
 """
 import os
 import re
-import subprocess
 import sys
+
+from source_checks import default_root, tracked_files, verdict
 
 CONTROL = re.compile(r"^(if|for|while|switch|catch|do|else)\b")
 SCOPE = re.compile(r"\b(namespace|class|struct|union|enum)\b[^()]*$")
@@ -108,9 +109,8 @@ def main(argv):
         k = args.index("--limit")
         limit = int(args[k + 1])
         del args[k:k + 2]
-    root = args[0] if args else os.path.join(os.path.dirname(__file__), "..")
-    files = subprocess.run(["git", "-C", root, "ls-files", "*.cc", "*.h"],
-                           capture_output=True, text=True, check=True).stdout.split()
+    root = args[0] if args else default_root(__file__)
+    files = tracked_files(root, "*.cc", "*.h")
     offenders = []
     for path in files:
         with open(os.path.join(root, path), encoding="utf-8", errors="replace") as f:
@@ -120,14 +120,11 @@ def main(argv):
             length = last - first + 1
             if length > limit:
                 offenders.append((length, path, first, lines[first - 1].strip()[:80]))
-    for length, path, first, head in sorted(offenders, reverse=True):
-        print(f"{path}:{first}: {length} lines: {head}")
-    if offenders:
-        print(f"check-function-length: {len(offenders)} function(s) over {limit} lines",
-              file=sys.stderr)
-        return 1
-    print(f"check-function-length: no function over {limit} lines in {len(files)} files")
-    return 0
+    return verdict([f"{path}:{first}: {length} lines: {head}"
+                    for length, path, first, head in sorted(offenders, reverse=True)],
+                   f"check-function-length: {len(offenders)} function(s) over {limit} lines",
+                   f"check-function-length: no function over {limit} lines in "
+                   f"{len(files)} files")
 
 
 if __name__ == "__main__":

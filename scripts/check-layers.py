@@ -10,8 +10,9 @@ listing each offending line, 0 otherwise.
 """
 import os
 import re
-import subprocess
 import sys
+
+from source_checks import default_root, tracked_files, verdict
 
 # folder -> the project folders it may include (besides itself).
 ALLOWED = {
@@ -45,9 +46,8 @@ def included_folder(match):
 
 
 def main(argv):
-    root = argv[0] if argv else os.path.join(os.path.dirname(__file__), "..")
-    files = subprocess.run(["git", "-C", root, "ls-files", "*.cc", "*.h"],
-                           capture_output=True, text=True, check=True).stdout.split()
+    root = argv[0] if argv else default_root(__file__)
+    files = tracked_files(root, "*.cc", "*.h")
     bad = []
     for path in files:
         folder = folder_of(path)
@@ -63,14 +63,8 @@ def main(argv):
                 if target != own and target not in ALLOWED[folder]:
                     bad.append(f"{path}:{number}: {folder} may not include {target}: "
                                f"{line.strip()}")
-    for b in bad:
-        print(b)
-    if bad:
-        print(f"check-layers: {len(bad)} include(s) against docs/architecture.md",
-              file=sys.stderr)
-        return 1
-    print(f"check-layers: every include of {len(ALLOWED)} folders follows the layers")
-    return 0
+    return verdict(bad, f"check-layers: {len(bad)} include(s) against docs/architecture.md",
+                   f"check-layers: every include of {len(ALLOWED)} folders follows the layers")
 
 
 if __name__ == "__main__":

@@ -12,21 +12,9 @@
 # Exit codes: 0 pass, 1 check failed, 2 bad usage / no replay page,
 # 77 skipped (no chromium, or no libjs-three so the report has no replay).
 set -euo pipefail
-if [ $# -lt 1 ] || [ $# -gt 2 ]; then
-  echo "usage: $0 DIR [OUT.png]" >&2
-  exit 2
-fi
-browser=""
-for candidate in chromium chromium-browser; do
-  if command -v "$candidate" > /dev/null 2>&1; then
-    browser=$(command -v "$candidate")
-    break
-  fi
-done
-if [ -z "$browser" ]; then
-  echo "screenshot_replay: chromium not installed, skipping" >&2
-  exit 77
-fi
+source "$(dirname "$0")/screenshot_common.sh"
+screenshot_usage "$@"
+find_chromium screenshot_replay
 root=$(cd "$(dirname "$0")/.." && pwd)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -37,15 +25,10 @@ if [ "$dir" = "--fixture" ]; then
     exit 77
   fi
   dir="$work/results"
-  /usr/bin/python3 "$root/reports/make_fixture.py" "$dir" > /dev/null
-  /usr/bin/python3 "$root/reports/make_report.py" "$dir" > /dev/null
+  make_fixture_report "$root" "$dir"
 fi
-page="$dir/report/replay/index.html"
-if [ ! -f "$page" ]; then
-  echo "screenshot_replay: $page not found (report written without libjs-three?)" >&2
-  exit 2
-fi
-page=$(cd "$(dirname "$page")" && pwd)/index.html
+page=$(page_path screenshot_replay "$dir/report/replay/index.html" \
+  "report written without libjs-three?")
 out=${2:-$work/replay.png}
 
 chrome() {

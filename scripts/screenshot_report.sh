@@ -9,43 +9,23 @@
 # not blank, 1 blank or failed render, 2 bad usage / no index.html,
 # 77 skipped (no chromium installed).
 set -euo pipefail
+source "$(dirname "$0")/screenshot_common.sh"
 
-if [ $# -lt 1 ] || [ $# -gt 2 ]; then
-  echo "usage: $0 DIR [OUT.png]" >&2
-  exit 2
-fi
+screenshot_usage "$@"
 dir=$1
 tmp_fixture=""
 if [ "$dir" = "--fixture" ]; then
-  if ! command -v chromium > /dev/null 2>&1 && ! command -v chromium-browser > /dev/null 2>&1; then
-    echo "screenshot_report: chromium not installed, skipping" >&2
-    exit 77
-  fi
+  find_chromium screenshot_report
   root=$(cd "$(dirname "$0")/.." && pwd)
   tmp_fixture=$(mktemp -d)
   dir="$tmp_fixture/results"
-  /usr/bin/python3 "$root/reports/make_fixture.py" "$dir" > /dev/null
-  /usr/bin/python3 "$root/reports/make_report.py" "$dir" > /dev/null
+  make_fixture_report "$root" "$dir"
 fi
-index="$dir/report/index.html"
-if [ ! -f "$index" ]; then
-  echo "screenshot_report: $index not found (run reports/make_report.py $dir first)" >&2
-  exit 2
-fi
-index=$(cd "$(dirname "$index")" && pwd)/index.html
+index=$(page_path screenshot_report "$dir/report/index.html" \
+  "run reports/make_report.py $dir first")
 out=${2:-$(dirname "$index")/screenshot.png}
 
-browser=""
-for candidate in chromium chromium-browser; do
-  if command -v "$candidate" > /dev/null 2>&1; then
-    browser=$(command -v "$candidate")
-    break
-  fi
-done
-if [ -z "$browser" ]; then
-  echo "screenshot_report: chromium not installed, skipping" >&2
-  exit 77
-fi
+find_chromium screenshot_report
 
 profile=$(mktemp -d)
 trap 'rm -rf "$profile" ${tmp_fixture:+"$tmp_fixture"}' EXIT

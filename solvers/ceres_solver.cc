@@ -190,26 +190,10 @@ struct CeresNlpSolver::Impl {
     b.Load(p);
     n = p.num_variables();
     m = p.num_constraints();
-    eq_rows.clear();
-    side_rows.clear();
-    side_sign.clear();
+    ClassifyRows(b, &eq_rows, &side_rows, &side_sign);
     fixed_vars.clear();
     lb_vars.clear();
     ub_vars.clear();
-    for (int i = 0; i < m; ++i) {
-      if (b.g_lb(i) == b.g_ub(i)) {
-        eq_rows.push_back(i);
-        continue;
-      }
-      if (std::isfinite(b.g_lb(i))) {
-        side_rows.push_back(i);
-        side_sign.push_back(-1.0);
-      }
-      if (std::isfinite(b.g_ub(i))) {
-        side_rows.push_back(i);
-        side_sign.push_back(+1.0);
-      }
-    }
     key.clear();
     for (int j = 0; j < n; ++j) {
       if (b.x_lb(j) == b.x_ub(j)) {

@@ -81,15 +81,6 @@ void NewtonSolver::ApplyBackendOptions(const OptionValues& values) {
   settings_.polish_floor = values.GetDouble("polish_floor");
 }
 
-namespace {
-// r = g(rows) - g_lb(rows); false if any entry is non-finite.
-bool Residual(const Eigen::VectorXd& g, const Eigen::VectorXd& g_lb,
-              const std::vector<int>& rows, Eigen::VectorXd* r) {
-  for (size_t k = 0; k < rows.size(); ++k) (*r)(k) = g(rows[k]) - g_lb(rows[k]);
-  return r->allFinite();
-}
-}  // namespace
-
 // Levenberg-Marquardt fallback (Marquardt's scaling D = diag(J^T J)):
 //   (J^T J + lambda D) dx = -J^T r,  lambda = lambda_k, 10 lambda_k, ...
 // taking the first dx with |r(x + dx)|^2 < |r(x)|^2 (for large lambda dx is
@@ -119,7 +110,7 @@ bool NewtonSolver::LevenbergMarquardtStep(const NlpProblem& problem,
     w->x_trial = result->x - w->dx;
     problem.Constraints(w->x_trial, w->g_trial);
     ++result->constraint_evaluations;
-    if (Residual(w->g_trial, w->bounds.g_lb, w->eq_rows, &w->r_trial) &&
+    if (EqualityResidual(w->g_trial, w->bounds.g_lb, w->eq_rows, &w->r_trial) &&
         w->r_trial.squaredNorm() < phi) {
       lm_lambda_ *= 0.1;
       return true;
@@ -135,21 +126,12 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
   Workspace& w = *ws_;
   w.Resize(n, m);
   w.bounds.Load(problem);
-  w.eq_rows.clear();
-  for (int i = 0; i < m; ++i)
-    if (w.bounds.g_lb(i) == w.bounds.g_ub(i))
-      w.eq_rows.push_back(i);  // n rows (validated)
+  EqualityRows(w.bounds, &w.eq_rows);  // n rows (validated)
 
   lm_lambda_ = settings_.lm_lambda_init;
-  Eigen::VectorXd& x = result->x;
-  x = x0;
-  problem.Constraints(x, w.g);
-  ++result->constraint_evaluations;
-  if (!Residual(w.g, w.bounds.g_lb, w.eq_rows, &w.r)) {
-    result->status = NlpStatus::kNumericalFailure;
-    result->backend_status = "non-finite residual at the starting point";
+  if (!StartSquareSystem(problem, x0, w.bounds, w.eq_rows, &w.g, &w.r, result))
     return;
-  }
+  const Eigen::VectorXd& x = result->x;
   int iter = 0;
   if (!Iterate(problem, options, &iter, result)) return;
   result->iterations = iter;
@@ -272,7 +254,7 @@ bool NewtonSolver::DampedStep(const NlpProblem& problem, double phi,
     w.x_trial = result->x + alpha * w.dx;
     problem.Constraints(w.x_trial, w.g_trial);
     ++result->constraint_evaluations;
-    if (Residual(w.g_trial, w.bounds.g_lb, w.eq_rows, &w.r_trial)) {
+    if (EqualityResidual(w.g_trial, w.bounds.g_lb, w.eq_rows, &w.r_trial)) {
       const double phi_trial = w.r_trial.squaredNorm();
       if (phi_trial <= (1.0 - settings_.armijo * alpha) * phi ||
           w.r_trial.lpNorm<Eigen::Infinity>() <= target) {

@@ -255,23 +255,7 @@ void SlsqpSolver::Impl::Prepare(const NlpProblem& p,
   bounds.Load(p);
   const NlpBounds& b = bounds;
 
-  eq_rows.clear();
-  ineq_rows.clear();
-  ineq_sign.clear();
-  for (int i = 0; i < m; ++i) {
-    if (b.g_lb(i) == b.g_ub(i)) {
-      eq_rows.push_back(i);
-      continue;
-    }
-    if (std::isfinite(b.g_lb(i))) {
-      ineq_rows.push_back(i);
-      ineq_sign.push_back(-1.0);
-    }
-    if (std::isfinite(b.g_ub(i))) {
-      ineq_rows.push_back(i);
-      ineq_sign.push_back(+1.0);
-    }
-  }
+  ClassifyRows(b, &eq_rows, &ineq_rows, &ineq_sign);
   const double tol = options.feasibility_tolerance;
   if (!opt || n != nv || n_eq != static_cast<int>(eq_rows.size()) ||
       n_ineq != static_cast<int>(ineq_rows.size()) || con_tol != tol) {

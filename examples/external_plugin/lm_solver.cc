@@ -40,16 +40,6 @@ LevenbergMarquardtSolver::LevenbergMarquardtSolver()
     : ws_(std::make_unique<Workspace>()) {}
 LevenbergMarquardtSolver::~LevenbergMarquardtSolver() = default;
 
-namespace {
-// r = g(rows) - g_lb(rows); false if non-finite.
-bool Residual(const Eigen::VectorXd& g, const Eigen::VectorXd& g_lb,
-              const std::vector<int>& rows, Eigen::VectorXd* r) {
-  for (size_t k = 0; k < rows.size(); ++k)
-    (*r)(static_cast<Eigen::Index>(k)) = g(rows[k]) - g_lb(rows[k]);
-  return r->allFinite();
-}
-}  // namespace
-
 quasiroll::OptionTable LevenbergMarquardtSolver::option_table() const {
   return {quasiroll::OptionSpec::Double(
               "lambda_init_scale", 1e-6,
@@ -70,20 +60,11 @@ void LevenbergMarquardtSolver::DoSolve(
   Workspace& w = *ws_;
   w.Resize(n, m);
   w.bounds.Load(problem);
-  w.eq_rows.clear();
-  for (int i = 0; i < m; ++i)
-    if (w.bounds.g_lb(i) == w.bounds.g_ub(i))
-      w.eq_rows.push_back(i);  // n rows (Solve checked)
-
-  Eigen::VectorXd& x = result->x;
-  x = x0;
-  problem.Constraints(x, w.g);
-  ++result->constraint_evaluations;
-  if (!Residual(w.g, w.bounds.g_lb, w.eq_rows, &w.r)) {
-    result->status = NlpStatus::kNumericalFailure;
-    result->backend_status = "non-finite residual at the starting point";
+  quasiroll::EqualityRows(w.bounds, &w.eq_rows);  // n rows (Solve checked)
+  if (!quasiroll::StartSquareSystem(problem, x0, w.bounds, w.eq_rows, &w.g,
+                                    &w.r, result))
     return;
-  }
+  const Eigen::VectorXd& x = result->x;
   int iter = 0;
   if (!Iterate(problem, options, &iter, result)) return;
   // The library's test for a square system's root: bounds or inequality
@@ -201,7 +182,8 @@ bool LevenbergMarquardtSolver::TryStep(const quasiroll::NlpProblem& problem,
   ++result->constraint_evaluations;
   bool accept = false;
   double phi_trial = w.phi;
-  if (Residual(w.g_trial, w.bounds.g_lb, w.eq_rows, &w.r_trial)) {
+  if (quasiroll::EqualityResidual(w.g_trial, w.bounds.g_lb, w.eq_rows,
+                                  &w.r_trial)) {
     phi_trial = 0.5 * w.r_trial.squaredNorm();
     accept = w.r_trial.lpNorm<Eigen::Infinity>() <= tol ||
              (phi_trial < w.phi && predicted > 0);

@@ -12,26 +12,18 @@ using quasiroll::IntegratorResult;
 using quasiroll::IntegratorStatus;
 
 quasiroll::OptionTable MidpointProjectionIntegrator::option_table() const {
-  using quasiroll::OptionSpec;
-  return {
-      OptionSpec::Double("projection_tolerance", 1e-12,
-                         "projection stops when ||H||_inf <= this")
-          .GreaterThan(0),
-      OptionSpec::Int("max_projection_iterations", 10,
-                      "Newton corrections per projection")
-          .AtLeast(1),
-      OptionSpec::Int("midpoint_steps", 1,
-                      "midpoint steps per IntegratorOptions::step")
+  quasiroll::OptionTable table = quasiroll::ProjectionSettings::Options();
+  table.push_back(
+      quasiroll::OptionSpec::Int("midpoint_steps", 1,
+                                 "midpoint steps per IntegratorOptions::step")
           .AtLeast(1)
-          .AtMost(1000),
-  };
+          .AtMost(1000));
+  return table;
 }
 
 void MidpointProjectionIntegrator::ApplyBackendOptions(
     const quasiroll::OptionValues& values) {
-  projection_tolerance_ = values.GetDouble("projection_tolerance");
-  max_projection_iterations_ =
-      static_cast<int>(values.GetInt("max_projection_iterations"));
+  projection_settings_ = quasiroll::ProjectionSettings::From(values);
   substeps_ = static_cast<int>(values.GetInt("midpoint_steps"));
 }
 
@@ -40,8 +32,7 @@ IntegratorStatus MidpointProjectionIntegrator::Project(
     const IntegratorOptions& /*options*/, IntegratorResult* result) {
   bool moved = false;
   const IntegratorStatus status =
-      projection_.Project(ode, y, projection_tolerance_,
-                          max_projection_iterations_, result, &moved);
+      projection_.Project(ode, y, projection_settings_, result, &moved);
   if (status != IntegratorStatus::kSuccess)
     result->message = projection_.message();
   return status;

@@ -51,8 +51,7 @@ class MidpointProjectionIntegrator final : public quasiroll::Integrator {
   // -1 if none (a component exactly 0 at the start does not fire).
   int Fired(const Eigen::VectorXd& g) const;
 
-  double projection_tolerance_ = 1e-12;
-  int max_projection_iterations_ = 10;
+  quasiroll::ProjectionSettings projection_settings_;
   int substeps_ = 1;
   quasiroll::WeightedProjection projection_;
   Eigen::VectorXd y0_, y1_, y_mid_, y_hi_, k_;

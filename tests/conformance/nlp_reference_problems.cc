@@ -9,6 +9,50 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 }  // namespace
 
+// ------------------------------------------------------------ the base ---
+ReferenceProblem::ReferenceProblem()
+    : objective_([](const In&) { return 0.0; }),
+      gradient_([](const In&, Out grad) { grad.setZero(); }) {}
+
+void ReferenceProblem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                                 Eigen::Ref<Eigen::VectorXd> x_ub,
+                                 Eigen::Ref<Eigen::VectorXd> g_lb,
+                                 Eigen::Ref<Eigen::VectorXd> g_ub) const {
+  x_lb = x_lb_;
+  x_ub = x_ub_;
+  g_lb = g_lb_;
+  g_ub = g_ub_;
+}
+
+double ReferenceProblem::Objective(
+    const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  return objective_(x);
+}
+
+void ReferenceProblem::ObjectiveGradient(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::VectorXd> grad) const {
+  gradient_(x, grad);
+}
+
+void ReferenceProblem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                   Eigen::Ref<Eigen::VectorXd> g) const {
+  constraints_(x, g);
+}
+
+void ReferenceProblem::ConstraintJacobian(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    Eigen::Ref<Eigen::MatrixXd> jac) const {
+  jacobian_(x, jac);
+}
+
+void ReferenceProblem::LagrangianHessian(
+    const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
+    const Eigen::Ref<const Eigen::VectorXd>& lambda,
+    Eigen::Ref<Eigen::MatrixXd> hess) const {
+  if (hessian_) hessian_(x, sigma, lambda, hess);
+}
+
 // ---------------------------------------------------------------- HS 71 ---
 Hs071Problem::Hs071Problem() {
   name_ = "hs071";
@@ -24,70 +68,51 @@ Hs071Problem::Hs071Problem() {
                             1.3794082931726724);
   f_star_ = 17.014017289156302;
   source_ = "Hock-Schittkowski #71; exact KKT point at 40 digits";
-}
-
-void Hs071Problem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                             Eigen::Ref<Eigen::VectorXd> x_ub,
-                             Eigen::Ref<Eigen::VectorXd> g_lb,
-                             Eigen::Ref<Eigen::VectorXd> g_ub) const {
-  x_lb.setConstant(1.0);
-  x_ub.setConstant(5.0);
-  g_lb << 25.0, 40.0;
-  g_ub << kInf, 40.0;
-}
-
-double Hs071Problem::Objective(
-    const Eigen::Ref<const Eigen::VectorXd>& x) const {
-  return x(0) * x(3) * (x(0) + x(1) + x(2)) + x(2);
-}
-
-void Hs071Problem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                     Eigen::Ref<Eigen::VectorXd> grad) const {
-  grad(0) = x(3) * (2.0 * x(0) + x(1) + x(2));
-  grad(1) = x(0) * x(3);
-  grad(2) = x(0) * x(3) + 1.0;
-  grad(3) = x(0) * (x(0) + x(1) + x(2));
-}
-
-void Hs071Problem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                               Eigen::Ref<Eigen::VectorXd> g) const {
-  g(0) = x(0) * x(1) * x(2) * x(3);
-  g(1) = x.squaredNorm();
-}
-
-void Hs071Problem::ConstraintJacobian(
-    const Eigen::Ref<const Eigen::VectorXd>& x,
-    Eigen::Ref<Eigen::MatrixXd> jac) const {
-  jac(0, 0) = x(1) * x(2) * x(3);
-  jac(0, 1) = x(0) * x(2) * x(3);
-  jac(0, 2) = x(0) * x(1) * x(3);
-  jac(0, 3) = x(0) * x(1) * x(2);
-  jac.row(1) = 2.0 * x.transpose();
-}
-
-void Hs071Problem::LagrangianHessian(
-    const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
-    const Eigen::Ref<const Eigen::VectorXd>& lambda,
-    Eigen::Ref<Eigen::MatrixXd> hess) const {
-  const double l0 = lambda(0), l1 = lambda(1);
-  hess.setZero();
-  // Objective.
-  hess(0, 0) = sigma * 2.0 * x(3);
-  hess(1, 0) = sigma * x(3);
-  hess(2, 0) = sigma * x(3);
-  hess(3, 0) = sigma * (2.0 * x(0) + x(1) + x(2));
-  hess(3, 1) = sigma * x(0);
-  hess(3, 2) = sigma * x(0);
-  // Product constraint.
-  hess(1, 0) += l0 * x(2) * x(3);
-  hess(2, 0) += l0 * x(1) * x(3);
-  hess(3, 0) += l0 * x(1) * x(2);
-  hess(2, 1) += l0 * x(0) * x(3);
-  hess(3, 1) += l0 * x(0) * x(2);
-  hess(3, 2) += l0 * x(0) * x(1);
-  // Sphere constraint.
-  hess.diagonal().array() += 2.0 * l1;
-  hess.triangularView<Eigen::StrictlyUpper>() = hess.transpose();
+  x_lb_ = Eigen::Vector4d::Constant(1.0);
+  x_ub_ = Eigen::Vector4d::Constant(5.0);
+  g_lb_ = Eigen::Vector2d(25.0, 40.0);
+  g_ub_ = Eigen::Vector2d(kInf, 40.0);
+  objective_ = [](const In& x) {
+    return x(0) * x(3) * (x(0) + x(1) + x(2)) + x(2);
+  };
+  gradient_ = [](const In& x, Out grad) {
+    grad(0) = x(3) * (2.0 * x(0) + x(1) + x(2));
+    grad(1) = x(0) * x(3);
+    grad(2) = x(0) * x(3) + 1.0;
+    grad(3) = x(0) * (x(0) + x(1) + x(2));
+  };
+  constraints_ = [](const In& x, Out g) {
+    g(0) = x(0) * x(1) * x(2) * x(3);
+    g(1) = x.squaredNorm();
+  };
+  jacobian_ = [](const In& x, MatrixOut jac) {
+    jac(0, 0) = x(1) * x(2) * x(3);
+    jac(0, 1) = x(0) * x(2) * x(3);
+    jac(0, 2) = x(0) * x(1) * x(3);
+    jac(0, 3) = x(0) * x(1) * x(2);
+    jac.row(1) = 2.0 * x.transpose();
+  };
+  hessian_ = [](const In& x, double sigma, const In& lambda, MatrixOut hess) {
+    const double l0 = lambda(0), l1 = lambda(1);
+    hess.setZero();
+    // Objective.
+    hess(0, 0) = sigma * 2.0 * x(3);
+    hess(1, 0) = sigma * x(3);
+    hess(2, 0) = sigma * x(3);
+    hess(3, 0) = sigma * (2.0 * x(0) + x(1) + x(2));
+    hess(3, 1) = sigma * x(0);
+    hess(3, 2) = sigma * x(0);
+    // Product constraint.
+    hess(1, 0) += l0 * x(2) * x(3);
+    hess(2, 0) += l0 * x(1) * x(3);
+    hess(3, 0) += l0 * x(1) * x(2);
+    hess(2, 1) += l0 * x(0) * x(3);
+    hess(3, 1) += l0 * x(0) * x(2);
+    hess(3, 2) += l0 * x(0) * x(1);
+    // Sphere constraint.
+    hess.diagonal().array() += 2.0 * l1;
+    hess.triangularView<Eigen::StrictlyUpper>() = hess.transpose();
+  };
 }
 
 // ---------------------------------------------------------------- HS 32 ---
@@ -97,56 +122,37 @@ Hs032Problem::Hs032Problem() {
   x_star_ = Eigen::Vector3d(0.0, 0.0, 1.0);
   f_star_ = 1.0;
   source_ = "Hock-Schittkowski #32 (exact)";
-}
-
-void Hs032Problem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                             Eigen::Ref<Eigen::VectorXd> x_ub,
-                             Eigen::Ref<Eigen::VectorXd> g_lb,
-                             Eigen::Ref<Eigen::VectorXd> g_ub) const {
-  x_lb.setZero();
-  x_ub.setConstant(kInf);
-  g_lb << 3.0, 1.0;
-  g_ub << kInf, 1.0;
-}
-
-double Hs032Problem::Objective(
-    const Eigen::Ref<const Eigen::VectorXd>& x) const {
-  const double s = x(0) + 3.0 * x(1) + x(2), d = x(0) - x(1);
-  return s * s + 4.0 * d * d;
-}
-
-void Hs032Problem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                     Eigen::Ref<Eigen::VectorXd> grad) const {
-  const double s = x(0) + 3.0 * x(1) + x(2), d = x(0) - x(1);
-  grad(0) = 2.0 * s + 8.0 * d;
-  grad(1) = 6.0 * s - 8.0 * d;
-  grad(2) = 2.0 * s;
-}
-
-void Hs032Problem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                               Eigen::Ref<Eigen::VectorXd> g) const {
-  g(0) = 6.0 * x(1) + 4.0 * x(2) - x(0) * x(0) * x(0);
-  g(1) = x(0) + x(1) + x(2);
-}
-
-void Hs032Problem::ConstraintJacobian(
-    const Eigen::Ref<const Eigen::VectorXd>& x,
-    Eigen::Ref<Eigen::MatrixXd> jac) const {
-  jac(0, 0) = -3.0 * x(0) * x(0);
-  jac(0, 1) = 6.0;
-  jac(0, 2) = 4.0;
-  jac.row(1).setOnes();
-}
-
-void Hs032Problem::LagrangianHessian(
-    const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
-    const Eigen::Ref<const Eigen::VectorXd>& lambda,
-    Eigen::Ref<Eigen::MatrixXd> hess) const {
-  hess << 10.0, -2.0, 2.0,  //
-      -2.0, 26.0, 6.0,      //
-      2.0, 6.0, 2.0;
-  hess *= sigma;
-  hess(0, 0) += lambda(0) * (-6.0 * x(0));
+  x_lb_ = Eigen::Vector3d::Zero();
+  x_ub_ = Eigen::Vector3d::Constant(kInf);
+  g_lb_ = Eigen::Vector2d(3.0, 1.0);
+  g_ub_ = Eigen::Vector2d(kInf, 1.0);
+  objective_ = [](const In& x) {
+    const double s = x(0) + 3.0 * x(1) + x(2), d = x(0) - x(1);
+    return s * s + 4.0 * d * d;
+  };
+  gradient_ = [](const In& x, Out grad) {
+    const double s = x(0) + 3.0 * x(1) + x(2), d = x(0) - x(1);
+    grad(0) = 2.0 * s + 8.0 * d;
+    grad(1) = 6.0 * s - 8.0 * d;
+    grad(2) = 2.0 * s;
+  };
+  constraints_ = [](const In& x, Out g) {
+    g(0) = 6.0 * x(1) + 4.0 * x(2) - x(0) * x(0) * x(0);
+    g(1) = x(0) + x(1) + x(2);
+  };
+  jacobian_ = [](const In& x, MatrixOut jac) {
+    jac(0, 0) = -3.0 * x(0) * x(0);
+    jac(0, 1) = 6.0;
+    jac(0, 2) = 4.0;
+    jac.row(1).setOnes();
+  };
+  hessian_ = [](const In& x, double sigma, const In& lambda, MatrixOut hess) {
+    hess << 10.0, -2.0, 2.0,  //
+        -2.0, 26.0, 6.0,      //
+        2.0, 6.0, 2.0;
+    hess *= sigma;
+    hess(0, 0) += lambda(0) * (-6.0 * x(0));
+  };
 }
 
 // ---------------------------------------------------------------- HS 40 ---
@@ -157,71 +163,50 @@ Hs040Problem::Hs040Problem() {
                             std::pow(2.0, -11.0 / 12.0), std::pow(2.0, -0.25));
   f_star_ = -0.25;
   source_ = "Hock-Schittkowski #40 (closed form)";
-}
-
-void Hs040Problem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                             Eigen::Ref<Eigen::VectorXd> x_ub,
-                             Eigen::Ref<Eigen::VectorXd> g_lb,
-                             Eigen::Ref<Eigen::VectorXd> g_ub) const {
-  x_lb.setConstant(-kInf);
-  x_ub.setConstant(kInf);
-  g_lb << 1.0, 0.0, 0.0;
-  g_ub = g_lb;
-}
-
-double Hs040Problem::Objective(
-    const Eigen::Ref<const Eigen::VectorXd>& x) const {
-  return -x(0) * x(1) * x(2) * x(3);
-}
-
-void Hs040Problem::ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                     Eigen::Ref<Eigen::VectorXd> grad) const {
-  grad(0) = -x(1) * x(2) * x(3);
-  grad(1) = -x(0) * x(2) * x(3);
-  grad(2) = -x(0) * x(1) * x(3);
-  grad(3) = -x(0) * x(1) * x(2);
-}
-
-void Hs040Problem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                               Eigen::Ref<Eigen::VectorXd> g) const {
-  g(0) = x(0) * x(0) * x(0) + x(1) * x(1);
-  g(1) = x(0) * x(0) * x(3) - x(2);
-  g(2) = x(3) * x(3) - x(1);
-}
-
-void Hs040Problem::ConstraintJacobian(
-    const Eigen::Ref<const Eigen::VectorXd>& x,
-    Eigen::Ref<Eigen::MatrixXd> jac) const {
-  jac.setZero();
-  jac(0, 0) = 3.0 * x(0) * x(0);
-  jac(0, 1) = 2.0 * x(1);
-  jac(1, 0) = 2.0 * x(0) * x(3);
-  jac(1, 2) = -1.0;
-  jac(1, 3) = x(0) * x(0);
-  jac(2, 1) = -1.0;
-  jac(2, 3) = 2.0 * x(3);
-}
-
-void Hs040Problem::LagrangianHessian(
-    const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
-    const Eigen::Ref<const Eigen::VectorXd>& lambda,
-    Eigen::Ref<Eigen::MatrixXd> hess) const {
-  hess.setZero();
-  for (int i = 0; i < 4; ++i) {
-    for (int j = 0; j < 4; ++j) {
-      if (i == j) continue;
-      double p = -sigma;
-      for (int k = 0; k < 4; ++k)
-        if (k != i && k != j) p *= x(k);
-      hess(i, j) = p;
+  x_lb_ = Eigen::Vector4d::Constant(-kInf);
+  x_ub_ = Eigen::Vector4d::Constant(kInf);
+  g_lb_ = Eigen::Vector3d(1.0, 0.0, 0.0);
+  g_ub_ = g_lb_;
+  objective_ = [](const In& x) { return -x(0) * x(1) * x(2) * x(3); };
+  gradient_ = [](const In& x, Out grad) {
+    grad(0) = -x(1) * x(2) * x(3);
+    grad(1) = -x(0) * x(2) * x(3);
+    grad(2) = -x(0) * x(1) * x(3);
+    grad(3) = -x(0) * x(1) * x(2);
+  };
+  constraints_ = [](const In& x, Out g) {
+    g(0) = x(0) * x(0) * x(0) + x(1) * x(1);
+    g(1) = x(0) * x(0) * x(3) - x(2);
+    g(2) = x(3) * x(3) - x(1);
+  };
+  jacobian_ = [](const In& x, MatrixOut jac) {
+    jac.setZero();
+    jac(0, 0) = 3.0 * x(0) * x(0);
+    jac(0, 1) = 2.0 * x(1);
+    jac(1, 0) = 2.0 * x(0) * x(3);
+    jac(1, 2) = -1.0;
+    jac(1, 3) = x(0) * x(0);
+    jac(2, 1) = -1.0;
+    jac(2, 3) = 2.0 * x(3);
+  };
+  hessian_ = [](const In& x, double sigma, const In& lambda, MatrixOut hess) {
+    hess.setZero();
+    for (int i = 0; i < 4; ++i) {
+      for (int j = 0; j < 4; ++j) {
+        if (i == j) continue;
+        double p = -sigma;
+        for (int k = 0; k < 4; ++k)
+          if (k != i && k != j) p *= x(k);
+        hess(i, j) = p;
+      }
     }
-  }
-  hess(0, 0) += lambda(0) * 6.0 * x(0);
-  hess(1, 1) += lambda(0) * 2.0;
-  hess(0, 0) += lambda(1) * 2.0 * x(3);
-  hess(0, 3) += lambda(1) * 2.0 * x(0);
-  hess(3, 0) += lambda(1) * 2.0 * x(0);
-  hess(3, 3) += lambda(2) * 2.0;
+    hess(0, 0) += lambda(0) * 6.0 * x(0);
+    hess(1, 1) += lambda(0) * 2.0;
+    hess(0, 0) += lambda(1) * 2.0 * x(3);
+    hess(0, 3) += lambda(1) * 2.0 * x(0);
+    hess(3, 0) += lambda(1) * 2.0 * x(0);
+    hess(3, 3) += lambda(2) * 2.0;
+  };
 }
 
 // ---------------------------------------------------------------- HS 73 ---
@@ -241,52 +226,36 @@ Hs073Problem::Hs073Problem() {
                             0.051776550613406777);
   f_star_ = 29.894378159143353;
   source_ = "Hock-Schittkowski #73, vertex refined at 40 digits";
-}
-
-void Hs073Problem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                             Eigen::Ref<Eigen::VectorXd> x_ub,
-                             Eigen::Ref<Eigen::VectorXd> g_lb,
-                             Eigen::Ref<Eigen::VectorXd> g_ub) const {
-  x_lb.setZero();
-  x_ub.setConstant(kInf);
-  g_lb << 5.0, 21.0, 1.0;
-  g_ub << kInf, kInf, 1.0;
-}
-
-double Hs073Problem::Objective(
-    const Eigen::Ref<const Eigen::VectorXd>& x) const {
-  return 24.55 * x(0) + 26.75 * x(1) + 39.0 * x(2) + 40.50 * x(3);
-}
-
-void Hs073Problem::ObjectiveGradient(
-    const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
-    Eigen::Ref<Eigen::VectorXd> grad) const {
-  grad << 24.55, 26.75, 39.0, 40.50;
-}
-
-void Hs073Problem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                               Eigen::Ref<Eigen::VectorXd> g) const {
-  double s = 0.0;
-  for (int i = 0; i < 4; ++i) s += kHs73Var[i] * x(i) * x(i);
-  g(0) = 2.3 * x(0) + 5.6 * x(1) + 11.1 * x(2) + 1.3 * x(3);
-  g(1) = 12.0 * x(0) + 11.9 * x(1) + 41.8 * x(2) + 52.1 * x(3) -
-         1.645 * std::sqrt(s);
-  g(2) = x(0) + x(1) + x(2) + x(3);
-}
-
-void Hs073Problem::ConstraintJacobian(
-    const Eigen::Ref<const Eigen::VectorXd>& x,
-    Eigen::Ref<Eigen::MatrixXd> jac) const {
-  double s = 0.0;
-  for (int i = 0; i < 4; ++i) s += kHs73Var[i] * x(i) * x(i);
-  const double q = std::sqrt(s);
-  jac.row(0) << 2.3, 5.6, 11.1, 1.3;
-  jac.row(1) << 12.0, 11.9, 41.8, 52.1;
-  // d sqrt(s) / dx_i = var_i x_i / sqrt(s); the origin (s = 0) is excluded by
-  // the equality row, use the one-sided limit 0 there.
-  if (q > 0.0)
-    for (int i = 0; i < 4; ++i) jac(1, i) -= 1.645 * kHs73Var[i] * x(i) / q;
-  jac.row(2).setOnes();
+  x_lb_ = Eigen::Vector4d::Zero();
+  x_ub_ = Eigen::Vector4d::Constant(kInf);
+  g_lb_ = Eigen::Vector3d(5.0, 21.0, 1.0);
+  g_ub_ = Eigen::Vector3d(kInf, kInf, 1.0);
+  objective_ = [](const In& x) {
+    return 24.55 * x(0) + 26.75 * x(1) + 39.0 * x(2) + 40.50 * x(3);
+  };
+  gradient_ = [](const In& /*x*/, Out grad) {
+    grad << 24.55, 26.75, 39.0, 40.50;
+  };
+  constraints_ = [](const In& x, Out g) {
+    double s = 0.0;
+    for (int i = 0; i < 4; ++i) s += kHs73Var[i] * x(i) * x(i);
+    g(0) = 2.3 * x(0) + 5.6 * x(1) + 11.1 * x(2) + 1.3 * x(3);
+    g(1) = 12.0 * x(0) + 11.9 * x(1) + 41.8 * x(2) + 52.1 * x(3) -
+           1.645 * std::sqrt(s);
+    g(2) = x(0) + x(1) + x(2) + x(3);
+  };
+  jacobian_ = [](const In& x, MatrixOut jac) {
+    double s = 0.0;
+    for (int i = 0; i < 4; ++i) s += kHs73Var[i] * x(i) * x(i);
+    const double q = std::sqrt(s);
+    jac.row(0) << 2.3, 5.6, 11.1, 1.3;
+    jac.row(1) << 12.0, 11.9, 41.8, 52.1;
+    // d sqrt(s) / dx_i = var_i x_i / sqrt(s); the origin (s = 0) is excluded
+    // by the equality row, use the one-sided limit 0 there.
+    if (q > 0.0)
+      for (int i = 0; i < 4; ++i) jac(1, i) -= 1.645 * kHs73Var[i] * x(i) / q;
+    jac.row(2).setOnes();
+  };
 }
 
 // ------------------------------------------------------- infeasible NLP ---
@@ -297,41 +266,20 @@ InfeasibleDiskProblem::InfeasibleDiskProblem() {
   f_star_ = std::numeric_limits<double>::quiet_NaN();
   feasible_ = false;
   source_ = "disk of radius 1 never meets the half-plane x1 + x2 >= 3";
-}
-
-void InfeasibleDiskProblem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                                      Eigen::Ref<Eigen::VectorXd> x_ub,
-                                      Eigen::Ref<Eigen::VectorXd> g_lb,
-                                      Eigen::Ref<Eigen::VectorXd> g_ub) const {
-  x_lb.setConstant(-kInf);
-  x_ub.setConstant(kInf);
-  g_lb << -kInf, 3.0;
-  g_ub << 1.0, kInf;
-}
-
-double InfeasibleDiskProblem::Objective(
-    const Eigen::Ref<const Eigen::VectorXd>& x) const {
-  return x.squaredNorm();
-}
-
-void InfeasibleDiskProblem::ObjectiveGradient(
-    const Eigen::Ref<const Eigen::VectorXd>& x,
-    Eigen::Ref<Eigen::VectorXd> grad) const {
-  grad = 2.0 * x;
-}
-
-void InfeasibleDiskProblem::Constraints(
-    const Eigen::Ref<const Eigen::VectorXd>& x,
-    Eigen::Ref<Eigen::VectorXd> g) const {
-  g(0) = x.squaredNorm();
-  g(1) = x(0) + x(1);
-}
-
-void InfeasibleDiskProblem::ConstraintJacobian(
-    const Eigen::Ref<const Eigen::VectorXd>& x,
-    Eigen::Ref<Eigen::MatrixXd> jac) const {
-  jac.row(0) = 2.0 * x.transpose();
-  jac.row(1).setOnes();
+  x_lb_ = Eigen::Vector2d::Constant(-kInf);
+  x_ub_ = Eigen::Vector2d::Constant(kInf);
+  g_lb_ = Eigen::Vector2d(-kInf, 3.0);
+  g_ub_ = Eigen::Vector2d(1.0, kInf);
+  objective_ = [](const In& x) { return x.squaredNorm(); };
+  gradient_ = [](const In& x, Out grad) { grad = 2.0 * x; };
+  constraints_ = [](const In& x, Out g) {
+    g(0) = x.squaredNorm();
+    g(1) = x(0) + x(1);
+  };
+  jacobian_ = [](const In& x, MatrixOut jac) {
+    jac.row(0) = 2.0 * x.transpose();
+    jac.row(1).setOnes();
+  };
 }
 
 // ----------------------------------------------------- circle and line ---
@@ -341,55 +289,33 @@ CircleLineSystem::CircleLineSystem() {
   x_star_ = Eigen::Vector2d::Constant(std::sqrt(2.0));
   f_star_ = 0.0;
   source_ = "closed form (sqrt 2, sqrt 2)";
-}
-
-void CircleLineSystem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                                 Eigen::Ref<Eigen::VectorXd> x_ub,
-                                 Eigen::Ref<Eigen::VectorXd> g_lb,
-                                 Eigen::Ref<Eigen::VectorXd> g_ub) const {
-  x_lb << 0.0, -kInf;
-  x_ub.setConstant(kInf);
-  g_lb << 4.0, 0.0, -kInf;
-  g_ub << 4.0, 0.0, 10.0;
-}
-
-double CircleLineSystem::Objective(
-    const Eigen::Ref<const Eigen::VectorXd>& /*x*/) const {
-  return 0.0;
-}
-
-void CircleLineSystem::ObjectiveGradient(
-    const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
-    Eigen::Ref<Eigen::VectorXd> grad) const {
-  grad.setZero();
-}
-
-void CircleLineSystem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                   Eigen::Ref<Eigen::VectorXd> g) const {
-  g(0) = x.squaredNorm();
-  g(1) = x(0) - x(1);
-  g(2) = x(0) + 2.0 * x(1);
-}
-
-void CircleLineSystem::ConstraintJacobian(
-    const Eigen::Ref<const Eigen::VectorXd>& x,
-    Eigen::Ref<Eigen::MatrixXd> jac) const {
-  jac.row(0) = 2.0 * x.transpose();
-  jac.row(1) << 1.0, -1.0;
-  jac.row(2) << 1.0, 2.0;
+  x_lb_ = Eigen::Vector2d(0.0, -kInf);
+  x_ub_ = Eigen::Vector2d::Constant(kInf);
+  g_lb_ = Eigen::Vector3d(4.0, 0.0, -kInf);
+  g_ub_ = Eigen::Vector3d(4.0, 0.0, 10.0);
+  constraints_ = [](const In& x, Out g) {
+    g(0) = x.squaredNorm();
+    g(1) = x(0) - x(1);
+    g(2) = x(0) + 2.0 * x(1);
+  };
+  jacobian_ = [](const In& x, MatrixOut jac) {
+    jac.row(0) = 2.0 * x.transpose();
+    jac.row(1) << 1.0, -1.0;
+    jac.row(2) << 1.0, 2.0;
+  };
 }
 
 // ------------------------------------------------- contact-like system ---
-ContactLikeSystem::ContactLikeSystem(int n) : n_(n) {
+ContactLikeSystem::ContactLikeSystem(int n) {
   if (n < 9)
     throw std::invalid_argument("ContactLikeSystem: n must be >= 9, got " +
                                 std::to_string(n));
   name_ = "contact_like_" + std::to_string(n);
-  a_.resize(n, n);
+  Eigen::MatrixXd a(n, n);
   const double off = 3.4 / (n - 1);  // row sums of |off-diagonal| <= 3.4 < 4
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j)
-      a_(i, j) = i == j ? 4.0 + 0.1 * i / n : off * std::cos(0.7 * i + 1.9 * j);
+      a(i, j) = i == j ? 4.0 + 0.1 * i / n : off * std::cos(0.7 * i + 1.9 * j);
   x_star_.resize(n);
   for (int i = 0; i < n; ++i) x_star_(i) = 0.5 + 0.3 * std::sin(1.3 * i + 0.4);
   for (int j = 0; j < 3; ++j) {
@@ -402,63 +328,40 @@ ContactLikeSystem::ContactLikeSystem(int n) : n_(n) {
     x0_(i) = x_star_(i) + 0.15 * std::cos(2.1 * i + 0.3);
   f_star_ = 0.0;
   source_ = "exact root by construction";
-}
-
-void ContactLikeSystem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                                  Eigen::Ref<Eigen::VectorXd> x_ub,
-                                  Eigen::Ref<Eigen::VectorXd> g_lb,
-                                  Eigen::Ref<Eigen::VectorXd> g_ub) const {
-  x_lb.setConstant(-kInf);
-  x_lb.tail(3).setZero();
-  x_ub.setConstant(kInf);
-  g_lb.head(n_).setZero();
-  g_ub.head(n_).setZero();
-  g_lb.tail(3).setConstant(-kInf);
-  g_ub.tail(3).setZero();
-}
-
-double ContactLikeSystem::Objective(
-    const Eigen::Ref<const Eigen::VectorXd>& /*x*/) const {
-  return 0.0;
-}
-
-void ContactLikeSystem::ObjectiveGradient(
-    const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
-    Eigen::Ref<Eigen::VectorXd> grad) const {
-  grad.setZero();
-}
-
-void ContactLikeSystem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                    Eigen::Ref<Eigen::VectorXd> g) const {
-  for (int i = 0; i < n_; ++i) {
-    double s = 0.0;
-    for (int j = 0; j < n_; ++j) s += a_(i, j) * (x(j) - x_star_(j));
-    const double di = x(i) - x_star_(i);
-    const int k = (i + 1) % n_;
-    g(i) = s + 0.5 * di * di + 0.25 * std::sin(x(k) - x_star_(k));
-  }
-  for (int j = 0; j < 3; ++j) {
-    const double fn = x(n_ - 3 + j);
-    g(n_ + j) =
-        x(2 * j) * x(2 * j) + x(2 * j + 1) * x(2 * j + 1) - 0.64 * fn * fn;
-  }
-}
-
-void ContactLikeSystem::ConstraintJacobian(
-    const Eigen::Ref<const Eigen::VectorXd>& x,
-    Eigen::Ref<Eigen::MatrixXd> jac) const {
-  jac.topRows(n_) = a_;
-  for (int i = 0; i < n_; ++i) {
-    const int k = (i + 1) % n_;
-    jac(i, i) += x(i) - x_star_(i);
-    jac(i, k) += 0.25 * std::cos(x(k) - x_star_(k));
-  }
-  jac.bottomRows(3).setZero();
-  for (int j = 0; j < 3; ++j) {
-    jac(n_ + j, 2 * j) = 2.0 * x(2 * j);
-    jac(n_ + j, 2 * j + 1) = 2.0 * x(2 * j + 1);
-    jac(n_ + j, n_ - 3 + j) = -1.28 * x(n_ - 3 + j);
-  }
+  x_lb_ = Eigen::VectorXd::Constant(n, -kInf);
+  x_lb_.tail(3).setZero();
+  x_ub_ = Eigen::VectorXd::Constant(n, kInf);
+  g_lb_ = Eigen::VectorXd::Zero(n + 3);
+  g_ub_ = Eigen::VectorXd::Zero(n + 3);
+  g_lb_.tail(3).setConstant(-kInf);
+  constraints_ = [n, a, xs = x_star_](const In& x, Out g) {
+    for (int i = 0; i < n; ++i) {
+      double s = 0.0;
+      for (int j = 0; j < n; ++j) s += a(i, j) * (x(j) - xs(j));
+      const double di = x(i) - xs(i);
+      const int k = (i + 1) % n;
+      g(i) = s + 0.5 * di * di + 0.25 * std::sin(x(k) - xs(k));
+    }
+    for (int j = 0; j < 3; ++j) {
+      const double fn = x(n - 3 + j);
+      g(n + j) =
+          x(2 * j) * x(2 * j) + x(2 * j + 1) * x(2 * j + 1) - 0.64 * fn * fn;
+    }
+  };
+  jacobian_ = [n, a, xs = x_star_](const In& x, MatrixOut jac) {
+    jac.topRows(n) = a;
+    for (int i = 0; i < n; ++i) {
+      const int k = (i + 1) % n;
+      jac(i, i) += x(i) - xs(i);
+      jac(i, k) += 0.25 * std::cos(x(k) - xs(k));
+    }
+    jac.bottomRows(3).setZero();
+    for (int j = 0; j < 3; ++j) {
+      jac(n + j, 2 * j) = 2.0 * x(2 * j);
+      jac(n + j, 2 * j + 1) = 2.0 * x(2 * j + 1);
+      jac(n + j, n - 3 + j) = -1.28 * x(n - 3 + j);
+    }
+  };
 }
 
 // ------------------------------------------------ infeasible-root system ---
@@ -470,42 +373,19 @@ InfeasibleRootSystem::InfeasibleRootSystem() {
   f_star_ = 0.0;
   feasible_ = false;
   source_ = "unique root (ln 2, 3 - ln 2) violates x2 <= 2";
-}
-
-void InfeasibleRootSystem::GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                                     Eigen::Ref<Eigen::VectorXd> x_ub,
-                                     Eigen::Ref<Eigen::VectorXd> g_lb,
-                                     Eigen::Ref<Eigen::VectorXd> g_ub) const {
-  x_lb.setConstant(-kInf);
-  x_ub << kInf, 2.0;
-  g_lb << 2.0, 3.0;
-  g_ub = g_lb;
-}
-
-double InfeasibleRootSystem::Objective(
-    const Eigen::Ref<const Eigen::VectorXd>& /*x*/) const {
-  return 0.0;
-}
-
-void InfeasibleRootSystem::ObjectiveGradient(
-    const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
-    Eigen::Ref<Eigen::VectorXd> grad) const {
-  grad.setZero();
-}
-
-void InfeasibleRootSystem::Constraints(
-    const Eigen::Ref<const Eigen::VectorXd>& x,
-    Eigen::Ref<Eigen::VectorXd> g) const {
-  g(0) = std::exp(x(0));
-  g(1) = x(0) + x(1);
-}
-
-void InfeasibleRootSystem::ConstraintJacobian(
-    const Eigen::Ref<const Eigen::VectorXd>& x,
-    Eigen::Ref<Eigen::MatrixXd> jac) const {
-  jac(0, 0) = std::exp(x(0));
-  jac(0, 1) = 0.0;
-  jac.row(1).setOnes();
+  x_lb_ = Eigen::Vector2d::Constant(-kInf);
+  x_ub_ = Eigen::Vector2d(kInf, 2.0);
+  g_lb_ = Eigen::Vector2d(2.0, 3.0);
+  g_ub_ = g_lb_;
+  constraints_ = [](const In& x, Out g) {
+    g(0) = std::exp(x(0));
+    g(1) = x(0) + x(1);
+  };
+  jacobian_ = [](const In& x, MatrixOut jac) {
+    jac(0, 0) = std::exp(x(0));
+    jac(0, 1) = 0.0;
+    jac.row(1).setOnes();
+  };
 }
 
 // ------------------------------------------------------------- factory ---

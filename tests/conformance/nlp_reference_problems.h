@@ -13,6 +13,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -21,6 +22,11 @@
 
 namespace quasiroll {
 
+// A reference problem is data plus callbacks: bounds, starting point and
+// known answer are stored vectors, f, grad f, g, dg/dx and the optional
+// Lagrangian Hessian are functions set by each problem's constructor (the
+// classes below differ only there). The callbacks capture values, never
+// `this`, so problems may be copied.
 class ReferenceProblem : public NlpProblem {
  public:
   const std::string& name() const { return name_; }
@@ -37,13 +43,48 @@ class ReferenceProblem : public NlpProblem {
   // True if the equality rows alone determine x (num equalities == n).
   bool IsSquareSystem() const { return CountEqualities() == num_variables(); }
 
+  int num_variables() const final { return static_cast<int>(x_lb_.size()); }
+  int num_constraints() const final { return static_cast<int>(g_lb_.size()); }
+  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
+                 Eigen::Ref<Eigen::VectorXd> x_ub,
+                 Eigen::Ref<Eigen::VectorXd> g_lb,
+                 Eigen::Ref<Eigen::VectorXd> g_ub) const final;
+  double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const final;
+  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
+                         Eigen::Ref<Eigen::VectorXd> grad) const final;
+  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                   Eigen::Ref<Eigen::VectorXd> g) const final;
+  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                          Eigen::Ref<Eigen::MatrixXd> jac) const final;
+  bool HasLagrangianHessian() const final {
+    return static_cast<bool>(hessian_);
+  }
+  void LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                         double sigma,
+                         const Eigen::Ref<const Eigen::VectorXd>& lambda,
+                         Eigen::Ref<Eigen::MatrixXd> hess) const final;
+
  protected:
+  using In = Eigen::Ref<const Eigen::VectorXd>;
+  using Out = Eigen::Ref<Eigen::VectorXd>;
+  using MatrixOut = Eigen::Ref<Eigen::MatrixXd>;
+
+  ReferenceProblem();
+
   std::string name_;
   Eigen::VectorXd x0_;
   Eigen::VectorXd x_star_;
   double f_star_ = 0.0;
   bool feasible_ = true;
   std::string source_;
+  // Sizes: n = x_lb_.size(), m = g_lb_.size().
+  Eigen::VectorXd x_lb_, x_ub_, g_lb_, g_ub_;
+  // f and grad f default to 0 (feasibility problems); the Hessian to none.
+  std::function<double(const In&)> objective_;
+  std::function<void(const In&, Out)> gradient_;
+  std::function<void(const In&, Out)> constraints_;
+  std::function<void(const In&, MatrixOut)> jacobian_;
+  std::function<void(const In&, double, const In&, MatrixOut)> hessian_;
 };
 
 // HS 71: min x1 x4 (x1+x2+x3) + x3  s.t.  x1 x2 x3 x4 >= 25,
@@ -51,24 +92,6 @@ class ReferenceProblem : public NlpProblem {
 class Hs071Problem final : public ReferenceProblem {
  public:
   Hs071Problem();
-  int num_variables() const override { return 4; }
-  int num_constraints() const override { return 2; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                 Eigen::Ref<Eigen::VectorXd> x_ub,
-                 Eigen::Ref<Eigen::VectorXd> g_lb,
-                 Eigen::Ref<Eigen::VectorXd> g_ub) const override;
-  double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
-  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                         Eigen::Ref<Eigen::VectorXd> grad) const override;
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                   Eigen::Ref<Eigen::VectorXd> g) const override;
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override;
-  bool HasLagrangianHessian() const override { return true; }
-  void LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                         double sigma,
-                         const Eigen::Ref<const Eigen::VectorXd>& lambda,
-                         Eigen::Ref<Eigen::MatrixXd> hess) const override;
 };
 
 // HS 32: min (x1+3x2+x3)^2 + 4(x1-x2)^2  s.t.  6x2 + 4x3 - x1^3 >= 3,
@@ -77,24 +100,6 @@ class Hs071Problem final : public ReferenceProblem {
 class Hs032Problem final : public ReferenceProblem {
  public:
   Hs032Problem();
-  int num_variables() const override { return 3; }
-  int num_constraints() const override { return 2; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                 Eigen::Ref<Eigen::VectorXd> x_ub,
-                 Eigen::Ref<Eigen::VectorXd> g_lb,
-                 Eigen::Ref<Eigen::VectorXd> g_ub) const override;
-  double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
-  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                         Eigen::Ref<Eigen::VectorXd> grad) const override;
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                   Eigen::Ref<Eigen::VectorXd> g) const override;
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override;
-  bool HasLagrangianHessian() const override { return true; }
-  void LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                         double sigma,
-                         const Eigen::Ref<const Eigen::VectorXd>& lambda,
-                         Eigen::Ref<Eigen::MatrixXd> hess) const override;
 };
 
 // HS 40: min -x1 x2 x3 x4  s.t.  x1^3 + x2^2 = 1, x1^2 x4 - x3 = 0,
@@ -103,24 +108,6 @@ class Hs032Problem final : public ReferenceProblem {
 class Hs040Problem final : public ReferenceProblem {
  public:
   Hs040Problem();
-  int num_variables() const override { return 4; }
-  int num_constraints() const override { return 3; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                 Eigen::Ref<Eigen::VectorXd> x_ub,
-                 Eigen::Ref<Eigen::VectorXd> g_lb,
-                 Eigen::Ref<Eigen::VectorXd> g_ub) const override;
-  double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
-  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                         Eigen::Ref<Eigen::VectorXd> grad) const override;
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                   Eigen::Ref<Eigen::VectorXd> g) const override;
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override;
-  bool HasLagrangianHessian() const override { return true; }
-  void LagrangianHessian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                         double sigma,
-                         const Eigen::Ref<const Eigen::VectorXd>& lambda,
-                         Eigen::Ref<Eigen::MatrixXd> hess) const override;
 };
 
 // HS 73 (cattle feed): linear objective, one linear and one chance
@@ -129,38 +116,12 @@ class Hs040Problem final : public ReferenceProblem {
 class Hs073Problem final : public ReferenceProblem {
  public:
   Hs073Problem();
-  int num_variables() const override { return 4; }
-  int num_constraints() const override { return 3; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                 Eigen::Ref<Eigen::VectorXd> x_ub,
-                 Eigen::Ref<Eigen::VectorXd> g_lb,
-                 Eigen::Ref<Eigen::VectorXd> g_ub) const override;
-  double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
-  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                         Eigen::Ref<Eigen::VectorXd> grad) const override;
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                   Eigen::Ref<Eigen::VectorXd> g) const override;
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override;
 };
 
 // Infeasible: min x1^2 + x2^2  s.t.  x1^2 + x2^2 <= 1,  x1 + x2 >= 3.
 class InfeasibleDiskProblem final : public ReferenceProblem {
  public:
   InfeasibleDiskProblem();
-  int num_variables() const override { return 2; }
-  int num_constraints() const override { return 2; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                 Eigen::Ref<Eigen::VectorXd> x_ub,
-                 Eigen::Ref<Eigen::VectorXd> g_lb,
-                 Eigen::Ref<Eigen::VectorXd> g_ub) const override;
-  double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
-  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                         Eigen::Ref<Eigen::VectorXd> grad) const override;
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                   Eigen::Ref<Eigen::VectorXd> g) const override;
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override;
 };
 
 // Square system: circle x1^2 + x2^2 = 4 intersected with line x1 = x2, bound
@@ -169,23 +130,10 @@ class InfeasibleDiskProblem final : public ReferenceProblem {
 class CircleLineSystem final : public ReferenceProblem {
  public:
   CircleLineSystem();
-  int num_variables() const override { return 2; }
-  int num_constraints() const override { return 3; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                 Eigen::Ref<Eigen::VectorXd> x_ub,
-                 Eigen::Ref<Eigen::VectorXd> g_lb,
-                 Eigen::Ref<Eigen::VectorXd> g_ub) const override;
-  double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
-  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                         Eigen::Ref<Eigen::VectorXd> grad) const override;
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                   Eigen::Ref<Eigen::VectorXd> g) const override;
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override;
 };
 
 // Square system shaped like the quasi-static contact problem: n unknowns
-// (n >= 6), n equality rows
+// (n >= 9), n equality rows
 //   F_i(x) = sum_j A_ij d_j + 0.5 d_i^2 + 0.25 sin(d_{i+1 mod n}),  d = x - x*,
 // with A strictly diagonally dominant (so F'(x*) = A is nonsingular) and
 // x* = O(1); lower bounds x_k >= 0 on the last three unknowns ("normal
@@ -194,23 +142,6 @@ class CircleLineSystem final : public ReferenceProblem {
 class ContactLikeSystem final : public ReferenceProblem {
  public:
   explicit ContactLikeSystem(int n = 18);
-  int num_variables() const override { return n_; }
-  int num_constraints() const override { return n_ + 3; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                 Eigen::Ref<Eigen::VectorXd> x_ub,
-                 Eigen::Ref<Eigen::VectorXd> g_lb,
-                 Eigen::Ref<Eigen::VectorXd> g_ub) const override;
-  double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
-  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                         Eigen::Ref<Eigen::VectorXd> grad) const override;
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                   Eigen::Ref<Eigen::VectorXd> g) const override;
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override;
-
- private:
-  int n_;
-  Eigen::MatrixXd a_;
 };
 
 // Square system with a unique root that violates a bound:
@@ -218,19 +149,6 @@ class ContactLikeSystem final : public ReferenceProblem {
 class InfeasibleRootSystem final : public ReferenceProblem {
  public:
   InfeasibleRootSystem();
-  int num_variables() const override { return 2; }
-  int num_constraints() const override { return 2; }
-  void GetBounds(Eigen::Ref<Eigen::VectorXd> x_lb,
-                 Eigen::Ref<Eigen::VectorXd> x_ub,
-                 Eigen::Ref<Eigen::VectorXd> g_lb,
-                 Eigen::Ref<Eigen::VectorXd> g_ub) const override;
-  double Objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
-  void ObjectiveGradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                         Eigen::Ref<Eigen::VectorXd> grad) const override;
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                   Eigen::Ref<Eigen::VectorXd> g) const override;
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override;
 };
 
 // One instance of each problem above (ContactLikeSystem with n = 18).

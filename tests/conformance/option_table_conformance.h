@@ -23,6 +23,14 @@ inline bool IsOptionName(const std::string& name) {
   });
 }
 
+// Every option of `table` at its default, as SetBackendOptions() text.
+inline GivenOptions DefaultsAsGiven(const OptionTable& table) {
+  GivenOptions defaults;
+  for (const OptionSpec& spec : table)
+    defaults[spec.name] = OptionValueText(spec.default_value);
+  return defaults;
+}
+
 // `Backend`: NlpSolver or Integrator (name(), option_table(),
 // backend_options(), SetBackendOptions()).
 template <typename Backend>
@@ -30,7 +38,6 @@ void ExpectBackendOptionTableValid(Backend& backend) {
   SCOPED_TRACE(backend.name());
   const OptionTable table = backend.option_table();
   std::set<std::string> names;
-  GivenOptions defaults;
   for (const OptionSpec& spec : table) {
     std::string why;
     EXPECT_TRUE(spec.Accepts(spec.default_value, &why))
@@ -41,10 +48,9 @@ void ExpectBackendOptionTableValid(Backend& backend) {
     EXPECT_FALSE(spec.doc.empty()) << spec.name << ": no doc line";
     EXPECT_EQ(ShadowedRunSetting({spec}), "")
         << spec.name << ": named like a run setting (RunSettingNames())";
-    defaults[spec.name] = OptionValueText(spec.default_value);
   }
   EXPECT_EQ(backend.backend_options().values().size(), table.size());
-  EXPECT_NO_THROW(backend.SetBackendOptions(defaults))
+  EXPECT_NO_THROW(backend.SetBackendOptions(DefaultsAsGiven(table)))
       << "the defaults, given as text, are not accepted";
   EXPECT_THROW(backend.SetBackendOptions({{"no_such_option", "1"}}),
                std::invalid_argument);

@@ -38,27 +38,40 @@ Eigen::VectorXd CentralDiff(F f, double h) {
   return (f(h) - f(-h)) / (2 * h);
 }
 
+// The forms f at a chart point against central differences (h = 1e-6) of
+// the chart c(du, dv) -> SurfaceForms there: A = e^T dc, K = e^T dn A^{-1}
+// (to k_tol), tau = e_2^T dx (dx: derivative of the first frame axis),
+// det(frame) = 1. Returns dc for further checks.
+template <typename Chart>
+Eigen::Matrix<double, 3, 2> ExpectFormsMatchDifferences(const SurfaceForms& f,
+                                                        Chart c, double k_tol) {
+  const double h = 1e-6;
+  Eigen::Matrix<double, 3, 2> dc, dn, dx;
+  dc.col(0) = (c(h, 0).point - c(-h, 0).point) / (2 * h);
+  dc.col(1) = (c(0, h).point - c(0, -h).point) / (2 * h);
+  dn.col(0) = (c(h, 0).frame.col(2) - c(-h, 0).frame.col(2)) / (2 * h);
+  dn.col(1) = (c(0, h).frame.col(2) - c(0, -h).frame.col(2)) / (2 * h);
+  dx.col(0) = (c(h, 0).frame.col(0) - c(-h, 0).frame.col(0)) / (2 * h);
+  dx.col(1) = (c(0, h).frame.col(0) - c(0, -h).frame.col(0)) / (2 * h);
+  const Eigen::Matrix<double, 3, 2> e = f.frame.leftCols<2>();
+  EXPECT_LT((f.A - e.transpose() * dc).norm(), 1e-8);
+  EXPECT_LT((f.K - e.transpose() * dn * f.A.inverse()).norm(), k_tol);
+  EXPECT_LT((f.tau - f.frame.col(1).transpose() * dx).norm(), 1e-8);
+  EXPECT_NEAR(f.frame.determinant(), 1.0, 1e-14);
+  return dc;
+}
+
 TEST(SurfaceForms, TorusFormsMatchDefinitions) {
   const double R = 0.08, r = 0.02;
   for (double u : {0.3, 1.7, -2.5}) {
     for (double v : {0.0, 0.4, -0.9}) {
       const SurfaceForms f = TorusForms(R, r, u, v);
-      const double h = 1e-6;
-      auto c = [&](double du, double dv) {
-        return TorusForms(R, r, u + du, v + dv);
-      };
-      Eigen::Matrix<double, 3, 2> dc, dn, dx;
-      dc.col(0) = (c(h, 0).point - c(-h, 0).point) / (2 * h);
-      dc.col(1) = (c(0, h).point - c(0, -h).point) / (2 * h);
-      dn.col(0) = (c(h, 0).frame.col(2) - c(-h, 0).frame.col(2)) / (2 * h);
-      dn.col(1) = (c(0, h).frame.col(2) - c(0, -h).frame.col(2)) / (2 * h);
-      dx.col(0) = (c(h, 0).frame.col(0) - c(-h, 0).frame.col(0)) / (2 * h);
-      dx.col(1) = (c(0, h).frame.col(0) - c(0, -h).frame.col(0)) / (2 * h);
-      const Eigen::Matrix<double, 3, 2> e = f.frame.leftCols<2>();
-      EXPECT_LT((f.A - e.transpose() * dc).norm(), 1e-8);
-      EXPECT_LT((f.K - e.transpose() * dn * f.A.inverse()).norm(), 1e-6);
-      EXPECT_LT((f.tau - f.frame.col(1).transpose() * dx).norm(), 1e-8);
-      EXPECT_NEAR(f.frame.determinant(), 1.0, 1e-14);
+      const Eigen::Matrix<double, 3, 2> dc = ExpectFormsMatchDifferences(
+          f,
+          [&](double du, double dv) {
+            return TorusForms(R, r, u + du, v + dv);
+          },
+          1e-6);
       EXPECT_LT(
           (f.frame.col(2) - dc.col(0).cross(dc.col(1)).normalized()).norm(),
           1e-8);
@@ -73,26 +86,31 @@ TEST(SurfaceForms, TerrainFormsMatchDefinitionsOnNonOrthogonalChart) {
     ASSERT_GT(std::abs(jet.hx * jet.hy), 1e-6)
         << "chart must be non-orthogonal here";
     const SurfaceForms f = TerrainForms(jet, pt.x(), pt.y());
-    const double h = 1e-6;
-    auto c = [&](double dx, double dy) {
-      return TerrainForms(terrain->Evaluate(pt.x() + dx, pt.y() + dy),
-                          pt.x() + dx, pt.y() + dy);
-    };
-    Eigen::Matrix<double, 3, 2> dc, dn, dxf;
-    dc.col(0) = (c(h, 0).point - c(-h, 0).point) / (2 * h);
-    dc.col(1) = (c(0, h).point - c(0, -h).point) / (2 * h);
-    dn.col(0) = (c(h, 0).frame.col(2) - c(-h, 0).frame.col(2)) / (2 * h);
-    dn.col(1) = (c(0, h).frame.col(2) - c(0, -h).frame.col(2)) / (2 * h);
-    dxf.col(0) = (c(h, 0).frame.col(0) - c(-h, 0).frame.col(0)) / (2 * h);
-    dxf.col(1) = (c(0, h).frame.col(0) - c(0, -h).frame.col(0)) / (2 * h);
-    const Eigen::Matrix<double, 3, 2> e = f.frame.leftCols<2>();
-    EXPECT_LT((f.A - e.transpose() * dc).norm(), 1e-8);
-    EXPECT_LT((f.K - e.transpose() * dn * f.A.inverse()).norm(), 1e-7);
+    ExpectFormsMatchDifferences(
+        f,
+        [&](double dx, double dy) {
+          return TerrainForms(terrain->Evaluate(pt.x() + dx, pt.y() + dy),
+                              pt.x() + dx, pt.y() + dy);
+        },
+        1e-7);
     EXPECT_LT((f.K - f.K.transpose()).norm(), 1e-14);
-    EXPECT_LT((f.tau - f.frame.col(1).transpose() * dxf).norm(), 1e-8);
-    EXPECT_NEAR(f.frame.determinant(), 1.0, 1e-14);
     EXPECT_LT(std::abs(f.frame.col(0).dot(f.frame.col(1))), 1e-15);
   }
+}
+
+// World velocity p' and angular velocity vee(R' R(0)^T) of a pose path
+// t -> (R(t), p(t)) at t = 0 by central differences (h = 1e-6); r0 = R(0).
+struct WorldTwist {
+  Vec3 v, w;
+};
+template <typename PosePath>
+WorldTwist CentralDiffTwist(PosePath pose, const Mat3& r0) {
+  const double h = 1e-6;
+  Mat3 Rp, Rm;
+  Vec3 pp, pm;
+  pose(h, &Rp, &pp);
+  pose(-h, &Rm, &pm);
+  return {(pp - pm) / (2 * h), Vee((Rp - Rm) / (2 * h) * r0.transpose())};
 }
 
 Configuration RoughStart(const KinematicModel& model) {
@@ -161,17 +179,10 @@ TEST(Kinematics, ContactVelocityMapMatchesFiniteDifferencedMotion) {
       *R_GW = R * R_PW;
       *point = p + R * (p_PW + R_PW * local);
     };
-    const double h = 1e-6;
-    Mat3 Rp, Rm;
-    Vec3 xp, xm;
-    pose(h, &Rp, &xp);
-    pose(-h, &Rm, &xm);
-    const Vec3 v_world = (xp - xm) / (2 * h);
-    const Mat3 rdot = (Rp - Rm) / (2 * h);
-    const Vec3 w_world = Vee(rdot * s.R_GW.transpose());
-    EXPECT_LT((twist.head<3>() - s.R_GCW.transpose() * v_world).norm(), 1e-8)
+    const WorldTwist fd = CentralDiffTwist(pose, s.R_GW);
+    EXPECT_LT((twist.head<3>() - s.R_GCW.transpose() * fd.v).norm(), 1e-8)
         << "wheel " << i;
-    EXPECT_LT((twist.tail<3>() - s.R_GCW.transpose() * w_world).norm(), 1e-8)
+    EXPECT_LT((twist.tail<3>() - s.R_GCW.transpose() * fd.w).norm(), 1e-8)
         << "wheel " << i;
   }
 }
@@ -214,15 +225,9 @@ TEST(Kinematics, MontanaIsConsistentWithChainForwardKinematics) {
       *R = cs.R;
       *p = cs.p;
     };
-    const double h = 1e-6;
-    Mat3 Rp, Rm;
-    Vec3 pp, pm;
-    chain_pose(h, &Rp, &pp);
-    chain_pose(-h, &Rm, &pm);
-    const Vec3 v_fd = (pp - pm) / (2 * h);
-    const Vec3 w_fd = Vee((Rp - Rm) / (2 * h) * s.R.transpose());
-    EXPECT_LT((v_fd - expected.head<3>()).norm(), 1e-8) << "wheel " << i;
-    EXPECT_LT((w_fd - expected.tail<3>()).norm(), 1e-8) << "wheel " << i;
+    const WorldTwist fd = CentralDiffTwist(chain_pose, s.R);
+    EXPECT_LT((fd.v - expected.head<3>()).norm(), 1e-8) << "wheel " << i;
+    EXPECT_LT((fd.w - expected.tail<3>()).norm(), 1e-8) << "wheel " << i;
   }
 }
 
@@ -314,17 +319,24 @@ TEST(InitialConfiguration, FlatGroundGivesDesignHeight) {
   }
 }
 
+// Platform pose (R, p) of the initial configuration at (x0, y0, yaw0) with
+// zero joint angles on an incline of slope beta ascending towards `ascent`.
+void InclineStart(double beta, double ascent, double x0, double y0, double yaw0,
+                  Mat3* R, Vec3* p) {
+  const KinematicModel model(RobotGeometry{},
+                             std::make_shared<InclineTerrain>(beta, ascent));
+  const Configuration theta =
+      SolveInitialConfiguration(model, x0, y0, yaw0, {0, 0, 0, 0, 0, 0});
+  model.PlatformPose(theta, R, p);
+}
+
 TEST(InitialConfiguration, InclineGivesSlopePitchAndRoll) {
   const double beta = 10.0 * M_PI / 180;
+  Mat3 R;
+  Vec3 p;
   // Straight uphill: nose up by beta (pitch = -beta with R = Rz Ry Rx).
   {
-    const KinematicModel model(RobotGeometry{},
-                               std::make_shared<InclineTerrain>(beta, 0.0));
-    const Configuration theta =
-        SolveInitialConfiguration(model, 0, 0, 0, {0, 0, 0, 0, 0, 0});
-    Mat3 R;
-    Vec3 p;
-    model.PlatformPose(theta, &R, &p);
+    InclineStart(beta, 0.0, 0, 0, 0, &R, &p);
     const Vec3 rpy = RpyFromRotation(R);
     EXPECT_NEAR(rpy(0), 0.0, 1e-10);
     EXPECT_NEAR(rpy(1), -beta, 1e-10);
@@ -333,27 +345,15 @@ TEST(InitialConfiguration, InclineGivesSlopePitchAndRoll) {
   }
   // Across the slope (heading +x, ascent along +y): roll = -beta (left up).
   {
-    const KinematicModel model(
-        RobotGeometry{}, std::make_shared<InclineTerrain>(beta, M_PI / 2));
-    const Configuration theta =
-        SolveInitialConfiguration(model, 0, 0, 0, {0, 0, 0, 0, 0, 0});
-    Mat3 R;
-    Vec3 p;
-    model.PlatformPose(theta, &R, &p);
+    InclineStart(beta, M_PI / 2, 0, 0, 0, &R, &p);
     const Vec3 rpy = RpyFromRotation(R);
     EXPECT_NEAR(rpy(0), beta, 1e-10);
     EXPECT_NEAR(rpy(1), 0.0, 1e-10);
   }
   // Oblique: the platform z axis is the plane normal.
   {
-    auto terrain = std::make_shared<InclineTerrain>(beta, 0.7);
-    const KinematicModel model(RobotGeometry{}, terrain);
-    const Configuration theta =
-        SolveInitialConfiguration(model, 0.1, -0.2, 1.9, {0, 0, 0, 0, 0, 0});
-    Mat3 R;
-    Vec3 p;
-    model.PlatformPose(theta, &R, &p);
-    const TerrainJet jet = terrain->Evaluate(0, 0);
+    InclineStart(beta, 0.7, 0.1, -0.2, 1.9, &R, &p);
+    const TerrainJet jet = InclineTerrain(beta, 0.7).Evaluate(0, 0);
     const Vec3 n = Vec3(-jet.hx, -jet.hy, 1).normalized();
     EXPECT_LT((R.col(2) - n).norm(), 1e-10);
   }

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "quasiroll/conformance/nlp_reference_problems.h"
+#include "quasiroll/conformance/option_table_conformance.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/nlp_polish.h"
 #ifdef QUASIROLL_HAVE_IPOPT
@@ -140,6 +141,20 @@ INSTANTIATE_TEST_SUITE_P(
 // ------------------------------------------------------ per-backend tests ---
 class BackendTest : public ::testing::TestWithParam<std::string> {
  protected:
+  // Whether this backend takes problem p (a square system if it needs one).
+  bool Takes(const ReferenceProblem& p) const {
+    return !solver_->RequiresSquareSystem() || p.IsSquareSystem();
+  }
+  // Solves p from its starting point; success iff kConverged.
+  ::testing::AssertionResult SolvesFromStart(const ReferenceProblem& p,
+                                             const NlpOptions& options,
+                                             NlpResult* r) {
+    const NlpStatus status = solver_->Solve(p, p.starting_point(), options, r);
+    if (status == NlpStatus::kConverged) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure()
+           << p.name() << ": " << ToString(status) << " " << r->backend_status;
+  }
+
   std::unique_ptr<NlpSolver> solver_ = NlpSolverRegistry::Create(GetParam());
 };
 
@@ -152,9 +167,7 @@ TEST_P(BackendTest, SquareSystemsToOneEMinus12) {
   for (const char* name : {"circle_line", "contact_like_18"}) {
     auto p = MakeReferenceProblem(name);
     NlpResult r;
-    ASSERT_EQ(solver_->Solve(*p, p->starting_point(), options, &r),
-              NlpStatus::kConverged)
-        << name << ": " << r.backend_status;
+    ASSERT_TRUE(SolvesFromStart(*p, options, &r));
     Report(GetParam(), *p, r);
     EXPECT_LE(r.max_constraint_violation, 1e-12) << name;
     // Nonsingular Jacobian with O(1) entries: |x - x*| ~ |residual|.
@@ -166,13 +179,11 @@ TEST_P(BackendTest, SquareSystemsToOneEMinus12) {
 TEST_P(BackendTest, WarmStartTakesNoMoreIterations) {
   for (const char* name : {"hs071", "contact_like_18"}) {
     auto p = MakeReferenceProblem(name);
-    if (solver_->RequiresSquareSystem() && !p->IsSquareSystem()) continue;
+    if (!Takes(*p)) continue;
     NlpOptions options;
     options.max_iterations = 500;
     NlpResult r;
-    ASSERT_EQ(solver_->Solve(*p, p->starting_point(), options, &r),
-              NlpStatus::kConverged)
-        << name << ": " << r.backend_status;
+    ASSERT_TRUE(SolvesFromStart(*p, options, &r));
     const int cold = r.iterations;
     const Eigen::VectorXd x_cold = r.x;
     options.warm_start_multipliers = true;  // r.multipliers from the cold solve
@@ -195,7 +206,7 @@ TEST_P(BackendTest, ReuseAcrossProblemsMatchesFreshSolver) {
   options.max_iterations = 500;
   for (int pass = 0; pass < 2; ++pass) {
     for (const auto& p : MakeReferenceProblems()) {
-      if (solver_->RequiresSquareSystem() && !p->IsSquareSystem()) continue;
+      if (!Takes(*p)) continue;
       NlpResult reused, fresh;
       const NlpStatus s1 =
           solver_->Solve(*p, p->starting_point(), options, &reused);
@@ -324,22 +335,12 @@ TEST_P(BackendTest, IterationLimitIsReported) {
 // the settings as they were; setting every option to its default changes no
 // answer (the table's defaults are the backend's behaviour).
 TEST_P(BackendTest, OptionTableIsWellFormedAndEnforced) {
+  auto p = MakeReferenceProblem("contact_like_18");
+  NlpResult a, b;
+  solver_->Solve(*p, p->starting_point(), NlpOptions(), &a);
+  // Well formed, the defaults accepted as text, an unknown option rejected.
+  conformance::ExpectBackendOptionTableValid(*solver_);
   const OptionTable table = solver_->option_table();
-  std::set<std::string> names;
-  GivenOptions defaults;
-  for (const OptionSpec& spec : table) {
-    std::string why;
-    EXPECT_TRUE(spec.Accepts(spec.default_value, &why))
-        << spec.name << ": " << why;
-    EXPECT_TRUE(names.insert(spec.name).second) << spec.name;
-    EXPECT_FALSE(spec.doc.empty()) << spec.name;
-    for (char c : spec.name)
-      EXPECT_TRUE(std::islower(static_cast<unsigned char>(c)) ||
-                  std::isdigit(static_cast<unsigned char>(c)) || c == '_')
-          << spec.name;
-    defaults[spec.name] = OptionValueText(spec.default_value);
-  }
-  EXPECT_EQ(solver_->backend_options().values().size(), table.size());
   try {
     solver_->SetBackendOptions({{"no_such_option", "1"}});
     ADD_FAILURE() << "unknown option accepted";
@@ -351,10 +352,7 @@ TEST_P(BackendTest, OptionTableIsWellFormedAndEnforced) {
       EXPECT_NE(msg.find(table.front().name), std::string::npos) << msg;
     }
   }
-  auto p = MakeReferenceProblem("contact_like_18");
-  NlpResult a, b;
-  solver_->Solve(*p, p->starting_point(), NlpOptions(), &a);
-  solver_->SetBackendOptions(defaults);
+  solver_->SetBackendOptions(conformance::DefaultsAsGiven(table));
   solver_->Solve(*p, p->starting_point(), NlpOptions(), &b);
   EXPECT_EQ(a.status, b.status);
   EXPECT_EQ(a.iterations, b.iterations);
@@ -372,15 +370,13 @@ TEST_P(BackendTest, OptionTableIsWellFormedAndEnforced) {
 // newton count exactly their accepted iterates natively.
 TEST_P(BackendTest, ConvergedResultsCarryMultipliersAndComparableCounts) {
   const std::string& backend = GetParam();
+  NlpOptions options;
+  options.max_iterations = 500;
   for (const char* name : {"hs071", "hs040", "contact_like_18"}) {
     auto p = MakeReferenceProblem(name);
-    if (solver_->RequiresSquareSystem() && !p->IsSquareSystem()) continue;
-    NlpOptions options;
-    options.max_iterations = 500;
+    if (!Takes(*p)) continue;
     NlpResult r;
-    ASSERT_EQ(solver_->Solve(*p, p->starting_point(), options, &r),
-              NlpStatus::kConverged)
-        << name << ": " << r.backend_status;
+    ASSERT_TRUE(SolvesFromStart(*p, options, &r));
     std::printf("[nlp] %-7s %-16s iterations %d native %d multipliers %s\n",
                 backend.c_str(), name, r.iterations, r.native_iterations,
                 r.multipliers_estimated ? "estimated" : "own");
