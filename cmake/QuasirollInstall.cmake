@@ -78,6 +78,9 @@ install(FILES ${PROJECT_SOURCE_DIR}/LICENSE ${PROJECT_SOURCE_DIR}/CITATION.cff
 
 install(EXPORT quasirollTargets NAMESPACE quasiroll::
         DESTINATION ${QUASIROLL_INSTALL_CMAKEDIR} COMPONENT devel)
+# The backends' find_dependency() calls, from the quasiroll_add_backend()
+# calls (cmake/QuasirollBackend.cmake).
+quasiroll_backend_config_code(QUASIROLL_BACKEND_DEPENDENCIES)
 configure_package_config_file(
   ${CMAKE_CURRENT_LIST_DIR}/quasirollConfig.cmake.in
   ${PROJECT_BINARY_DIR}/quasirollConfig.cmake

@@ -5,13 +5,22 @@
 set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config git ccache
-  libeigen3-dev coinor-libipopt-dev liblapack-dev libnlopt-cxx-dev libceres-dev
-  libsundials-dev libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev
+  libeigen3-dev libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev
   libcli11-dev python3 python3-matplotlib python3-numpy
   libopenmpi-dev openmpi-bin python3-pandas
   python3-dev pybind11-dev python3-pybind11 python3-pytest
   chromium clang-format libjs-three
 )
+# The optional backends' libraries: one line per quasiroll_add_backend()
+# OPTION (solvers/CMakeLists.txt, integrators/CMakeLists.txt), with the
+# backends that need them (docs/plugins.md, "Adding a backend").
+BACKEND_PACKAGES=(
+  coinor-libipopt-dev liblapack-dev  # QUASIROLL_WITH_IPOPT: ipopt, ipopt-mumps
+  libnlopt-cxx-dev                   # QUASIROLL_WITH_NLOPT: slsqp
+  libceres-dev                       # QUASIROLL_WITH_CERES: ceres
+  libsundials-dev                    # QUASIROLL_WITH_SUNDIALS: ida, cvode-projection
+)
+PACKAGES+=("${BACKEND_PACKAGES[@]}")
 # Optional, not needed by scripts/test.sh: clang + libFuzzer runtime for
 # scripts/fuzz.sh (docs/fuzzing.md).
 OPTIONAL_FUZZ_PACKAGES=(clang libclang-rt-14-dev)
