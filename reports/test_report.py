@@ -28,6 +28,7 @@ from quasiroll_report import plotting  # noqa: E402
 from quasiroll_report import robot  # noqa: E402
 from quasiroll_report import problems  # noqa: E402
 from quasiroll_report import data  # noqa: E402
+from quasiroll_report import data as data_module  # noqa: E402
 from quasiroll_report.data import read_meta, read_references, read_runs  # noqa: E402
 from quasiroll_report.report import FIGURE_NAMES  # noqa: E402
 
@@ -568,6 +569,183 @@ class MethodIdentityTest(unittest.TestCase):
         charts = {c["group"]: c for c in sel.stability_charts(legacy)}
         self.assertEqual([p["rows"] for p in charts["stability_sigma_dt"]["panels"]],
                          [["ipopt/rk-baumgarte/zoh"]])
+
+
+def _base_row(**fields):
+    row = {"run_id": "r", "scene": "paper", "nlp": "n", "dae": "d", "coupling": "zoh",
+           "method": "n/d/zoh", "dt": 0.1, "tol": 1e-6, "sigma": 5.0, "eps": 1e-8,
+           "mu": 0.5, "seed": "1", "roughness": float("nan"), "t_end": 8.0,
+           "status": "success", "t_reached": 8.0, "err_pos_rms": 1e-5, "substeps": 1.0}
+    row.update(fields)
+    return row
+
+
+class RefereeTest(unittest.TestCase):
+    """Issue #21 item 8, the referee's smaller points (report side)."""
+
+    def manifest(self):
+        with open(os.path.join(Fixture.good, "report", "figures.json")) as handle:
+            return {entry["name"]: entry for entry in json.load(handle)}
+
+    def html(self):
+        with open(os.path.join(Fixture.good, "report", "index.html"),
+                  encoding="utf-8") as handle:
+            return handle.read()
+
+    # 1. sweep panels are titled by what is held fixed, never the swept value
+    def test_sweep_panels_titled_by_fixed_parameters(self):
+        manifest = self.manifest()
+        for name in ("fig13_traction_vs_mu", "fig14_total_slip_vs_mu"):
+            titles = [p["title"] for p in manifest[name]["data"]["panels"]]
+            self.assertEqual(len(titles), 2, titles)
+            for title in titles:
+                self.assertNotIn("μ=", title)
+                self.assertIn("Δt=0.1 s", title)
+            self.assertIn("pvc mode", titles[1])
+        labels = {name: [p["label"] for p in manifest[name]["data"]["panels"]]
+                  for name in STABILITY_FIGURES}
+        self.assertTrue(all("roughness" not in lab for lab in labels["fig_stability_roughness"]),
+                        labels)
+        self.assertTrue(all("μ=" not in lab for lab in labels["fig_stability_mu"]), labels)
+        self.assertTrue(all("Δt" not in lab for lab in labels["fig_stability_dt"]), labels)
+        self.assertIn("μ=0.5", labels["fig_stability_dt"][0])
+        # A field that varies over the panel's rows is never taken from one row.
+        rows = [_base_row(mu=0.3), _base_row(mu=0.5, dt=0.2)]
+        label = problems.fixed_label(rows)
+        self.assertNotIn("μ=", label)
+        self.assertNotIn("Δt", label)
+        self.assertIn("8 s", label)
+        self.assertNotIn("μ=", problems.fixed_label(rows[:1], omit=("mu",)))
+
+    # 2. the μ_min label stays inside its axes, clear of the title
+    def assert_inside_axes_clear_of_title(self, fig, ax, needle):
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        texts = [t for t in ax.texts if needle in t.get_text()]
+        self.assertEqual(len(texts), 1, [t.get_text() for t in ax.texts])
+        box = texts[0].get_window_extent(renderer)
+        frame = ax.get_window_extent(renderer)
+        self.assertGreaterEqual(box.y0, frame.y0 - 1)
+        self.assertLessEqual(box.y1, frame.y1 + 1)
+        self.assertGreaterEqual(box.x0, frame.x0 - 1)
+        self.assertFalse(box.overlaps(ax.title.get_window_extent(renderer)))
+
+    def test_mu_min_label_inside_axes(self):
+        from quasiroll_report import figures_methods, figures_paper
+        plotting.apply_style()
+        for rows in (["a/b/zoh"], ["a/b/zoh", "c/d/zoh", "e/f/zoh"]):
+            panel = {"rows": rows, "values": [0.1, 0.3, 0.5], "numeric": True, "log": False,
+                     "cells": {(rows[0], j): {"cls": "success", "detail": "", "label": "1"}
+                               for j in range(3)},
+                     "label": "paper · 8 s", "mu_min": 0.43, "limits": []}
+            fig = plotting.new_figure(7, 1.3 + 0.3 * len(rows))
+            ax = fig.add_subplot()
+            figures_methods._draw_stability_panel(ax, panel, "μ [-]", "mu")
+            self.assert_inside_axes_clear_of_title(fig, ax, "μ_min")
+            plotting.plt.close(fig)
+        fig = plotting.new_figure(5, 4)
+        ax = fig.add_subplot()
+        ax.plot([0.2, 0.8], [1, 2])
+        ax.set_title("paper · 8 s\ntotal traction per method")
+        figures_paper._mu_min_line(ax, 0.43)
+        self.assert_inside_axes_clear_of_title(fig, ax, "μ_min")
+        plotting.plt.close(fig)
+
+    # 3. numeric axes by value; the RK4 limit on the σ·Δt axis
+    def test_numeric_axes_and_rk4_limit(self):
+        manifest = self.manifest()
+        sigma = manifest["fig_stability_sigma_dt"]
+        for panel in sigma["data"]["panels"]:
+            self.assertTrue(panel["numeric"])
+            self.assertEqual(panel["limits"], [2.785])
+        self.assertIn("h = Δt/substeps", sigma["caption"])
+        self.assertIn("σ·h = 2.785", sigma["caption"])
+        for name in ("fig_stability_mu", "fig_stability_dt"):
+            self.assertTrue(all(p["numeric"] for p in manifest[name]["data"]["panels"]))
+        # substeps: h = Δt/substeps, so the line sits at 2.785·substeps
+        rk4 = _base_row(dae_options=json.dumps({"baumgarte_sigma": 5, "rk_method": "rk4"}),
+                        substeps=4.0)
+        adaptive = _base_row(dae_options=json.dumps({"baumgarte_sigma": 5,
+                                                     "rk_method": "dp54"}))
+        self.assertEqual([(round(x, 6), n) for x, n in sel.rk4_limit_lines([rk4, adaptive])],
+                         [(11.14, 4)])
+        # drawn by value on a log axis, with the limit line
+        from quasiroll_report import figures_methods
+        values = [0.05, 0.5, 1.0, 40.0]
+        panel = {"rows": ["a/b/zoh"], "values": values, "numeric": True, "log": True,
+                 "cells": {("a/b/zoh", j): {"cls": "success", "detail": "", "label": "1"}
+                           for j in range(4)},
+                 "label": "x", "mu_min": float("nan"), "limits": [(2.785, 1)]}
+        fig = plotting.new_figure(8, 1.6)
+        ax = fig.add_subplot()
+        figures_methods._draw_stability_panel(ax, panel, "σ·Δt [-]", "sigma_dt")
+        self.assertEqual(ax.get_xscale(), "log")
+        self.assertEqual([float(t) for t in ax.get_xticks()], values)
+        lo, hi = ax.get_xlim()
+        self.assertTrue(lo < 0.05 and hi > 40.0, (lo, hi))
+        centres = sorted(p.get_x() + p.get_width() / 2 for p in ax.patches)
+        self.assertEqual(len(centres), 4)
+        # bands sit by value: the 0.5..1 gap is narrow, 1..40 wide
+        widths = [p.get_width() for p in sorted(ax.patches, key=lambda p: p.get_x())]
+        self.assertLess(widths[1], widths[3])
+        self.assertTrue(any(list(line.get_xdata()) == [2.785, 2.785] for line in ax.lines))
+        plotting.plt.close(fig)
+
+    # 4. no σ for integrators without a Baumgarte gain
+    def test_no_sigma_without_baumgarte_gain(self):
+        manifest = self.manifest()
+        legend = manifest["fig15_stabilisation"]["data"]["legend"]
+        projection = [t for t in legend if t.startswith("rk-projection")]
+        baumgarte = [t for t in legend if t.startswith("rk-baumgarte")]
+        self.assertTrue(projection and baumgarte, legend)
+        self.assertNotIn("σ", projection[0])
+        self.assertIn("σ=5", baumgarte[0])
+        data = manifest["fig_stability_sigma_dt"]["data"]
+        self.assertEqual(data["left_out"], ["newton/rk-projection/zoh"])
+        self.assertNotIn("newton/rk-projection/zoh", [r for p in data["panels"]
+                                                      for r in p["rows"]])
+        self.assertIn("without a Baumgarte gain", manifest["fig_stability_sigma_dt"]["caption"])
+        with_gain = _base_row(dae_options='{"baumgarte_sigma":5,"rk_method":"rk4"}')
+        without = _base_row(dae_options='{"projection_tolerance":1e-12,"rk_method":"rk4"}')
+        self.assertTrue(data_module.has_dae_option(with_gain, "baumgarte_sigma"))
+        self.assertFalse(data_module.has_dae_option(without, "baumgarte_sigma"))
+
+    # 5. a blow-up status reads as numerical in the summary
+    def test_summary_status_shows_cause_class(self):
+        html = self.html()
+        summary = html[html.index("Summary"):html.index("Fastest")]
+        self.assertIn("INFEASIBLE_FRICTION (numerical: drift_blowup)", summary)
+        self.assertIn("DEGENERATE_CONTACT (numerical: baumgarte_instability)", summary)
+        self.assertIn("INFEASIBLE_FRICTION (physical: friction_limit)", summary)
+        self.assertNotRegex(summary, r"INFEASIBLE_FRICTION \d")
+        blowup = _base_row(status="drift_exceeded")
+        self.assertEqual(sel.status_text(blowup), "drift_exceeded (numerical: drift_blowup)")
+        friction = _base_row(status="INFEASIBLE_FRICTION", cause="numerical",
+                             cause_detail="baumgarte_instability")
+        self.assertEqual(sel.status_text(friction),
+                         "INFEASIBLE_FRICTION (numerical: baumgarte_instability)")
+        self.assertEqual(sel.status_text(_base_row(status="INFEASIBLE_FRICTION")),
+                         "INFEASIBLE_FRICTION (unclassified)")
+
+    # 6. Fig. 5: one method in both panels, camber shown in degrees
+    def test_fig5_one_method_and_camber_labels(self):
+        entry = self.manifest()["fig05_snapshots"]
+        panels = entry["data"]["panels"]
+        self.assertEqual(len(panels), 2)
+        self.assertEqual(panels[0]["method"], panels[1]["method"])
+        self.assertIn(f"same method, {panels[0]['method']}", entry["caption"])
+        for panel in panels:
+            self.assertEqual([lab[:3] for lab in panel["camber_labels"]], ["δ2=", "δ3="])
+            self.assertTrue(all(lab.endswith("°") for lab in panel["camber_labels"]))
+        # The paper scene's own pick (finest Δt, m1) is not run in pvc mode:
+        # the pair is the method both ran (m2), not m1 beside m3.
+        runs = [_base_row(run_id="a", method="m1", dt=0.05),
+                _base_row(run_id="b", method="m2", dt=0.1),
+                _base_row(run_id="c", method="m2", dt=0.1, scene="paper_pvc"),
+                _base_row(run_id="d", method="m3", dt=0.05, scene="paper_pvc")]
+        self.assertEqual(sel.paper_run(runs, lambda r: True)["run_id"], "a")
+        paper, pvc = sel.snapshot_pair(runs, lambda r: True, "paper_pvc")
+        self.assertEqual((paper["run_id"], pvc["run_id"]), ("b", "c"))
 
 
 class BadInputTest(unittest.TestCase):

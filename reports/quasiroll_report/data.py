@@ -210,6 +210,55 @@ def _legacy_dae_options(run):
     return options
 
 
+def dae_option_table(run):
+    """{name: value} of the integrator's option table as the run used it
+    (runs.csv `dae_options`), or None when the row does not carry it."""
+    try:
+        table = json.loads(run.get("dae_options") or "null")
+    except (TypeError, ValueError):
+        return None
+    return table if isinstance(table, dict) else None
+
+
+def dae_option_known(run, name):
+    """True / False when the row shows whether its integrator has the option
+    `name` (`dae_options` written, or the method id naming it); None when it
+    cannot tell (older rows)."""
+    table = dae_option_table(run)
+    if table is not None:
+        return name in table
+    if name in dict(parse_method(run.get("method", ""))[3]):
+        return True
+    return None
+
+
+def has_dae_option(run, name):
+    """True when the run's integrator has the option `name` (e.g.
+    baumgarte_sigma): from `dae_options` where written, else from the
+    method id; for older rows without either, from a shorthand column that
+    holds a number."""
+    known = dae_option_known(run, name)
+    if known is not None:
+        return known
+    column = {option: col for col, option, _ in LEGACY_OPTION_COLUMNS}.get(name)
+    return column is not None and is_finite(run.get(column, math.nan))
+
+
+def dae_option(run, name, default=None):
+    """The value of an integrator option: `dae_options`, else the method id,
+    else the shorthand column; `default` when the integrator lacks it."""
+    table = dae_option_table(run)
+    if table is not None:
+        return table.get(name, default)
+    options = dict(parse_method(run.get("method", ""))[3])
+    if name in options:
+        return options[name]
+    column = {option: col for col, option, _ in LEGACY_OPTION_COLUMNS}.get(name)
+    value = run.get(column) if column else None
+    return default if value in (None, "") or (isinstance(value, float)
+                                              and not math.isfinite(value)) else value
+
+
 def method_name(run):
     """runs.csv `method`; for older files derived from nlp/dae/coupling and
     the shorthand columns (LEGACY_OPTION_COLUMNS)."""

@@ -11,6 +11,7 @@ from matplotlib.patches import Patch
 from . import selection as sel
 from .data import is_finite
 from .plotting import (MissingData, NOT_RUN_COLOUR, UNKNOWN_COLOUR, cause_colour,
+                       vline_label,
                        fmt, new_figure, no_data, positive, save_figure,
                        text_colour)
 from .data import is_variant
@@ -254,27 +255,104 @@ def _cell_colour(cell):
     return cause_colour(cell["cls"], cell["detail"])
 
 
-def _draw_stability_panel(ax, panel, axis_label, axis):
+def _rgb(colour):
+    return [int(colour[k:k + 2], 16) / 255 for k in (1, 3, 5)]
+
+
+def _draw_category_cells(ax, panel):
     rows, values = panel["rows"], panel["values"]
     image = np.ones((len(rows), len(values), 3))
     for i, row in enumerate(rows):
         for j in range(len(values)):
             cell = panel["cells"].get((row, j))
-            colour = _cell_colour(cell) if cell else NOT_RUN_COLOUR
-            image[i, j] = [int(colour[k:k + 2], 16) / 255 for k in (1, 3, 5)]
+            image[i, j] = _rgb(_cell_colour(cell) if cell else NOT_RUN_COLOUR)
     ax.imshow(image, aspect="auto", interpolation="nearest")
     for (row, j), cell in panel["cells"].items():
-        i = rows.index(row)
-        ax.text(j, i, cell["label"], ha="center", va="center", fontsize=7,
+        ax.text(j, rows.index(row), cell["label"], ha="center", va="center", fontsize=7,
                 color=text_colour(_cell_colour(cell)))
     ax.set_xticks(range(len(values)))
     many = len(values) > 8
     ax.set_xticklabels([sel.format_value(v) for v in values],
                        rotation=45 if many else 0, ha="right" if many else "center",
                        fontsize=8)
+    ax.set_xticks(np.arange(-0.5, len(values)), minor=True)
+
+
+def value_edges(values, log):
+    """Cell edges of sorted numeric axis values: half-way between neighbours
+    (in log10 where log), half a gap beyond the ends."""
+    t = np.log10(values) if log else np.asarray(values, dtype=float)
+    if t.size == 1:
+        half = 0.15 if log else max(0.1 * abs(float(t[0])), 0.05)
+        edges = np.array([t[0] - half, t[0] + half])
+    else:
+        mids = 0.5 * (t[1:] + t[:-1])
+        edges = np.concatenate([[t[0] - (mids[0] - t[0])], mids,
+                                [t[-1] + (t[-1] - mids[-1])]])
+    return 10 ** edges if log else edges
+
+
+def _draw_value_cells(ax, panel):
+    """A numeric axis: each column a band from half-way to its neighbours,
+    positioned by value (log10 where the values span a decade), a tick and a
+    dot at the value itself."""
+    from matplotlib.patches import Rectangle
+    from matplotlib.ticker import FixedLocator, NullFormatter, NullLocator
+    rows, values = panel["rows"], [float(v) for v in panel["values"]]
+    log = panel["log"]
+    edges = value_edges(values, log)
+    if log:
+        ax.set_xscale("log")
+    span = (np.log10(edges[-1] / edges[0]) if log else edges[-1] - edges[0])
+    fig = ax.figure
+    width_pt = ax.get_position().width * fig.get_figwidth() * 72
+
+    def width_of(j):
+        w = (np.log10(edges[j + 1] / edges[j]) if log else edges[j + 1] - edges[j])
+        return w / span * width_pt
+
+    for i, row in enumerate(rows):
+        for j, value in enumerate(values):
+            cell = panel["cells"].get((row, j))
+            colour = _cell_colour(cell) if cell else NOT_RUN_COLOUR
+            ax.add_patch(Rectangle((edges[j], i - 0.5), edges[j + 1] - edges[j], 1.0,
+                                   facecolor=colour, edgecolor="white", linewidth=0.8))
+            if cell is None:
+                continue
+            text = text_colour(colour)
+            ax.plot([value], [i + 0.32], marker="o", markersize=2.5, color=text,
+                    linestyle="none")
+            w = width_of(j)
+            if w >= 7:
+                ax.text(value, i, cell["label"], ha="center", va="center",
+                        fontsize=7 if w >= 22 else 6, rotation=0 if w >= 22 else 90,
+                        color=text, clip_on=True)
+    ax.set_xlim(edges[0], edges[-1])
+    ax.set_ylim(len(rows) - 0.5, -0.5)
+    # Tick labels by value; a label too close to the previous one is left out
+    # (the value is still ticked, and in the table below the figure).
+    shown, last = [], -math.inf
+    for value in values:
+        at = ((np.log10(value / edges[0]) if log else value - edges[0]) / span * width_pt)
+        shown.append(sel.format_value(value) if at - last >= 18 else "")
+        if shown[-1]:
+            last = at
+    ax.xaxis.set_major_locator(FixedLocator(values))
+    ax.set_xticklabels(shown, rotation=90 if len(values) > 8 else 0, fontsize=8)
+    ax.xaxis.set_minor_locator(NullLocator())
+    ax.xaxis.set_minor_formatter(NullFormatter())
+
+
+def _draw_stability_panel(ax, panel, axis_label, axis):
+    rows = panel["rows"]
+    if panel.get("numeric"):
+        _draw_value_cells(ax, panel)
+        xs = None
+    else:
+        _draw_category_cells(ax, panel)
+        xs = panel["values"]
     ax.set_yticks(range(len(rows)))
     ax.set_yticklabels(rows, fontsize=8)
-    ax.set_xticks(np.arange(-0.5, len(values)), minor=True)
     ax.set_yticks(np.arange(-0.5, len(rows)), minor=True)
     ax.grid(which="minor", color="white", linewidth=1.5)
     ax.grid(which="major", visible=False)
@@ -282,12 +360,19 @@ def _draw_stability_panel(ax, panel, axis_label, axis):
     ax.set_xlabel(axis_label)
     ax.set_title(panel["label"], fontsize=9, loc="left")
     if axis == "mu" and is_finite(panel["mu_min"]):
-        x = sel.value_position(values, panel["mu_min"])
-        if x is not None:
+        x = panel["mu_min"] if xs is None else sel.value_position(xs, panel["mu_min"])
+        lo, hi = ax.get_xlim()
+        if x is not None and min(lo, hi) <= x <= max(lo, hi):
             ax.axvline(x, color="black", linestyle=":", linewidth=2)
-            ax.text(x, -0.6, f"μ_min(ref) = {fmt(panel['mu_min'])}", ha="center",
-                    va="bottom", fontsize=8,
-                    bbox={"facecolor": "white", "alpha": 0.85, "edgecolor": "none"})
+            vline_label(ax, x, f"μ_min(ref) = {fmt(panel['mu_min'])}", color="black")
+    for x, substeps in panel.get("limits", []):
+        lo, hi = ax.get_xlim()
+        if x >= hi:
+            ax.set_xlim(lo, x * (1.15 if panel.get("log") else 1.05))
+        ax.axvline(x, color="#222222", linestyle="--", linewidth=1.4)
+        vline_label(ax, x, "RK4 limit σ·h = 2.785" + (f" (h = Δt/{substeps})"
+                                                      if substeps != 1 else ""),
+                    color="#222222")
 
 
 def _cause_handles(charts):
@@ -311,6 +396,30 @@ def _cause_handles(charts):
         handles.append(Patch(facecolor=colour, edgecolor="#777777", label=label))
     handles.append(Patch(facecolor=NOT_RUN_COLOUR, edgecolor="#777777", label="not run"))
     return handles
+
+
+def _axis_caption(chart):
+    """What the caption says about the value axis, the RK4 limit and the runs
+    a σ axis leaves out."""
+    panels = chart["panels"]
+    out = ""
+    if any(p.get("numeric") for p in panels):
+        scale = ("log" if any(p.get("log") for p in panels) else "linear")
+        out += (f" Columns sit at their values on a {scale} axis (a band reaches "
+                "half-way to the next value; the dot marks the value run).")
+    limits = sorted({n for p in panels for _, n in p.get("limits", [])})
+    if limits:
+        steps = ", ".join(f"substeps = {n}: h = Δt/{n}, line at σ·Δt = "
+                          f"{sel.RK4_SIGMA_H_LIMIT * n:g}" for n in limits)
+        out += (" Dashed line: the stability limit of fixed-step RK4 for the "
+                "Baumgarte drift equation dH/dt = −σH, σ·h = 2.785, where h is "
+                "the integrator step: h = Δt/substeps, substeps being the RK4 "
+                f"steps per output interval Δt (here {steps}).")
+    if chart.get("left_out"):
+        out += (" Left out: " + ", ".join(chart["left_out"]) + " — integrators "
+                "without a Baumgarte gain (no baumgarte_sigma in their option "
+                "table), for which σ is no parameter.")
+    return out
 
 
 def _stability_figure(ctx, chart):
@@ -350,6 +459,7 @@ def _stability_figure(ctx, chart):
         "unclassified."
         + (f" Dotted line: the friction the scene needs, {mu_text} (the solver's "
            "μ_min maximised over the reference trajectory)." if mu_text else "")
+        + _axis_caption(chart)
         + (" Unclassified failures (old results without the `cause` column) "
            "show the status the run reported; a numerical blow-up can report a "
            "quasi-static status such as INFEASIBLE_FRICTION, so do not read "
@@ -358,14 +468,17 @@ def _stability_figure(ctx, chart):
     title = f"3. Stability — {chart['axis_label'].split(' [')[0]}"
     record = save_figure(fig, ctx.out_dir, name, title, caption)
     record.data = {"group": chart["group"], "axis": chart["axis"], "panels": [
-        {"scene": p["scene"], "rows": p["rows"],
+        {"scene": p["scene"], "rows": p["rows"], "label": p["label"],
          "values": [sel.format_value(v) for v in p["values"]],
+         "numeric": p.get("numeric", False), "log": p.get("log", False),
+         "limits": [x for x, _ in p.get("limits", [])],
+         "substeps": p.get("substeps", []),
          "mu_min": p["mu_min"],
          "cells": [{"row": row, "value": sel.format_value(p["values"][j]),
                     "cls": c["cls"], "detail": c["detail"], "label": c["label"],
                     "colour": _cell_colour(c), "status": c["status"]}
                    for (row, j), c in sorted(p["cells"].items())]}
-        for p in panels]}
+        for p in panels], "left_out": chart.get("left_out", [])}
     record.notes.append(chart)
     return record
 

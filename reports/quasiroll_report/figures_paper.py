@@ -9,13 +9,14 @@ from matplotlib.patches import Patch
 from matplotlib.transforms import blended_transform_factory
 
 from . import selection as sel
-from .data import is_finite, is_success
+from .data import dae_option, has_dae_option, is_finite, is_success
 from .plotting import (COMPONENT_STYLES, MissingData, WHEEL_STYLES, fmt,
                        new_figure, no_data, positive, save_figure,
-                       spans_decades)
+                       spans_decades, vline_label)
 from .figures_methods import style_legend_handles
 from . import robot
-from .problems import method_style, plot_style, robot_geometry, scene_mode
+from .problems import (fixed_label, method_style, plot_style, robot_geometry,
+                       scene_mode)
 from .terrain import describe_terrain, terrain_height
 
 WHEELS = (1, 2, 3)
@@ -86,6 +87,26 @@ def _draw_robot(ax, geom, row, alpha=1.0):
                depthshade=False)
 
 
+def _camber_labels(ax, geom, traj, indices):
+    """The camber angle δ of each rear wheel (wheels 2, 3) in degrees, written
+    above the wheel at the given snapshots (Fig. 5: the last, drawn opaque):
+    the wheels are drawn at true scale, so a few degrees of camber would not
+    be seen otherwise. Returns the texts."""
+    labels = []
+    for k in indices:
+        row = robot.row_at(traj, k)
+        frames = robot.wheel_frames_world(geom, row)
+        for i, (_, centre) in zip((2, 3), frames[1:]):
+            delta = math.degrees(float(row[f"delta{i}"]))
+            text = f"δ{i}={delta:+.1f}°"
+            ax.text(centre[0], centre[1], centre[2] + 2.2 * geom["R"], text, fontsize=6.5,
+                    ha="center", va="bottom", color="#111111", zorder=40,
+                    bbox={"facecolor": "white", "alpha": 0.7, "edgecolor": "none",
+                          "pad": 0.4})
+            labels.append(text)
+    return labels
+
+
 def _snapshot_panel(ax, ctx, run, traj, geom):
     spec = ctx.terrain_of(run)
     ax.computed_zorder = False
@@ -105,6 +126,7 @@ def _snapshot_panel(ax, ctx, run, traj, geom):
                if robot.finite_pose(robot.row_at(traj, k))]
     for n, k in enumerate(indices):
         _draw_robot(ax, geom, robot.row_at(traj, k), alpha=0.45 + 0.55 * (n + 1) / len(indices))
+    camber_labels = _camber_labels(ax, geom, traj, indices[-1:])
     top = float(np.nanmax(traj["z"])) + geom["z_h"]
     low = float(np.nanmin(zs))
     dx, dy, dz = box[1] - box[0], box[3] - box[2], top - low
@@ -120,17 +142,20 @@ def _snapshot_panel(ax, ctx, run, traj, geom):
     cambers = np.concatenate([traj["delta2"][finite], traj["delta3"][finite]])
     cambers = cambers[np.isfinite(cambers)]
     mode = scene_mode(run, ctx.references) or run["scene"]
-    ax.set_title(f"{run['scene']} ({mode} mode)", fontsize=10)
+    ax.set_title(f"{run['scene']} ({mode} mode)\n{run['method']}, Δt={fmt(run['dt'])} s",
+                 fontsize=10)
     return {"run": run, "times": [float(traj["t"][k]) for k in indices],
+            "camber_labels": camber_labels,
             "max_camber_deg": float(np.degrees(np.max(np.abs(cambers)))) if cambers.size
             else math.nan, "spec": spec}
 
 
 def figure_snapshots(ctx):
-    run, traj = _primary(ctx)
-    pairs = [(run, traj)]
-    if ctx.primary_pvc is not None:
-        pairs.append((ctx.primary_pvc, ctx.trajectories.get(ctx.primary_pvc)))
+    _primary(ctx)
+    paper, pvc = ctx.snapshot_pair
+    pairs = [(paper, ctx.trajectories.get(paper))]
+    if pvc is not None:
+        pairs.append((pvc, ctx.trajectories.get(pvc)))
     fig = new_figure(7.5 * len(pairs), 4.4)
     panels = []
     for k, (r, t) in enumerate(pairs):
@@ -152,9 +177,17 @@ def figure_snapshots(ctx):
                      + ", ".join(f"{t:.3g}" for t in p["times"])
                      + f" s, largest camber |δ| {fmt(p['max_camber_deg'], 2)}°, terrain "
                      + surface)
-    if ctx.primary_pvc is None:
+    if pvc is None:
         parts.append("no successful pvc-mode run at μ = 0.5 with a trajectory, so "
                      "only paper mode is shown")
+        same = f"Method: {paper['method']}."
+    elif pvc["method"] == paper["method"]:
+        same = (f"Both panels from the same method, {paper['method']} (the method "
+                "both scenes ran at μ = 0.5), so they differ only by the camber mode.")
+    else:
+        same = ("The two scenes share no successful method at μ = 0.5, so the "
+                f"panels are from different methods: {paper['method']} (paper), "
+                f"{pvc['method']} (pvc).")
     caption = (
         "Fig. 5 — the paper shows the robot crossing the rough terrain R1. "
         "Here the robot itself is drawn at true scale (no vertical exaggeration) "
@@ -162,11 +195,15 @@ def figure_snapshots(ctx):
         "the steer and camber joints, the three torus wheels at their steer and "
         "camber angles (each recorded contact point lies on its drawn torus), "
         "faded for earlier times, with the COM and contact paths; paper mode "
-        "and passive-variable-camber mode side by side. " + "; ".join(parts) + ".")
+        "and passive-variable-camber mode side by side. " + same + " The camber "
+        "is to scale, so a few degrees hardly show: each rear wheel is labelled "
+        "with its camber angle δ2, δ3 in degrees at the last (opaque) snapshot. "
+        + "; ".join(parts) + ".")
     record = save_figure(fig, ctx.out_dir, "fig05_snapshots",
                          "Fig. 5 — the robot on the terrain", caption)
     record.data = {"panels": [{"scene": p["run"]["scene"], "run_id": p["run"]["run_id"],
-                               "times": p["times"]} for p in panels]}
+                               "method": p["run"]["method"], "times": p["times"],
+                               "camber_labels": p["camber_labels"]} for p in panels]}
     return record
 
 
@@ -403,11 +440,12 @@ def _mark_failures(ax, failed):
 
 
 def _mu_min_line(ax, mu_min):
+    """The dotted μ_min(ref) line, labelled inside the axes beside the line
+    (never over the panel title)."""
     if is_finite(mu_min):
         ax.axvline(mu_min, color="grey", linestyle=":", linewidth=1.6)
-        ax.text(mu_min, 0.98, f" μ_min(ref) = {fmt(mu_min)}", rotation=90, fontsize=7,
-                ha="right", va="top", color="#444444",
-                transform=blended_transform_factory(ax.transData, ax.transAxes))
+        return vline_label(ax, mu_min, f"μ_min(ref) = {fmt(mu_min)}")
+    return None
 
 
 def _failed_text(failed):
@@ -423,8 +461,10 @@ def _failed_text(failed):
 
 
 def _scene_title(ctx, scene, rows):
-    mode = scene_mode(rows[0], ctx.references) if rows else ""
-    return f"{scene}" + (f" ({mode} mode)" if mode else "")
+    """The parameters held fixed over a μ-sweep panel's runs (all of the
+    scene's rows, failed ones included); μ is swept, so never in it."""
+    return fixed_label([r for r in rows if r["scene"] == scene], ctx.references,
+                       omit=("mu",)) or scene
 
 
 def _sweep_legend(fig, gs_cell, ok, failed, styles):
@@ -495,14 +535,15 @@ def figure_traction_vs_mu(ctx):
         _mark_failures(ax_total, mine_failed)
         mu_min = _scene_mu_min(ctx, scene)
         _mu_min_line(ax_total, mu_min)
-        title = _scene_title(ctx, scene, mine_ok or mine_failed)
-        ax_total.set_title(f"{title}: total traction per method", fontsize=9)
+        title = _scene_title(ctx, scene, mine_ok + mine_failed)
+        ax_total.set_title(f"{title}\ntotal traction per method", fontsize=9)
         ax_total.set_xlabel("friction coefficient μ [-]")
         ax_total.set_ylabel("mean Σ_i ‖traction_i‖ [N]")
         if not mine_ok:
             no_data(ax_total, "no successful run")
             no_data(ax_wheel, "no successful run")
-            panels.append({"scene": scene, "methods": [], "mu_min": mu_min})
+            panels.append({"scene": scene, "methods": [], "mu_min": mu_min,
+                           "title": title})
             continue
         main = _main_method(ctx, mine_ok)
         runs = sorted((r for r in mine_ok if r["method"] == main), key=lambda r: r["mu"])
@@ -516,7 +557,7 @@ def figure_traction_vs_mu(ctx):
         ax_wheel.set_title(f"{scene}: per wheel, {main}", fontsize=9)
         ax_wheel.legend(loc="best", fontsize=7)
         panels.append({"scene": scene, "methods": sorted(curves), "mu_min": mu_min,
-                       "curves": {m: c for m, c in curves.items()}})
+                       "curves": {m: c for m, c in curves.items()}, "title": title})
     _sweep_legend(fig, gs[:, n], ok, failed, ctx.styles)
     mu, values = _common_mu_ratio(ctx, scenes, ok, metrics, "mean_total_traction")
     compare = (", ".join(f"{s} {fmt(v)} N" for s, v in values.items()) + f" at μ={fmt(mu)}"
@@ -566,11 +607,12 @@ def figure_total_slip_vs_mu(ctx):
             ax.set_yscale("log")
         ax.set_xlabel("friction coefficient μ [-]")
         ax.set_ylabel("total slip ∫Σ_i ‖s_i‖ dt [m]")
-        ax.set_title(_scene_title(ctx, scene, mine_ok or failed), fontsize=9)
+        title = _scene_title(ctx, scene, mine_ok + failed)
+        ax.set_title(title, fontsize=9)
         if not mine_ok:
             no_data(ax, "no successful run")
         panels.append({"scene": scene, "methods": sorted(curves), "mu_min": mu_min,
-                       "curves": curves})
+                       "curves": curves, "title": title})
     _sweep_legend(fig, gs[0, n], ok, failed, ctx.styles)
     mu, per_scene = _common_mu_ratio(ctx, scenes, ok, metrics, "total_slip")
     regimes = _slip_regimes(ok, mu)
@@ -607,6 +649,20 @@ def figure_total_slip_vs_mu(ctx):
 
 # ---------------------------------------------------------------- Fig. 15
 
+def _sigma(run):
+    """The run's Baumgarte gain σ, or None for an integrator without one (its
+    option table has no baumgarte_sigma: the runs.csv sigma column is only
+    the unused shorthand there)."""
+    if not has_dae_option(run, "baumgarte_sigma"):
+        return None
+    value = dae_option(run, "baumgarte_sigma", run["sigma"])
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return None
+    return value if math.isfinite(value) else None
+
+
 def figure_stabilisation(ctx):
     pair = sel.stabilisation_pair(ctx.runs, ctx.trajectories.has, ctx.primary)
     pair = [r for r in pair if r is not None]
@@ -621,7 +677,7 @@ def figure_stabilisation(ctx):
         ax.plot(traj["t"], positive(traj["drift"]), **plot_style(ctx.styles[run["method"]]),
                 markevery=0.1, label=f"{run['dae']} ({run['method']}, "
                 f"Δt={fmt(run['dt'])} s"
-                + (f", σ={fmt(run['sigma'])} 1/s)" if is_finite(run["sigma"]) else ")"))
+                + (f", σ={fmt(_sigma(run))} 1/s)" if _sigma(run) is not None else ")"))
         finite = traj["drift"][np.isfinite(traj["drift"])]
         parts.append(f"{run['dae']} max {fmt(float(finite.max()) if finite.size else math.nan)}"
                      f", final {fmt(float(finite[-1]) if finite.size else math.nan)}")
@@ -637,5 +693,7 @@ def figure_stabilisation(ctx):
         "Fig. 15 — the paper shows that Baumgarte stabilisation keeps the "
         "holonomic loop-closure violation bounded. This run: "
         + "; ".join(parts) + missing + ".")
-    return save_figure(fig, ctx.out_dir, "fig15_stabilisation",
-                       "Fig. 15 — constraint stabilisation", caption)
+    record = save_figure(fig, ctx.out_dir, "fig15_stabilisation",
+                         "Fig. 15 — constraint stabilisation", caption)
+    record.data = {"legend": [t.get_text() for t in ax.get_legend().get_texts()]}
+    return record

@@ -102,11 +102,11 @@ def _swatch(styles, method):
 def summary_table(summary, styles, failed_only):
     out = ["<table>", "<tr><th></th><th>method (nlp[options]/dae[options]/coupling)</th>"
            "<th>runs</th>"
-           "<th>status counts</th><th>failures: physical / numerical / model / unclassified</th>"
+           "<th>status counts (failures: status (cause class: detail))</th><th>failures: physical / numerical / model / unclassified</th>"
            "<th>max drift ‖H‖∞ (successes)</th><th>max KKT residual (successes)</th></tr>"]
     for row in summary:
         counts = ", ".join(f"{escape(s)} {n}" for s, n in
-                           sorted(row["status_counts"].items(),
+                           sorted(row["status_causes"].items(),
                                   key=lambda kv: (kv[0] != "success", kv[0])))
         note = ' <span class="note">(all runs failed)</span>' \
             if row["method"] in failed_only else ""

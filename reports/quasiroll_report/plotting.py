@@ -190,3 +190,19 @@ def fmt(value, digits=3):
 
 def method_label(method):
     return method
+
+
+def vline_label(ax, x, text, color="#444444", fontsize=7, y=0.97):
+    """Label of a vertical marker line at data x: inside the axes (never over
+    a panel title), beside the line, clipped to the axes. Rotated along the
+    line from `y` (axes fraction) down where the axes are tall enough for
+    it, else horizontal at the top. Returns the Text."""
+    from matplotlib.transforms import blended_transform_factory
+    fig = ax.figure
+    height_in = ax.get_position().height * fig.get_figheight()
+    rotated = height_in * 72 >= 0.62 * fontsize * (len(text) + 2)
+    trans = blended_transform_factory(ax.transData, ax.transAxes)
+    return ax.text(x, y, text + " ", rotation=90 if rotated else 0, fontsize=fontsize,
+                   ha="right", va="top", color=color, transform=trans, clip_on=True,
+                   zorder=30, bbox={"facecolor": "white", "alpha": 0.8,
+                                    "edgecolor": "none", "pad": 0.5})

@@ -146,6 +146,51 @@ def problem_label(run, references=None, omit=()):
     return " · ".join(parts)
 
 
+def _distinct(rows, get):
+    values = []
+    for run in rows:
+        value = get(run)
+        if isinstance(value, float) and not math.isfinite(value):
+            value = None
+        if value in ("",):
+            value = None
+        if not any(value == v or (isinstance(value, float) and isinstance(v, float)
+                                  and math.isclose(value, v, rel_tol=1e-9))
+                   for v in values):
+            values.append(value)
+    return values
+
+
+def fixed_label(rows, references=None, omit=()):
+    """Title of a panel of a sweep: the parameters held fixed over `rows`
+    (scene, mode, μ, seed, roughness, t_end, Δt, ε), each only when every row
+    has the same value; `omit` names the swept ones ("mu", "seed",
+    "roughness", "dt", "eps"), never taken from one row."""
+    if not rows:
+        return ""
+    parts = []
+
+    def single(name, get, text):
+        if name in omit:
+            return
+        values = _distinct(rows, get)
+        if len(values) == 1 and values[0] is not None:
+            parts.append(text(values[0]))
+
+    single("scene", lambda r: r["scene"], str)
+    single("mode", lambda r: scene_mode(r, references or {}), lambda m: f"{m} mode")
+    single("mu", lambda r: r["mu"], lambda v: f"μ={_short(v)}")
+    single("seed", lambda r: r.get("seed", ""), lambda v: f"seed {v}")
+    rough = _distinct(rows, lambda r: r.get("roughness", math.nan))
+    if "roughness" not in omit and len(rough) == 1 and rough[0] is not None \
+            and not math.isclose(rough[0], 1.0):
+        parts.append(f"roughness {_short(rough[0])}")
+    single("t_end", lambda r: r.get("t_end", math.nan), lambda v: f"{_short(v)} s")
+    single("dt", lambda r: r["dt"], lambda v: f"Δt={_short(v)} s")
+    single("eps", lambda r: r.get("eps", math.nan), lambda v: f"ε={_short(v)} m/s")
+    return " · ".join(parts)
+
+
 def problem_sort_key(run):
     t_end = run.get("t_end", math.nan)
     return (-(t_end if is_finite(t_end) else 0.0), run["scene"],

@@ -53,6 +53,9 @@ class Context:
         pvc = sel.pvc_scene(self.runs, self.references)
         self.primary_pvc = (sel.paper_run(self.runs, self._has_usable_trajectory, pvc)
                             if pvc else None)
+        # Fig. 5 and the replay: paper and pvc mode from one and the same method.
+        self.snapshot_pair = sel.snapshot_pair(self.runs, self._has_usable_trajectory,
+                                               pvc, self.primary)
         self._terrains = {}
 
     def _has_usable_trajectory(self, run):
@@ -122,7 +125,7 @@ def build_report(results_dir, out_dir=None, allow_missing=False):
     if not ctx.meta and not os.path.isfile(os.path.join(ctx.results_dir, "meta.json")):
         warnings.append("meta.json is missing: metadata shown as unknown")
     records = _draw_figures(ctx, allow_missing, warnings)
-    replay, notes = write_replay(ctx, [ctx.primary, ctx.primary_pvc])
+    replay, notes = write_replay(ctx, list(ctx.snapshot_pair))
     warnings += notes
     page = render_page(ctx, sel.method_summary(ctx.runs),
                        sel.accuracy_bands(ctx.runs, ctx.references), records, warnings,

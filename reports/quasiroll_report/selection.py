@@ -6,8 +6,10 @@ from collections import Counter, OrderedDict
 
 import numpy as np
 
-from .data import is_finite, is_success, is_variant, method_base, method_without
-from .problems import group_by_problem, method_style, problem_label, scene_mode
+from .data import (dae_option, dae_option_known, is_finite, is_success, is_variant,
+                   method_base, method_without)
+from .problems import (fixed_label, group_by_problem, method_style, problem_label,
+                       scene_mode)
 
 PAPER_SCENE = "paper"
 PAPER_MU = 0.5
@@ -205,6 +207,10 @@ MODEL = "model"
 CAUSE_CLASSES = (PHYSICAL, NUMERICAL, MODEL, UNKNOWN)
 
 
+# Statuses of runs that reached t_end but broke the suite's drift / gap bound.
+BOUND_STATUSES = {"drift_exceeded": "drift_blowup", "gap_exceeded": "gap_blowup"}
+
+
 def has_causes(runs):
     """True when the harness classified failures (`cause` column filled)."""
     return any(r.get("cause") for r in runs if not is_success(r))
@@ -220,7 +226,24 @@ def failure_cause(run):
     cause = run.get("cause", "")
     if cause in (PHYSICAL, NUMERICAL, MODEL):
         return cause, run.get("cause_detail", "") or "unspecified"
+    if run["status"] in BOUND_STATUSES:
+        # Reached t_end past the suite's drift/gap bound: the method's error
+        # by definition (docs/harness.md, Verdicts), whatever the harness wrote.
+        return NUMERICAL, BOUND_STATUSES[run["status"]]
     return UNKNOWN, run["status"]
+
+
+def status_text(run):
+    """A run's status as the summary shows it: the status with its cause
+    class, e.g. 'INFEASIBLE_FRICTION (numerical: baumgarte_instability)', so
+    a blow-up that ends in a quasi-static status never reads as a physical
+    limit; 'INFEASIBLE_FRICTION (unclassified)' without a cause."""
+    cls, detail = failure_cause(run)
+    if cls == "success":
+        return run["status"]
+    if cls == UNKNOWN:
+        return f"{run['status']} (unclassified)"
+    return f"{run['status']} ({cls}: {detail})"
 
 
 def method_summary(runs):
@@ -237,6 +260,8 @@ def method_summary(runs):
             "runs": len(mine),
             "successes": len(ok),
             "status_counts": Counter(run["status"] for run in mine),
+            # The status with its cause class (status_text): what the table shows.
+            "status_causes": Counter(status_text(run) for run in mine),
             "cause_counts": classes,
             "max_drift": _max([r["drift_max"] for r in ok]),
             "max_kkt": _max([r.get("kkt_residual", math.nan) for r in ok]),
@@ -317,6 +342,33 @@ def paper_run(runs, has_trajectory, scene=PAPER_SCENE):
                               _accuracy_key(r)))
 
 
+def snapshot_pair(runs, has_trajectory, pvc, primary=None):
+    """(paper run, pvc run) for Fig. 5 and the replay: both of one method
+    (nlp/dae/coupling with its options) where the two scenes share one
+    successful μ = 0.5 run with a trajectory, preferring the primary's
+    method, then the pvc run's Δt closest to the paper run's; else the two
+    scenes' own picks (paper_run). pvc = the pvc scene name or None."""
+    primary = primary if primary is not None else paper_run(runs, has_trajectory)
+    if pvc is None or primary is None:
+        return primary, None if pvc is None else paper_run(runs, has_trajectory, pvc)
+
+    def ok(scene):
+        return [r for r in successful(runs) if r["scene"] == scene
+                and mu_equals(r, PAPER_MU) and has_trajectory(r)]
+    paper_ok, pvc_ok = ok(primary["scene"]), ok(pvc)
+    common = {r["method"] for r in paper_ok} & {r["method"] for r in pvc_ok}
+    if not common:
+        return primary, paper_run(runs, has_trajectory, pvc)
+    if primary["method"] in common:
+        paper = primary
+    else:
+        paper = paper_run([r for r in paper_ok if r["method"] in common],
+                          has_trajectory, primary["scene"])
+    twins = [r for r in pvc_ok if r["method"] == paper["method"]]
+    same_dt = [r for r in twins if _same(r["dt"], paper["dt"])]
+    return paper, paper_run(same_dt or twins, has_trajectory, pvc)
+
+
 def _preference(run, scene):
     dt = run["dt"] if is_finite(run["dt"]) else math.inf
     return (is_variant(run["method"]), run["scene"] != scene, run["coupling"] != "zoh",
@@ -389,6 +441,20 @@ _ROW_PARAMETERS = [("dt", "Δt", lambda r: r["dt"]), ("tol", "rtol", lambda r: r
 _AXIS_OWNS = {"sigma_dt": {"dt"}, "sigma": {"dt"}, "dt": {"dt"}, "tol": {"tol"}}
 # Backend options an axis sweeps: its columns, so not part of a row's method.
 _AXIS_OPTIONS = {"sigma_dt": {"baumgarte_sigma"}, "sigma": {"baumgarte_sigma"}}
+# The run fields an axis sweeps, left out of its panels' titles
+# (problems.fixed_label).
+_AXIS_SWEEPS = {"mu": ("mu",), "rough": ("roughness",), "seed": ("seed",),
+                "dt": ("dt",), "tol": ()}
+# Axes whose values are numbers: positioned by value (log where they span a
+# decade or more), not by column index.
+NUMERIC_AXES = ("sigma_dt", "sigma", "dt", "tol", "mu", "rough")
+# An axis that needs an integrator option: runs whose integrator lacks it
+# (no Baumgarte gain: sigma is not a parameter of theirs) are left out.
+_AXIS_NEEDS = {"sigma_dt": "baumgarte_sigma", "sigma": "baumgarte_sigma"}
+# Stability limit of classical RK4 on the real axis: |1 + z + z²/2 + z³/6 +
+# z⁴/24| <= 1 for z = -σh up to σh = 2.785 (the Baumgarte drift ODE
+# dH/dt = -σH integrated with the fixed step h).
+RK4_SIGMA_H_LIMIT = 2.785
 
 
 def _value_key(value):
@@ -466,6 +532,46 @@ def stability_cell(rows):
             "run_id": worst["run_id"]}
 
 
+def substeps_of(run):
+    """Integrator steps per output interval Δt (runs.csv `substeps`; 1 when
+    not recorded)."""
+    value = run.get("substeps", math.nan)
+    return int(value) if is_finite(value) and value >= 1 else 1
+
+
+def rk4_limit_lines(rows):
+    """[(σ·Δt, substeps)] where σ·h = RK4_SIGMA_H_LIMIT for the fixed-step
+    RK4 runs among rows (h = Δt / substeps), one per substeps value."""
+    steps = sorted({substeps_of(r) for r in rows
+                    if str(dae_option(r, "rk_method", "")) == "rk4"})
+    return [(RK4_SIGMA_H_LIMIT * n, n) for n in steps]
+
+
+def _has_axis_option(rows, option):
+    """Predicate: does a row's integrator have the option a chart's axis
+    sweeps? From `dae_options` / the method id (data.dae_option_known); for
+    older rows that cannot tell, an integrator whose σ column varies within
+    the group sweeps it, one whose σ stays put does not."""
+    sweeping = {dae for dae in {r["dae"] for r in rows}
+                if _varies([r["sigma"] for r in rows if r["dae"] == dae])}
+
+    def has(run):
+        known = dae_option_known(run, option)
+        return known if known is not None else run["dae"] in sweeping
+    return has
+
+
+def _spans_decades(values, decades):
+    nums = [v for v in values if isinstance(v, float) and math.isfinite(v) and v > 0]
+    return len(nums) == len(values) and len(nums) > 1 and \
+        math.log10(max(nums) / min(nums)) >= decades
+
+
+def axis_is_numeric(axis, values):
+    return axis in NUMERIC_AXES and bool(values) and all(
+        isinstance(v, float) and math.isfinite(v) for v in values)
+
+
 def _row_label(run, extra, options=()):
     parts = [method_without(run["method"], options)] + [
         f"{lab}={format_value(get(run))}" for _, lab, get in extra]
@@ -490,6 +596,13 @@ def stability_charts(runs, references=None):
             continue
         name, label, getter = axis
         rows = in_group(runs, group)
+        needs = _AXIS_NEEDS.get(name)
+        if needs:
+            has = _has_axis_option(rows, needs)
+            left_out = sorted({r["method"] for r in rows if not has(r)})
+            rows = [r for r in rows if has(r)]
+        else:
+            left_out = []
         owned = _AXIS_OWNS.get(name, set())
         options = _AXIS_OPTIONS.get(name, set())
         panels = []
@@ -513,13 +626,19 @@ def stability_charts(runs, references=None):
             mu_min = math.nan
             if name == "mu":
                 mu_min = scene_mu_min(mine)
+            numeric = axis_is_numeric(name, values)
             panels.append({"scene": scene,
-                           # The axis varies across the columns: not in the label.
-                           "label": problem_label(mine[0], references, omit=(name,)),
+                           # The parameters held fixed over the panel's runs;
+                           # the swept ones (the axis) never from one row.
+                           "label": fixed_label(mine, references,
+                                                omit=_AXIS_SWEEPS.get(name, ())),
                            "values": values, "rows": row_names, "cells": cells,
-                           "mu_min": mu_min})
+                           "mu_min": mu_min, "numeric": numeric,
+                           "log": numeric and _spans_decades(values, 1.0),
+                           "limits": rk4_limit_lines(mine) if name in _AXIS_NEEDS else [],
+                           "substeps": sorted({substeps_of(r) for r in mine})})
         charts.append({"group": group, "axis": name, "axis_label": label,
-                       "panels": panels})
+                       "panels": panels, "left_out": left_out})
     return charts
 
 
