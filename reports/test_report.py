@@ -748,6 +748,79 @@ class RefereeTest(unittest.TestCase):
         self.assertEqual((paper["run_id"], pvc["run_id"]), ("b", "c"))
 
 
+class ReplayPageTest(unittest.TestCase):
+    """Issue #21 item 8.7: the 3D replay's ?run=<run_id>, scales, per-frame
+    values and friction cones."""
+
+    def setUp(self):
+        if not os.path.isfile("/usr/share/javascript/three/three.min.js"):
+            self.skipTest("libjs-three not installed")
+        self.folder = os.path.join(Fixture.good, "report", "replay")
+        with open(os.path.join(self.folder, "data.js"), encoding="utf-8") as handle:
+            text = handle.read()
+        self.data = json.loads(text[text.index("=") + 1:].rstrip().rstrip(";"))
+        with open(os.path.join(self.folder, "index.html"), encoding="utf-8") as handle:
+            self.page = handle.read()
+
+    def test_frame_values_cones_and_scales(self):
+        from quasiroll_report import replay
+        for run in self.data:
+            self.assertGreater(run["scale_bar"], 0)
+            self.assertGreater(run["force_bar"], 0)
+            self.assertEqual(run["force_bar"], replay.nice_length(run["force_bar"]))
+            for frame in run["frames"][::25]:
+                for key, size in (("v", 3), ("w", 3), ("n", 3), ("lon", 3), ("lat", 3),
+                                  ("camber", 2), ("normals", 3)):
+                    self.assertEqual(len(frame[key]), size, key)
+                for normal in frame["normals"]:
+                    self.assertAlmostEqual(float(np.linalg.norm(normal)), 1.0, places=5)
+                    self.assertGreater(normal[2], 0.5)
+        self.assertEqual(replay.nice_length(0.37), 0.25)
+        self.assertEqual(replay.nice_length(7.0), 5.0)
+        for needle in ("AxesHelper", "ConeGeometry", "force_bar", 'id="info"',
+                       "camber", "scale_bar"):
+            self.assertIn(needle, self.page)
+        self.assertNotIn("http://", self.page.replace("http://www.w3.org", ""))
+        self.assertNotIn("https://", self.page)
+
+    def test_run_parameter_picks_by_run_id(self):
+        if not shutil.which("node"):
+            self.skipTest("node not installed")
+        start = self.page.index("function pickRun(")
+        end = self.page.index("window.quasirollPickRun")
+        ids = [d["run_id"] for d in self.data]
+        script = (self.page[start:end] + "var runs = " + json.dumps([{"run_id": i} for i in ids])
+                  + ";\nconsole.log(JSON.stringify([pickRun(runs, null), pickRun(runs, "
+                  + json.dumps(ids[-1]) + "), pickRun(runs, '1'), pickRun(runs, '9'), "
+                  "pickRun(runs, 'no-such-run')]));")
+        out = subprocess.run(["node", "-e", script], capture_output=True, text=True,
+                             timeout=60)
+        self.assertEqual(out.returncode, 0, out.stderr)
+        self.assertEqual(json.loads(out.stdout), [0, len(ids) - 1, 1, len(ids) - 1, -1])
+
+    def test_run_parameter_in_browser(self):
+        browser = shutil.which("chromium")
+        if not browser:
+            self.skipTest("chromium not installed")
+        wanted = self.data[-1]["run_id"]
+        profile = tempfile.mkdtemp(prefix="quasiroll_replay_profile_")
+        try:
+            out = subprocess.run(
+                [browser, "--headless", "--no-sandbox", "--use-angle=swiftshader",
+                 "--enable-unsafe-swiftshader", "--no-first-run",
+                 "--disable-background-networking", f"--user-data-dir={profile}",
+                 "--virtual-time-budget=10000", "--window-size=1000,640", "--dump-dom",
+                 "file://" + os.path.join(self.folder, "index.html") + f"?run={wanted}"],
+                capture_output=True, text=True, timeout=180)
+        finally:
+            shutil.rmtree(profile, ignore_errors=True)
+        self.assertIn('data-ready="1"', out.stdout, out.stdout[-2000:])
+        info = out.stdout[out.stdout.index('<div id="info">'):]
+        self.assertTrue(info.startswith(f'<div id="info">run {wanted}\nt = '), info[:200])
+        self.assertIn("camber", info[:1000])
+        self.assertIn("|t|/(mu N)", info[:1000])
+
+
 class BadInputTest(unittest.TestCase):
     def assert_one_line_error(self, result, *needles):
         self.assertEqual(result.returncode, 2, result.stderr)
