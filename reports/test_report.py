@@ -662,6 +662,11 @@ class RefereeTest(unittest.TestCase):
         self.assertIn("σ·h = 2.785", sigma["caption"])
         for name in ("fig_stability_mu", "fig_stability_dt"):
             self.assertTrue(all(p["numeric"] for p in manifest[name]["data"]["panels"]))
+        # the table flags the σ·Δt columns beyond the limit (the fixture's 3)
+        html = self.html()
+        self.assertIn('title="beyond the RK4 limit σ·h = 2.785">3*</th>', html)
+        self.assertIn("<th>1.5</th>", html)
+        self.assertIn("σ·Δt &gt; 2.785", html)
         # substeps: h = Δt/substeps, so the line sits at 2.785·substeps
         rk4 = _base_row(dae_options=json.dumps({"baumgarte_sigma": 5, "rk_method": "rk4"}),
                         substeps=4.0)

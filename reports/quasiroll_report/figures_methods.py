@@ -438,7 +438,8 @@ def _stability_figure(ctx, chart):
     cells = [c for p in panels for c in p["cells"].values()]
     counts = {cls: sum(1 for c in cells if c["cls"] == cls)
               for cls in ("success",) + sel.CAUSE_CLASSES}
-    methods = sorted({r["method"] for r in sel.in_group(ctx.runs, chart["group"])})
+    methods = sorted({r["method"] for r in sel.in_group(ctx.runs, chart["group"])}
+                     - set(chart.get("left_out", [])))
     mu_text = "; ".join(f"{p['scene']}: μ_min(ref) {fmt(p['mu_min'])}" for p in panels
                         if chart["axis"] == "mu" and is_finite(p["mu_min"]))
     caption = (

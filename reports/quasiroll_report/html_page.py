@@ -256,7 +256,15 @@ def qs_table(ctx):
 def stability_table(chart):
     out = []
     for panel in chart["panels"]:
-        head = "".join(f"<th>{escape(sel.format_value(v))}</th>" for v in panel["values"])
+        limits = panel.get("limits", [])
+        limit = limits[0][0] if len(limits) == 1 else None
+
+        def beyond(value):
+            return limit is not None and isinstance(value, float) and value > limit
+        head = "".join(
+            f'<th title="beyond the RK4 limit σ·h = 2.785">{escape(sel.format_value(v))}*</th>'
+            if beyond(v) else f"<th>{escape(sel.format_value(v))}</th>"
+            for v in panel["values"])
         out += [f"<p><b>{escape(chart['group'])}</b> — {escape(panel['label'])}</p>",
                 '<div class="scroll"><table class="map">',
                 f"<tr><th>method \\ {escape(chart['axis_label'])}</th>{head}</tr>"]
@@ -276,6 +284,9 @@ def stability_table(chart):
                              f"{escape(cell['label'])}</td>")
             out.append(f"<tr><th>{escape(row)}</th>{''.join(cells)}</tr>")
         out.append("</table></div>")
+        if limit is not None:
+            out.append(f'<p class="note">* beyond the fixed-step RK4 stability limit '
+                       f"σ·h = 2.785 (h = Δt/{limits[0][1]}: σ·Δt &gt; {limit:g}).</p>")
     return "\n".join(out)
 
 
