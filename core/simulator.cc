@@ -642,6 +642,8 @@ bool Simulator::LocateSampleStop(double* t, SimulationResult* result) {
   br.b = *t;
   br.theta_b = s.theta;
   br.have_b = true;
+  const QuasiStaticSolution original = s.sol;  // kept if not confirmed
+  const Configuration theta_original = s.theta;
   std::swap(s.sol_b, s.sol);
   s.event_solves = 0;
   s.event_iterations = s.event_iterations_native = 0;
@@ -649,20 +651,27 @@ bool Simulator::LocateSampleStop(double* t, SimulationResult* result) {
   result->nlp_solves += s.event_solves;
   result->nlp_iterations += s.event_iterations;
   result->nlp_iterations_native += s.event_iterations_native;
+  // Reproduce a failure to reach b (coupled) for its solution.
+  if (!br.have_b) Reintegrate(s.t_prev, s.theta_prev, br.b);
   if (br.have_b && s.sol_b.status != QuasiStaticStatus::kOk &&
       s.sol_b.status != QuasiStaticStatus::kSolverFailure) {
     std::swap(s.sol, s.sol_b);
     s.theta = br.theta_b;
     *t = br.b;
-  } else if (!br.have_b) {
+  } else if (!br.have_b && s.ode.nlp_failed() &&
+             s.ode.last_solution().status !=
+                 QuasiStaticStatus::kSolverFailure) {
     // Coupled: the integrator itself failed past a; stop at a with the
     // failing stage's solution.
     s.sol = s.ode.last_solution();
     s.theta = br.theta_a;
     *t = br.a;
   } else {
-    std::swap(s.sol, s.sol_b);  // the located end did not confirm it: keep
-    return false;               // the sample's stop
+    // The located end is no physical stop (a solver failure, or a state off
+    // the path of a blown-up run): keep the sample's stop.
+    s.sol = original;
+    s.theta = theta_original;
+    return false;
   }
   s.t_lower = br.a;
   s.t_upper = br.b;
