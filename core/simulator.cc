@@ -524,7 +524,8 @@ bool Simulator::Reintegrate(double t0, const Configuration& theta0, double t1) {
 // Bisects br->[a, b] down to event_tolerance. A time m is "before the limit"
 // when the integrator reaches it from (t0, theta0) and the state there
 // passes the geometric indicators (solve false) or the quasi-static solve
-// (solve true; the failing solve at b is kept in s.sol_b).
+// does not fail physically (solve true; the failing solve at b is kept in
+// s.sol_b).
 void Simulator::Bisect(double t0, const Configuration& theta0, bool solve,
                        Bracket* br) {
   Session& s = *session_;
@@ -540,7 +541,10 @@ void Simulator::Bisect(double t0, const Configuration& theta0, bool solve,
       s.event_solves += s.sol_event.nlp_solves;
       s.event_iterations += s.sol_event.nlp_iterations;
       s.event_iterations_native += s.sol_event.nlp_iterations_native;
-      good = s.sol_event.status == QuasiStaticStatus::kOk;
+      // SOLVER_FAILURE means mu > mu_min with regular statics (model.md
+      // §7.7): the physical limit is not reached there.
+      good = s.sol_event.status == QuasiStaticStatus::kOk ||
+             s.sol_event.status == QuasiStaticStatus::kSolverFailure;
       if (good && contact) good = CheckValidity(*model_, y, true).ok();
     } else if (good) {
       EvaluateLimitIndicators(*model_, y, contact, &s.ind);
