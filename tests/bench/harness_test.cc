@@ -380,7 +380,7 @@ TEST(BenchVerdicts, BlowUpIsNumericalFrictionStopIsPhysical) {
   const Table t = ReadTable(root / "out" / "runs.csv");
   ASSERT_EQ(t.rows.size(), 3u);
   const auto& blowup = t.rows[0];
-  EXPECT_EQ(blowup.at("status"), "INFEASIBLE_FRICTION");  // kept as is
+  EXPECT_EQ(blowup.at("status"), "INFEASIBLE_FRICTION");   // kept as is
   EXPECT_NEAR(std::stod(blowup.at("mu_min")), 0.5, 1e-6);  // located
   EXPECT_EQ(blowup.at("ref_status"), "success");
   EXPECT_EQ(blowup.at("cause"), "numerical");
