@@ -331,6 +331,9 @@ struct Simulator::Session {
   double t_stop = kNaN, t_lower = kNaN, t_upper = kNaN;
   const char* pending_limit = "";
   bool done_located = false;  // LocateIntegratorStop recorded the stop
+  // Relative-curvature margins at the last two samples (trend check).
+  std::array<double, 3> curvature_now{kNaN, kNaN, kNaN},
+      curvature_before{kNaN, kNaN, kNaN};
   int event_solves = 0;
   long long event_iterations = 0, event_iterations_native = 0;
   int pending_wheel = -1;
@@ -380,6 +383,8 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   s.t_stop = s.t_lower = s.t_upper = kNaN;
   s.pending_limit = "";
   s.pending_wheel = -1;
+  s.curvature_now.fill(kNaN);
+  s.curvature_before.fill(kNaN);
   s.done_located = false;
   s.done = false;
   *result = SimulationResult{};
@@ -599,7 +604,22 @@ bool Simulator::CheckIntervalEvents(double t0, double t1) {
     }
     fa = frac;
   }
-  if (std::isnan(fb)) return false;
+  if (std::isnan(fb)) {
+    // s.ind holds the end's indicators. A relative-curvature margin that,
+    // extrapolated from the last two samples, reaches 0 inside this
+    // interval while the end is valid may have been stepped over (the
+    // contact rates grow like 1/margin, and a step across the singularity
+    // can land back on the valid side): check on re-integrated states.
+    bool suspect = false;
+    for (int i = 0; i < 3; ++i) {
+      const double now = s.curvature_now[i], before = s.curvature_before[i];
+      if (now < before && now - (before - now) * (h / dt_) * 1.0 <= 0)
+        suspect = true;
+      s.curvature_before[i] = now;
+      s.curvature_now[i] = s.ind.relative_curvature[i];
+    }
+    return suspect && ScanInterval(t0, t1);
+  }
   const char* limit = s.ind.violated;
   int wheel = s.ind.wheel;
   while ((fb - fa) * h > options_.event_tolerance) {
@@ -627,6 +647,53 @@ bool Simulator::CheckIntervalEvents(double t0, double t1) {
   s.pending_limit = limit;
   s.pending_wheel = wheel;
   return true;
+}
+
+// Checks the states the run's integrator reaches from the start of the
+// interval [t0, t1] at kScanPoints times t0 + j (t1 - t0)/kScanPoints; at
+// the first one past a geometric limit (or not reached), bisects like
+// LocateIntegratorStop and leaves the located stop pending. Returns true if
+// so.
+bool Simulator::ScanInterval(double t0, double t1) {
+  constexpr int kScanPoints = 8;
+  Session& s = *session_;
+  const Configuration th0 = s.theta_prev;
+  Bracket br;
+  br.a = t0;
+  br.theta_a = th0;
+  for (int j = 1; j < kScanPoints; ++j) {
+    const double tj = t0 + (t1 - t0) * j / kScanPoints;
+    const bool reached = Reintegrate(t0, th0, tj);
+    if (reached) {
+      EvaluateLimitIndicators(*model_, s.y_event, false, &s.ind);
+      if (s.ind.ok()) {
+        br.a = tj;
+        br.theta_a = s.y_event;
+        continue;
+      }
+    }
+    br.b = tj;
+    br.have_b = reached;
+    br.theta_b = s.y_event;
+    Bisect(t0, th0, false, &br);
+    s.t_lower = br.a;
+    s.t_upper = br.b;
+    s.t_stop = br.have_b ? br.b : br.a;
+    s.theta = br.have_b ? br.theta_b : br.theta_a;
+    const char* limit = "relative_curvature";
+    int wheel = 0;
+    if (br.have_b) {
+      EvaluateLimitIndicators(*model_, s.theta, false, &s.ind);
+      if (!s.ind.ok()) {
+        limit = s.ind.violated;
+        wheel = s.ind.wheel;
+      }
+    }
+    s.pending_limit = limit;
+    s.pending_wheel = wheel;
+    return true;
+  }
+  return false;
 }
 
 // The solve at the sample time *t failed physically (or the sampled
@@ -710,8 +777,11 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
     s.k += 1;
     return true;
   }
-  // Reproduce the failure at b for its solution and stage state.
-  if (!Reintegrate(t0, s.theta, br.b) && s.ode.nlp_failed()) {
+  // Reproduce the failure at b for its solution and stage state. Where the
+  // NLP gives up before the limit (SOLVER_FAILURE: mu > mu_min there) the
+  // integrator cannot go on towards it: the limit that stopped it stands.
+  if (!Reintegrate(t0, s.theta, br.b) && s.ode.nlp_failed() &&
+      s.ode.last_solution().status != QuasiStaticStatus::kSolverFailure) {
     s.sol = s.ode.last_solution();
   } else {
     s.sol = first;  // the failure that started the search

@@ -186,6 +186,7 @@ class Simulator {
   bool Reintegrate(double t0, const Configuration& theta0, double t1);
   void Bisect(double t0, const Configuration& theta0, bool solve, Bracket* br);
   bool CheckIntervalEvents(double t0, double t1);
+  bool ScanInterval(double t0, double t1);
   bool LocateSampleStop(double* t, SimulationResult* result);
   bool LocateIntegratorStop(double t0, double t1, SimulationResult* result);
   void SetStopEvent(double t, SimulationResult* result) const;

@@ -99,9 +99,12 @@ TEST(LimitEvents, IndicatorsAgreeWithCheckValidity) {
                   1e-15);
       // (The wheel bridges the dip before the curvature limit: the
       // second-contact clearance turns negative first, with CheckValidity.)
-      EXPECT_EQ(ind.second_contact[i] < 0,
-                v.contact[i] == ContactValidity::kSecondContact)
-          << ts.t;
+      if (v.contact[i] == ContactValidity::kValid ||
+          v.contact[i] == ContactValidity::kSecondContact) {
+        EXPECT_EQ(ind.second_contact[i] < 0,
+                  v.contact[i] == ContactValidity::kSecondContact)
+            << ts.t;
+      }
     }
     ++checked;
   }
