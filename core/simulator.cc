@@ -613,8 +613,7 @@ bool Simulator::CheckIntervalEvents(double t0, double t1) {
     bool suspect = false;
     for (int i = 0; i < 3; ++i) {
       const double now = s.curvature_now[i], before = s.curvature_before[i];
-      if (now < before && now - (before - now) * (h / dt_) <= 0)
-        suspect = true;
+      if (now < before && now - (before - now) * (h / dt_) <= 0) suspect = true;
       s.curvature_before[i] = now;
       s.curvature_now[i] = s.ind.relative_curvature[i];
     }
