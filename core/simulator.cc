@@ -34,6 +34,12 @@ bool SimulationOptions::IsValid(std::string* why) const {
                 std::to_string(t_end));
   if (second_contact_check_every < 0)
     return fail("second_contact_check_every: must be >= 0");
+  if (event_points < 0 || event_points > 1000)
+    return fail("event_points: must be in [0, 1000], got " +
+                std::to_string(event_points));
+  if (!(event_tolerance > 0) || !std::isfinite(event_tolerance))
+    return fail("event_tolerance: must be finite and > 0, got " +
+                std::to_string(event_tolerance));
   std::string inner;
   if (!integrator.IsValid(&inner)) return fail("integrator." + inner);
   if (!quasi_static.IsValid(&inner)) return fail("quasi_static." + inner);
@@ -259,6 +265,8 @@ void Simulator::Record(double t, const Configuration& theta,
 }
 
 namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
 // Zoh solves follow the path at regular steps: extrapolated warm starts.
 QuasiStaticOptions SolverOptions(const SimulationOptions& options) {
   QuasiStaticOptions qs = options.quasi_static;
@@ -292,7 +300,8 @@ struct Simulator::Session {
                SolverOptions(sim.options_)),
         integrator(CreateIntegrator(sim.options_, &dae_options)),
         ode(*sim.model_, sim.options_.coupling, &solver),
-        y(kConfigSize) {
+        y(kConfigSize),
+        y_event(kConfigSize) {
     iopts = sim.options_.integrator;
     if (iopts.step <= 0) iopts.step = sim.dt_;
   }
@@ -311,6 +320,34 @@ struct Simulator::Session {
   long long ode_iterations_seen = 0;
   long long ode_native_iterations_seen = 0;
   bool done = true;
+  // Located stops: the held twist and the state at the start of the last
+  // integrated interval, the re-integration workspace, and a located stop
+  // pending for the next Interval() (t_stop NaN: none).
+  Vec12 w_held = Vec12::Zero();
+  Configuration theta_prev = Configuration::Zero();
+  double t_prev = 0;
+  bool have_prev = false;
+  Eigen::VectorXd y_event;
+  QuasiStaticSolution sol_event, sol_b;
+  LimitIndicators ind;
+  double t_stop = kNaN, t_lower = kNaN, t_upper = kNaN;
+  const char* pending_limit = "";
+  bool done_located = false;  // LocateIntegratorStop recorded the stop
+  // Relative-curvature margins at the last two samples (trend check).
+  std::array<double, 3> curvature_now{kNaN, kNaN, kNaN},
+      curvature_before{kNaN, kNaN, kNaN};
+  int event_solves = 0;
+  long long event_iterations = 0, event_iterations_native = 0;
+  int pending_wheel = -1;
+};
+
+// A bisection bracket: the limit is not met at a, met at b (or the state at
+// b could not be reached: have_b false).
+struct Simulator::Bracket {
+  double a = 0, b = 0;
+  Configuration theta_a = Configuration::Zero(),
+                theta_b = Configuration::Zero();
+  bool have_b = false;
 };
 
 SimulationResult Simulator::Run(const Configuration& theta0) {
@@ -344,6 +381,13 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   s.ode_iterations_seen = s.ode.nlp_iterations();
   s.ode_native_iterations_seen = s.ode.nlp_iterations_native();
   s.ode.ResetKkt();
+  s.have_prev = false;
+  s.t_stop = s.t_lower = s.t_upper = kNaN;
+  s.pending_limit = "";
+  s.pending_wheel = -1;
+  s.curvature_now.fill(kNaN);
+  s.curvature_before.fill(kNaN);
+  s.done_located = false;
   s.done = false;
   *result = SimulationResult{};
   result->nlp_options = s.nlp_options;
@@ -382,23 +426,38 @@ bool Simulator::Advance(SimulationResult* result) {
 bool Simulator::Interval(SimulationResult* result) {
   Session& s = *session_;
   const int k = s.k;
-  const double t = k == s.n ? t_end_ : k * dt_;
+  // A located stop (CheckIntervalEvents) is recorded at its own time.
+  const bool pending = !std::isnan(s.t_stop);
+  double t = pending ? s.t_stop : k == s.n ? t_end_ : k * dt_;
   const double t_next = k + 1 == s.n ? t_end_ : (k + 1) * dt_;
   s.solver.Solve(s.theta, &s.sol);
   QuasiStaticSolution& sol = s.sol;
   result->nlp_solves += sol.nlp_solves;
   result->nlp_iterations += sol.nlp_iterations;
   result->nlp_iterations_native += sol.nlp_iterations_native;
-  if (options_.second_contact_check_every > 0 &&
-      k % options_.second_contact_check_every == 0 &&
-      sol.status == QuasiStaticStatus::kOk) {
+  const bool check_contact =
+      options_.second_contact_check_every > 0 &&
+      (k % options_.second_contact_check_every == 0 || pending);
+  if (check_contact && sol.status == QuasiStaticStatus::kOk) {
     const ValidityReport v = CheckValidity(*model_, s.theta, true);
     if (!v.ok()) {
       sol.status = QuasiStaticStatus::kDegenerateContact;
       sol.message = v.Describe();
     }
   }
-  Record(t, s.theta, sol, result, k);
+  if (pending && sol.status == QuasiStaticStatus::kOk) {
+    // The located state lies within event_tolerance past the crossing; the
+    // solve's own checks may still pass there (a state reached only at the
+    // bracket's lower end): the limit stands.
+    sol.status = QuasiStaticStatus::kDegenerateContact;
+    sol.critical_contact = s.pending_wheel;
+    sol.message = "wheel " + std::to_string(s.pending_wheel + 1) + ": " +
+                  s.pending_limit + " (located between samples)";
+  }
+  if (!pending && sol.status != QuasiStaticStatus::kOk &&
+      sol.status != QuasiStaticStatus::kSolverFailure)
+    LocateSampleStop(&t, result);
+  Record(t, s.theta, s.sol, result, k);
   result->t_reached = t;
   if (sol.status == QuasiStaticStatus::kOk)
     result->kkt_residual = std::fmax(result->kkt_residual, sol.kkt_residual);
@@ -415,19 +474,22 @@ bool Simulator::Interval(SimulationResult* result) {
       os << ", wheel " << result->critical_contact;
     os << "): " << sol.message;
     result->stop_reason = os.str();
+    SetStopEvent(t, result);
     return false;
   }
   if (k == s.n) {
     result->status = "success";
     return false;
   }
-  s.ode.Hold(s.solver.problem().JointSpaceVelocity(sol.z));
+  s.w_held = s.solver.problem().JointSpaceVelocity(sol.z);
+  s.ode.Hold(s.w_held);
   s.y = s.theta;
   const IntegratorStatus st =
       s.integrator->Integrate(s.ode, t, t_next, s.y, s.iopts, &s.ires);
   if (st != IntegratorStatus::kSuccess) {
     result->t_reached = s.ires.t_reached;
     if (s.ode.nlp_failed()) {
+      if (LocateIntegratorStop(t, t_next, result)) return !s.done_located;
       const QuasiStaticSolution& f = s.ode.last_solution();
       result->status = ToString(f.status);
       result->stop_configuration = s.solver.problem().configuration();
@@ -446,9 +508,349 @@ bool Simulator::Interval(SimulationResult* result) {
     }
     return false;
   }
+  s.theta_prev = s.theta;
+  s.t_prev = t;
+  s.have_prev = true;
   s.theta = s.y;
   s.k = k + 1;
+  if (options_.locate_events) CheckIntervalEvents(t, t_next);
   return true;
+}
+
+// Integrates the run's ODE (the held twist in zoh) with the run's own
+// integrator from (t0, theta0) to t1 into s.y_event; false if it fails.
+bool Simulator::Reintegrate(double t0, const Configuration& theta0, double t1) {
+  Session& s = *session_;
+  s.y_event = theta0;
+  if (!(t1 > t0)) return true;
+  s.ode.Hold(s.w_held);
+  return s.integrator->Integrate(s.ode, t0, t1, s.y_event, s.iopts, &s.ires) ==
+         IntegratorStatus::kSuccess;
+}
+
+// Bisects br->[a, b] down to event_tolerance. A time m is "before the limit"
+// when the integrator reaches it from (t0, theta0) and the state there
+// passes the geometric indicators (solve false) or the quasi-static solve
+// does not fail physically (solve true; the failing solve at b is kept in
+// s.sol_b).
+void Simulator::Bisect(double t0, const Configuration& theta0, bool solve,
+                       Bracket* br) {
+  Session& s = *session_;
+  const bool contact = options_.second_contact_check_every > 0;
+  while (br->b - br->a > options_.event_tolerance) {
+    const double m = 0.5 * (br->a + br->b);
+    if (!(m > br->a && m < br->b)) break;  // round-off
+    const bool reached = Reintegrate(t0, theta0, m);
+    const Configuration y = s.y_event;
+    bool good = reached;
+    if (good && solve) {
+      s.solver.Solve(y, &s.sol_event);
+      s.event_solves += s.sol_event.nlp_solves;
+      s.event_iterations += s.sol_event.nlp_iterations;
+      s.event_iterations_native += s.sol_event.nlp_iterations_native;
+      // SOLVER_FAILURE means mu > mu_min with regular statics (model.md
+      // §7.7): the physical limit is not reached there.
+      good = s.sol_event.status == QuasiStaticStatus::kOk ||
+             s.sol_event.status == QuasiStaticStatus::kSolverFailure;
+      if (good && contact) good = CheckValidity(*model_, y, true).ok();
+    } else if (good) {
+      EvaluateLimitIndicators(*model_, y, contact, &s.ind);
+      good = s.ind.ok();
+    }
+    if (good) {
+      br->a = m;
+      br->theta_a = y;
+    } else {
+      br->b = m;
+      br->have_b = reached;
+      if (reached) br->theta_b = y;
+      if (reached && solve) std::swap(s.sol_b, s.sol_event);
+    }
+  }
+}
+
+// After an interval [t0, t1] (state s.theta_prev at t0, s.theta at t1):
+// looks for a geometric limit on the dense output (interior points and the
+// end); if one is met, bisects the dense output for the first crossing,
+// re-integrates from t0 to it with the run's own integrator and leaves that
+// state in s.theta with s.t_stop set, for the next Interval() to record and
+// stop. Returns true if so.
+bool Simulator::CheckIntervalEvents(double t0, double t1) {
+  Session& s = *session_;
+  const Configuration& th0 = s.theta_prev;
+  const Configuration th1 = s.theta;
+  const double h = t1 - t0;
+  const int m = options_.event_points;
+  Configuration f0, f1;
+  // zoh: F at the end with the held twist (exact); coupled: the end slope
+  // of the quadratic through (Theta_0, F_0, Theta_1). Without a right-hand
+  // side (K singular at an end) the dense output is linear.
+  bool dense = m > 0 && model_->Rhs(th0, s.w_held, &f0);
+  if (dense && options_.coupling == Coupling::kZoh) {
+    dense = model_->Rhs(th1, s.w_held, &f1);
+  } else if (dense) {
+    f1 = 2.0 / h * (th1 - th0) - f0;
+  }
+  auto state = [&](double frac) -> Configuration {
+    if (frac >= 1.0) return th1;
+    if (dense) return HermiteState(th0, f0, th1, f1, h, frac);
+    return (1.0 - frac) * th0 + frac * th1;
+  };
+  double fa = 0.0, fb = kNaN;
+  for (int j = 1; j <= m + 1; ++j) {
+    const double frac = static_cast<double>(j) / (m + 1);
+    EvaluateLimitIndicators(*model_, state(frac), false, &s.ind);
+    if (!s.ind.ok()) {
+      fb = frac;
+      break;
+    }
+    fa = frac;
+  }
+  if (std::isnan(fb)) {
+    // s.ind holds the end's indicators. A relative-curvature margin that,
+    // extrapolated from the last two samples, reaches 0 inside this
+    // interval while the end is valid may have been stepped over (the
+    // contact rates grow like 1/margin, and a step across the singularity
+    // can land back on the valid side): check on re-integrated states.
+    bool suspect = false;
+    for (int i = 0; i < 3; ++i) {
+      const double now = s.curvature_now[i], before = s.curvature_before[i];
+      if (now < before && now - (before - now) * (h / dt_) <= 0) suspect = true;
+      s.curvature_before[i] = now;
+      s.curvature_now[i] = s.ind.relative_curvature[i];
+    }
+    return suspect && ScanInterval(t0, t1);
+  }
+  const char* limit = s.ind.violated;
+  int wheel = s.ind.wheel;
+  while ((fb - fa) * h > options_.event_tolerance) {
+    const double fm = 0.5 * (fa + fb);
+    if (!(fm > fa && fm < fb)) break;  // round-off
+    EvaluateLimitIndicators(*model_, state(fm), false, &s.ind);
+    if (s.ind.ok()) {
+      fa = fm;
+    } else {
+      fb = fm;
+      limit = s.ind.violated;
+      wheel = s.ind.wheel;
+    }
+  }
+  s.t_lower = t0 + fa * h;
+  s.t_upper = fb >= 1.0 ? t1 : t0 + fb * h;
+  s.t_stop = s.t_upper;
+  if (fb >= 1.0) {
+    s.theta = th1;
+  } else if (Reintegrate(t0, th0, s.t_stop)) {
+    s.theta = s.y_event;
+  } else {
+    s.theta = state(fb);
+  }
+  s.pending_limit = limit;
+  s.pending_wheel = wheel;
+  return true;
+}
+
+// Checks the states the run's integrator reaches from the start of the
+// interval [t0, t1] at kScanPoints times t0 + j (t1 - t0)/kScanPoints; at
+// the first one past a geometric limit (or not reached), bisects like
+// LocateIntegratorStop and leaves the located stop pending. Returns true if
+// so.
+bool Simulator::ScanInterval(double t0, double t1) {
+  constexpr int kScanPoints = 8;
+  Session& s = *session_;
+  const Configuration th0 = s.theta_prev;
+  Bracket br;
+  br.a = t0;
+  br.theta_a = th0;
+  for (int j = 1; j < kScanPoints; ++j) {
+    const double tj = t0 + (t1 - t0) * j / kScanPoints;
+    const bool reached = Reintegrate(t0, th0, tj);
+    if (reached) {
+      EvaluateLimitIndicators(*model_, s.y_event, false, &s.ind);
+      if (s.ind.ok()) {
+        br.a = tj;
+        br.theta_a = s.y_event;
+        continue;
+      }
+    }
+    br.b = tj;
+    br.have_b = reached;
+    br.theta_b = s.y_event;
+    Bisect(t0, th0, false, &br);
+    s.t_lower = br.a;
+    s.t_upper = br.b;
+    s.t_stop = br.have_b ? br.b : br.a;
+    s.theta = br.have_b ? br.theta_b : br.theta_a;
+    const char* limit = "relative_curvature";
+    int wheel = 0;
+    if (br.have_b) {
+      EvaluateLimitIndicators(*model_, s.theta, false, &s.ind);
+      if (!s.ind.ok()) {
+        limit = s.ind.violated;
+        wheel = s.ind.wheel;
+      }
+    }
+    s.pending_limit = limit;
+    s.pending_wheel = wheel;
+    return true;
+  }
+  return false;
+}
+
+// The solve at the sample time *t failed physically (or the sampled
+// second-contact check did): locates the crossing inside the last interval
+// and replaces s.theta, s.sol and *t by the located stop. Returns true if
+// located.
+bool Simulator::LocateSampleStop(double* t, SimulationResult* result) {
+  Session& s = *session_;
+  if (!options_.locate_events || !s.have_prev) return false;
+  const bool contact = options_.second_contact_check_every > 0;
+  // The sampled second-contact check (every N samples) may have failed
+  // before the last interval: the start must pass it.
+  if (contact && !CheckValidity(*model_, s.theta_prev, true).ok()) return false;
+  Bracket br;
+  br.a = s.t_prev;
+  br.theta_a = s.theta_prev;
+  br.b = *t;
+  br.theta_b = s.theta;
+  br.have_b = true;
+  const QuasiStaticSolution original = s.sol;  // kept if not confirmed
+  const Configuration theta_original = s.theta;
+  std::swap(s.sol_b, s.sol);
+  s.event_solves = 0;
+  s.event_iterations = s.event_iterations_native = 0;
+  Bisect(s.t_prev, s.theta_prev, true, &br);
+  result->nlp_solves += s.event_solves;
+  result->nlp_iterations += s.event_iterations;
+  result->nlp_iterations_native += s.event_iterations_native;
+  // Reproduce a failure to reach b (coupled) for its solution.
+  if (!br.have_b) Reintegrate(s.t_prev, s.theta_prev, br.b);
+  if (br.have_b && s.sol_b.status != QuasiStaticStatus::kOk &&
+      s.sol_b.status != QuasiStaticStatus::kSolverFailure) {
+    std::swap(s.sol, s.sol_b);
+    s.theta = br.theta_b;
+    *t = br.b;
+  } else if (!br.have_b && s.ode.nlp_failed() &&
+             s.ode.last_solution().status !=
+                 QuasiStaticStatus::kSolverFailure) {
+    // Coupled: the integrator itself failed past a; stop at a with the
+    // failing stage's solution.
+    s.sol = s.ode.last_solution();
+    s.theta = br.theta_a;
+    *t = br.a;
+  } else {
+    // The located end is no physical stop (a solver failure, or a state off
+    // the path of a blown-up run): keep the sample's stop.
+    s.sol = original;
+    s.theta = theta_original;
+    return false;
+  }
+  s.t_lower = br.a;
+  s.t_upper = br.b;
+  return true;
+}
+
+// A quasi-static solve failed inside the integrator (coupled mode) on
+// [t0, t1]: locates the first time the integrator cannot reach, records a
+// sample at the last reachable one and stops. Returns true if it did.
+bool Simulator::LocateIntegratorStop(double t0, double t1,
+                                     SimulationResult* result) {
+  Session& s = *session_;
+  if (!options_.locate_events ||
+      s.ode.last_solution().status == QuasiStaticStatus::kSolverFailure)
+    return false;
+  const QuasiStaticSolution first = s.ode.last_solution();
+  Bracket br;
+  br.a = t0;
+  br.theta_a = s.theta;
+  br.b = t1;
+  Bisect(t0, s.theta, false, &br);
+  s.t_lower = br.a;
+  s.t_upper = br.b;
+  if (br.have_b) {
+    // The integrator reaches b, where a geometric limit is violated: stop
+    // there (recorded by the next Interval(), as for CheckIntervalEvents).
+    EvaluateLimitIndicators(*model_, br.theta_b, false, &s.ind);
+    s.theta = br.theta_b;
+    s.t_stop = br.b;
+    s.pending_limit = s.ind.violated;
+    s.pending_wheel = s.ind.wheel;
+    s.k += 1;
+    return true;
+  }
+  // Reproduce the failure at b for its solution and stage state. Where the
+  // NLP gives up before the limit (SOLVER_FAILURE: mu > mu_min there) the
+  // integrator cannot go on towards it: the limit that stopped it stands.
+  if (!Reintegrate(t0, s.theta, br.b) && s.ode.nlp_failed() &&
+      s.ode.last_solution().status != QuasiStaticStatus::kSolverFailure) {
+    s.sol = s.ode.last_solution();
+  } else {
+    s.sol = first;  // the failure that started the search
+  }
+  result->stop_configuration = s.solver.problem().configuration();
+  s.theta = br.theta_a;
+  const QuasiStaticSolution& sol = s.sol;
+  Record(br.a, s.theta, sol, result, s.k);
+  s.done_located = true;
+  result->t_reached = br.a;
+  result->status = ToString(sol.status);
+  result->mu_min_at_stop = sol.mu_min;
+  result->critical_contact =
+      sol.critical_contact >= 0 ? sol.critical_contact + 1 : -1;
+  result->stop_reason = "t=" + std::to_string(br.a) +
+                        " s: " + ToString(sol.status) +
+                        " inside the integrator (located): " + sol.message;
+  SetStopEvent(br.a, result);
+  return true;
+}
+
+namespace {
+const char* LimitOfStatus(QuasiStaticStatus status) {
+  switch (status) {
+    case QuasiStaticStatus::kInfeasibleFriction:
+      return "friction_limit";
+    case QuasiStaticStatus::kLiftOff:
+      return "lift_off";
+    case QuasiStaticStatus::kSingular:
+      return "singular";
+    default:
+      return "";
+  }
+}
+}  // namespace
+
+// Fills result->event for a stop at t with s.sol.
+void Simulator::SetStopEvent(double t, SimulationResult* result) const {
+  const Session& s = *session_;
+  const QuasiStaticSolution& sol = s.sol;
+  StopEvent& e = result->event;
+  e = StopEvent{};
+  EvaluateLimitIndicators(
+      *model_, s.theta, options_.second_contact_check_every > 0, &e.indicators);
+  if (sol.status == QuasiStaticStatus::kDegenerateContact) {
+    e.limit = !std::isnan(s.t_stop) ? s.pending_limit
+              : e.indicators.ok()   ? "degenerate_contact"
+                                    : e.indicators.violated;
+    e.wheel = !std::isnan(s.t_stop) ? s.pending_wheel + 1
+              : e.indicators.ok()   ? result->critical_contact
+                                    : e.indicators.wheel + 1;
+  } else {
+    e.limit = LimitOfStatus(sol.status);
+    e.wheel = result->critical_contact;
+  }
+  if (e.limit.empty()) {  // SOLVER_FAILURE: numerical, no physical limit
+    e = StopEvent{};
+    return;
+  }
+  e.t = t;
+  e.mu_min = sol.mu_min;
+  e.min_normal_force = sol.min_normal_force;
+  e.located = !std::isnan(s.t_upper);
+  e.t_lower = e.located ? s.t_lower : s.have_prev ? s.t_prev : t;
+  e.t_upper = e.located ? s.t_upper : t;
+  e.tolerance = e.located
+                    ? options_.event_tolerance
+                    : dt_ * std::max(1, options_.second_contact_check_every);
 }
 
 }  // namespace quasiroll

@@ -17,6 +17,7 @@
 
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/kinematics.h"
+#include "quasiroll/core/limit_events.h"
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/scene.h"
 
@@ -44,6 +45,17 @@ struct SimulationOptions {
   QuasiStaticOptions quasi_static;
   // Run the sampled second-contact check every N samples (0 = never).
   int second_contact_check_every = 0;
+  // Located stops (model.md §8.6, core/limit_events.h). When on, the
+  // geometric limits (tread angle, relative curvature, leaving the terrain)
+  // are checked along every hold interval on `event_points` interior points
+  // of a cubic Hermite dense output and at its end, and a stop (a crossing
+  // there, or a physical quasi-static failure at the next sample) is located
+  // by bisection on states the run's own integrator reaches from the
+  // interval's start, to `event_tolerance` seconds; the run then stops at
+  // the located time. Off: stops are seen at the samples only (as before).
+  bool locate_events = true;
+  int event_points = 3;
+  double event_tolerance = 1e-9;  // [s]
   bool IsValid(std::string* why) const;
 };
 
@@ -74,6 +86,27 @@ struct TrajectorySample {
   Configuration theta = Configuration::Zero();
 };
 
+// The physical limit a run stopped on (model.md §8.6); limit "" when the run
+// met none (success, or a numerical stop).
+struct StopEvent {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  // relative_curvature, tread_angle, second_contact, outside_terrain
+  // (DEGENERATE_CONTACT), friction_limit, lift_off, singular.
+  std::string limit;
+  int wheel = -1;  // 1-based, -1 if none
+  // located: the crossing was bracketed in [t_lower, t_upper] with
+  // t_upper - t_lower <= tolerance on the run's own states, and the run
+  // stopped at t (one of the two ends, = t_reached). Not located (locating
+  // off, or the first sample): the bracket is the sample interval.
+  bool located = false;
+  double t = kNaN, t_lower = kNaN, t_upper = kNaN, tolerance = kNaN;
+  // The indicators (core/limit_events.h) at the stop state, and the
+  // quasi-static solve's mu_min and smallest normal force there (NaN unless
+  // computed).
+  LimitIndicators indicators;
+  double mu_min = kNaN, min_normal_force = kNaN;
+};
+
 struct SimulationResult {
   // "success", a quasi-static status ("INFEASIBLE_FRICTION", ...) or an
   // integrator status ("step_size_too_small", ...).
@@ -88,6 +121,8 @@ struct SimulationResult {
   Configuration stop_configuration =
       Configuration::Constant(std::numeric_limits<double>::quiet_NaN());
   std::vector<TrajectorySample> samples;
+  // The located physical stop (limit "" if none).
+  StopEvent event;
   // Cost counters.
   int nlp_solves = 0;
   long long nlp_iterations = 0;         // comparable count (core/nlp.h)
@@ -150,6 +185,15 @@ class Simulator {
   class RobotOde;
   struct Session;
   bool Interval(SimulationResult* result);
+  // Located stops (core/simulator_events.cc).
+  struct Bracket;
+  bool Reintegrate(double t0, const Configuration& theta0, double t1);
+  void Bisect(double t0, const Configuration& theta0, bool solve, Bracket* br);
+  bool CheckIntervalEvents(double t0, double t1);
+  bool ScanInterval(double t0, double t1);
+  bool LocateSampleStop(double* t, SimulationResult* result);
+  bool LocateIntegratorStop(double t0, double t1, SimulationResult* result);
+  void SetStopEvent(double t, SimulationResult* result) const;
   void Record(double t, const Configuration& theta,
               const QuasiStaticSolution& sol, SimulationResult* result,
               int index) const;

@@ -18,6 +18,13 @@ std::string DivergenceDetail(const FailureEvidence& e) {
   if (e.gap_max > e.gap_bound) return "gap_blowup";
   return "step_too_large";
 }
+// The reference stopped at a physical limit and the run went past it by
+// more than the same-place tolerance (or reached t_end): the run stepped
+// over the limit (docs/model.md §8.6).
+bool MissedEvent(const FailureEvidence& e) {
+  return e.has_reference && e.ref_status && IsPhysicalStop(*e.ref_status) &&
+         e.t_reached > e.ref_t_reached + StopTolerance(e) + 1e-9;
+}
 // A run that blew up: its motion (and so its inertia) is the method's.
 bool BlewUp(const FailureEvidence& e) {
   return !e.known_instability.empty() || e.drift_max > e.drift_bound ||
@@ -31,8 +38,10 @@ double StopTolerance(const FailureEvidence& e) {
 
 FailureCause ClassifyFailure(const FailureEvidence& e) {
   const RunStatus st = e.status;
-  if (st == RunStatus::kSuccess) return {"", ""};
   if (st == RunStatus::kError) return {"numerical", "error"};
+  if (st == RunStatus::kSuccess)
+    return MissedEvent(e) ? FailureCause{"numerical", "missed_event"}
+                          : FailureCause{"", ""};
   // The motion left the quasi-static model's domain before the stop: what
   // follows (a limit, a solver giving up) is outside what the model can
   // claim, whichever method ran it.
@@ -44,6 +53,7 @@ FailureCause ClassifyFailure(const FailureEvidence& e) {
     return {"numerical", !e.known_instability.empty()      ? e.known_instability
                          : st == RunStatus::kDriftExceeded ? "drift_blowup"
                                                            : "gap_blowup"};
+  if (MissedEvent(e)) return {"numerical", "missed_event"};
   const double tol_t = StopTolerance(e);
   const bool ref_stopped =
       e.has_reference && e.ref_status != RunStatus::kSuccess;

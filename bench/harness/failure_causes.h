@@ -47,7 +47,10 @@ struct FailureCause {
   std::string detail;  // "", friction_limit, ... (docs/harness.md)
 };
 
-// Classifies a non-success row (rules in docs/harness.md, Failure causes):
+// Classifies a row (rules in docs/harness.md, Failure causes); a success has
+// no cause unless it went past its reference's physical stop (then, like
+// any run that stops more than StopTolerance after that stop, numerical /
+// missed_event):
 // model (quasi_static_invalid) when the motion up to the stop exceeds the
 // quasi-static inertia bound and the run did not blow up; else physical when
 // the reference stops at the same place (|t_reached - t_ref| <=

@@ -303,6 +303,36 @@ std::string IsoTimeNow() {
   return buf;
 }
 
+void WriteStopEvent(const StopEvent& e, JsonWriter* json) {
+  JsonWriter& j = *json;
+  if (e.limit.empty()) {
+    j.Null();
+    return;
+  }
+  j.BeginObject();
+  j.Key("limit").Value(e.limit);
+  j.Key("wheel");
+  e.wheel > 0 ? (void)j.Value(e.wheel) : (void)j.Null();
+  j.Key("located").Value(e.located);
+  j.Key("t").Value(e.t);
+  j.Key("t_lower").Value(e.t_lower);
+  j.Key("t_upper").Value(e.t_upper);
+  j.Key("tolerance").Value(e.tolerance);
+  j.Key("indicators").BeginObject();
+  auto three = [&j](const char* key, const std::array<double, 3>& v) {
+    j.Key(key).BeginArray();
+    for (double x : v) j.Value(x);
+    j.EndArray();
+  };
+  three("tread_angle", e.indicators.tread_angle);
+  three("relative_curvature", e.indicators.relative_curvature);
+  three("second_contact", e.indicators.second_contact);
+  j.EndObject();
+  j.Key("mu_min").Value(e.mu_min);
+  j.Key("min_normal_force").Value(e.min_normal_force);
+  j.EndObject();
+}
+
 std::string RunJson(const Scene& scene, const SimulationOptions& options,
                     double dt, double t_end, const SimulationResult& r) {
   JsonWriter j;
@@ -330,6 +360,8 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   const SlipDistances slip = TotalSlipDistances(r.samples);
   j.Key("sliding_distance").Value(slip.sliding);
   j.Key("creep_distance").Value(slip.creep);
+  j.Key("event");  // the physical limit the run stopped on (model.md §8.6)
+  WriteStopEvent(r.event, &j);
   j.Key("scene").BeginObject();
   j.Key("name").Value(scene.name);
   j.Key("file").Value(scene.source_path);
@@ -369,6 +401,14 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
                  : 2);
   j.Key("nlp_residual_tolerance")
       .Value(options.quasi_static.residual_tolerance);
+  // How stops are located (model.md §8.6): every method, by the simulator.
+  j.Key("events").BeginObject();
+  j.Key("locate").Value(options.locate_events);
+  j.Key("method").Value(options.locate_events ? "dense_output_bisection"
+                                              : "samples_only");
+  j.Key("points").Value(options.event_points);
+  j.Key("tolerance").Value(options.event_tolerance);
+  j.EndObject();
   // Backend options: as given, and as used (every option of the table).
   auto write_options = [&j](const char* key, const GivenOptions& given,
                             const OptionValues& used) {

@@ -59,6 +59,12 @@ void SetInvocation(int argc, const char* const* argv);
 const std::string& Invocation();
 std::string IsoTimeNow();
 
+// run.json's "event" (docs/formats.md): null when the run met no physical
+// limit, else {"limit", "wheel", "located", "t", "t_lower", "t_upper",
+// "tolerance", "indicators": {"tread_angle", "relative_curvature",
+// "second_contact"}, "mu_min", "min_normal_force"}.
+void WriteStopEvent(const StopEvent& event, JsonWriter* json);
+
 // run.json of `quasiroll run`.
 std::string RunJson(const Scene& scene, const SimulationOptions& options,
                     double dt, double t_end, const SimulationResult& result);

@@ -153,6 +153,41 @@ TEST(FailureCauses, FrictionStopShared) {
   EXPECT_EQ(c.cause, "numerical");
 }
 
+// A run that goes past its reference's physical stop stepped over the
+// limit (docs/model.md §8.6): the dip of tests/core/test_limit_events.cc,
+// where zoh at dt 0.05 used to reach t_end although the reference stops
+// on the relative-curvature limit at 3.39 s. Never a success, whatever it
+// stops on later; within the same-place tolerance the stop is shared.
+TEST(FailureCauses, PassingThePhysicalStopIsAMissedEvent) {
+  FailureCause c =
+      ClassifyFailure(Evidence("success", 4.0, "DEGENERATE_CONTACT", 3.3906));
+  EXPECT_EQ(c.cause, "numerical");
+  EXPECT_EQ(c.detail, "missed_event");
+  // Stopping 0.17 s (more than two intervals) after it: missed too.
+  c = ClassifyFailure(
+      Evidence("DEGENERATE_CONTACT", 3.5586, "DEGENERATE_CONTACT", 3.3906));
+  EXPECT_EQ(c.detail, "missed_event");
+  c = ClassifyFailure(
+      Evidence("rhs_failure", 3.5586, "INFEASIBLE_FRICTION", 3.3906));
+  EXPECT_EQ(c.detail, "missed_event");
+  // Within StopTolerance (0.1 s here): the same stop, physical.
+  c = ClassifyFailure(
+      Evidence("DEGENERATE_CONTACT", 3.4500, "DEGENERATE_CONTACT", 3.3906));
+  EXPECT_EQ(c.cause, "physical");
+  // Stopping before it is not a missed event; nor is passing a reference
+  // that stopped for a numerical reason.
+  c = ClassifyFailure(
+      Evidence("DEGENERATE_CONTACT", 2.0, "DEGENERATE_CONTACT", 3.3906));
+  EXPECT_EQ(c.detail, "step_too_large");
+  EXPECT_EQ(
+      ClassifyFailure(Evidence("success", 4.0, "SOLVER_FAILURE", 3.39)).cause,
+      "");
+  // A blow-up keeps its root cause.
+  FailureEvidence e = Evidence("drift_exceeded", 4.0, "LIFT_OFF", 3.0);
+  e.drift_max = 0.5;
+  EXPECT_EQ(ClassifyFailure(e).detail, "drift_blowup");
+}
+
 // The default suite's stability_dt blow-up: rk-baumgarte, zoh, dt 3.2 s,
 // sigma 5 (sigma h = 16 > 2.785) stops at 3.2 s with INFEASIBLE_FRICTION and
 // mu_min 4.1 while the reference drives on: never a friction limit.
