@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 #include <system_error>
+#include <utility>
 
 #include "quasiroll/core/backend_info.h"
 
@@ -16,6 +17,18 @@ std::string Number(double v) {
   const auto res = std::to_chars(buf, buf + sizeof(buf), v);
   return std::string(buf, res.ptr);
 }
+
+OptionSpec Make(std::string name, OptionType type, OptionValue def,
+                std::string doc) {
+  OptionSpec s;
+  s.name = std::move(name);
+  s.type = type;
+  s.default_value = std::move(def);
+  s.doc = std::move(doc);
+  return s;
+}
+
+}  // namespace
 
 std::string JsonString(const std::string& s) {
   std::string out = "\"";
@@ -45,18 +58,6 @@ std::string JsonString(const std::string& s) {
   }
   return out + "\"";
 }
-
-OptionSpec Make(std::string name, OptionType type, OptionValue def,
-                std::string doc) {
-  OptionSpec s;
-  s.name = std::move(name);
-  s.type = type;
-  s.default_value = std::move(def);
-  s.doc = std::move(doc);
-  return s;
-}
-
-}  // namespace
 
 const char* ToString(OptionType type) {
   switch (type) {
@@ -334,6 +335,18 @@ std::pair<std::string, std::string> SplitKeyValue(const std::string& text,
     throw std::invalid_argument(flag + ": expected key=value, got \"" + text +
                                 "\"");
   return {text.substr(0, eq), text.substr(eq + 1)};
+}
+
+BackendInfo ThreadSafeBackendInfo(std::string description, std::string family,
+                                  std::string library,
+                                  std::string library_version) {
+  BackendInfo info;
+  info.description = std::move(description);
+  info.family = std::move(family);
+  info.library = std::move(library);
+  info.library_version = std::move(library_version);
+  info.thread_safe = true;
+  return info;
 }
 
 const char* ToString(BackendRole role) {
