@@ -18,18 +18,6 @@ std::string Number(double v) {
   return std::string(buf, res.ptr);
 }
 
-OptionSpec Make(std::string name, OptionType type, OptionValue def,
-                std::string doc) {
-  OptionSpec s;
-  s.name = std::move(name);
-  s.type = type;
-  s.default_value = std::move(def);
-  s.doc = std::move(doc);
-  return s;
-}
-
-}  // namespace
-
 std::string JsonString(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
@@ -58,6 +46,18 @@ std::string JsonString(const std::string& s) {
   }
   return out + "\"";
 }
+
+OptionSpec Make(std::string name, OptionType type, OptionValue def,
+                std::string doc) {
+  OptionSpec s;
+  s.name = std::move(name);
+  s.type = type;
+  s.default_value = std::move(def);
+  s.doc = std::move(doc);
+  return s;
+}
+
+}  // namespace
 
 const char* ToString(OptionType type) {
   switch (type) {

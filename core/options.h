@@ -89,9 +89,6 @@ class OptionValues {
 std::string OptionValueText(const OptionValue& value);
 // JSON of a value ("0.5", "true", "\"adaptive\"").
 std::string OptionValueJson(const OptionValue& value);
-// `s` as a JSON string: quoted, with '"', '\\' and control characters
-// escaped (the JSON writers of the library and the bench use it).
-std::string JsonString(const std::string& s);
 
 // Parses `text` as a value of `spec` and checks its range. Throws
 // std::invalid_argument "<context>: option '<name>': <problem>, got "<text>"".

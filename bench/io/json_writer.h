@@ -8,8 +8,6 @@
 #include <string>
 #include <vector>
 
-#include "quasiroll/core/options.h"
-
 namespace quasiroll {
 
 class JsonWriter {
@@ -98,7 +96,34 @@ class JsonWriter {
       first_.back() = false;
     }
   }
-  void AppendString(const std::string& s) { out_ += JsonString(s); }
+  void AppendString(const std::string& s) {
+    out_ += '"';
+    for (char c : s) {
+      switch (c) {
+        case '"':
+          out_ += "\\\"";
+          break;
+        case '\\':
+          out_ += "\\\\";
+          break;
+        case '\n':
+          out_ += "\\n";
+          break;
+        case '\t':
+          out_ += "\\t";
+          break;
+        default:
+          if (static_cast<unsigned char>(c) < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+            out_ += buf;
+          } else {
+            out_ += c;
+          }
+      }
+    }
+    out_ += '"';
+  }
 
   std::string out_;
   std::vector<bool> first_;
