@@ -66,6 +66,13 @@ struct BackendInfo {
   }
 };
 
+// The info of a backend whose separate instances may run concurrently
+// (thread_safe), with its description, family and library; the cost hints,
+// roles and callbacks are left to the caller.
+BackendInfo ThreadSafeBackendInfo(std::string description, std::string family,
+                                  std::string library = "",
+                                  std::string library_version = "");
+
 // "default", "reference", "reference_check".
 const char* ToString(BackendRole role);
 

@@ -176,20 +176,22 @@ struct KktVerifier::Workspace {
     if (m > 0) absr.noalias() += jac.cwiseAbs().transpose() * lam.cwiseAbs();
     double scale = std::max(1.0, grad.lpNorm<Eigen::Infinity>());
     if (m > 0) scale = std::max(scale, absr.maxCoeff());
+    // The complementarity error of a bound's or a row's multiplier w: w > 0
+    // pairs with the slack `positive_slack`, w < 0 with `negative_slack`.
+    auto side_error = [](double w, double positive_slack,
+                         double negative_slack) {
+      if (w > 0) return SideError(w, positive_slack);
+      if (w < 0) return SideError(-w, negative_slack);
+      return 0.0;
+    };
     double err = 0.0;
     for (int j = 0; j < n; ++j) {
       if (x_lb(j) == x_ub(j)) continue;
-      if (r(j) > 0)
-        err = std::max(err, SideError(r(j), x(j) - x_lb(j)));
-      else if (r(j) < 0)
-        err = std::max(err, SideError(-r(j), x_ub(j) - x(j)));
+      err = std::max(err, side_error(r(j), x(j) - x_lb(j), x_ub(j) - x(j)));
     }
     for (int i = 0; i < m; ++i) {
       if (g_lb(i) == g_ub(i)) continue;
-      if (lam(i) > 0)
-        err = std::max(err, SideError(lam(i), g_ub(i) - g(i)));
-      else if (lam(i) < 0)
-        err = std::max(err, SideError(-lam(i), g(i) - g_lb(i)));
+      err = std::max(err, side_error(lam(i), g_ub(i) - g(i), g(i) - g_lb(i)));
     }
     return err / scale;
   }
@@ -264,25 +266,22 @@ double KktVerifier::Verify(const NlpProblem& problem,
   // only that sign-consistent estimate is a candidate (an estimate with a
   // wrong-sign multiplier can look small relative to large cancelling
   // multipliers of a degenerate active set).
-  int active_sides = 0;
-  for (int i = 0; i < m; ++i) {
-    if (g_lb(i) == g_ub(i)) continue;
-    const double lo = g(i) - g_lb(i), hi = g_ub(i) - g(i);
-    if (lo <= activity_tolerance && lo <= hi)
-      w.row_side(i) = -1;
-    else if (hi <= activity_tolerance)
-      w.row_side(i) = 1;
-    active_sides += w.row_side(i) != 0;
-  }
-  for (int j = 0; j < n; ++j) {
-    if (x_lb(j) == x_ub(j)) continue;
-    const double lo = x(j) - x_lb(j), hi = x_ub(j) - x(j);
-    if (lo <= activity_tolerance && lo <= hi)
-      w.var_side(j) = -1;
-    else if (hi <= activity_tolerance)
-      w.var_side(j) = 1;
-    active_sides += w.var_side(j) != 0;
-  }
+  //
+  // -1 / 1: v is within activity_tolerance of the lower / upper side of
+  // [lb, ub] (the nearer one); 0: of neither, or lb == ub (an equality or a
+  // fixed variable).
+  auto active_side = [activity_tolerance](double v, double lb, double ub) {
+    if (lb == ub) return 0;
+    const double lo = v - lb, hi = ub - v;
+    if (lo <= activity_tolerance && lo <= hi) return -1;
+    return hi <= activity_tolerance ? 1 : 0;
+  };
+  for (int i = 0; i < m; ++i)
+    w.row_side(i) = active_side(g(i), g_lb(i), g_ub(i));
+  for (int j = 0; j < n; ++j)
+    w.var_side(j) = active_side(x(j), x_lb(j), x_ub(j));
+  const int active_sides =
+      w.row_side.cwiseAbs().sum() + w.var_side.cwiseAbs().sum();
   if (active_sides == 0) return best;
   for (int pass = 0; pass <= active_sides; ++pass) {
     w.SolveLeastSquares();
@@ -341,6 +340,21 @@ double MaxConstraintViolation(const Eigen::Ref<const Eigen::VectorXd>& x,
   }
   return v;
 }
+
+namespace {
+// Throws std::invalid_argument unless lb(i) <= ub(i), neither NaN, for all i.
+void CheckBounds(const char* what, const Eigen::VectorXd& lb,
+                 const Eigen::VectorXd& ub) {
+  for (Eigen::Index i = 0; i < lb.size(); ++i) {
+    if (std::isnan(lb(i)) || std::isnan(ub(i)) || lb(i) > ub(i)) {
+      std::ostringstream os;
+      os << "NlpSolver::Solve: " << what << " bounds [" << i << "] invalid: ["
+         << lb(i) << ", " << ub(i) << "]";
+      throw std::invalid_argument(os.str());
+    }
+  }
+}
+}  // namespace
 
 void NlpSolver::SetBackendOptions(const GivenOptions& given) {
   OptionValues values =
@@ -425,24 +439,10 @@ void NlpSolver::ValidateInputs(const NlpProblem& problem,
   g_ub_.resize(m);
   g_.resize(m);
   problem.GetBounds(x_lb_, x_ub_, g_lb_, g_ub_);
-  for (int i = 0; i < n; ++i) {
-    if (std::isnan(x_lb_(i)) || std::isnan(x_ub_(i)) || x_lb_(i) > x_ub_(i)) {
-      std::ostringstream os;
-      os << "NlpSolver::Solve: variable bounds [" << i << "] invalid: ["
-         << x_lb_(i) << ", " << x_ub_(i) << "]";
-      throw std::invalid_argument(os.str());
-    }
-  }
-  int equalities = 0;
-  for (int i = 0; i < m; ++i) {
-    if (std::isnan(g_lb_(i)) || std::isnan(g_ub_(i)) || g_lb_(i) > g_ub_(i)) {
-      std::ostringstream os;
-      os << "NlpSolver::Solve: constraint bounds [" << i << "] invalid: ["
-         << g_lb_(i) << ", " << g_ub_(i) << "]";
-      throw std::invalid_argument(os.str());
-    }
-    equalities += (g_lb_(i) == g_ub_(i));
-  }
+  CheckBounds("variable", x_lb_, x_ub_);
+  CheckBounds("constraint", g_lb_, g_ub_);
+  const int equalities =
+      static_cast<int>((g_lb_.array() == g_ub_.array()).count());
   if (RequiresSquareSystem() && equalities != n) {
     std::ostringstream os;
     os << "NlpSolver::Solve(" << name()

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 #include <system_error>
+#include <utility>
 
 #include "quasiroll/core/backend_info.h"
 
@@ -334,6 +335,18 @@ std::pair<std::string, std::string> SplitKeyValue(const std::string& text,
     throw std::invalid_argument(flag + ": expected key=value, got \"" + text +
                                 "\"");
   return {text.substr(0, eq), text.substr(eq + 1)};
+}
+
+BackendInfo ThreadSafeBackendInfo(std::string description, std::string family,
+                                  std::string library,
+                                  std::string library_version) {
+  BackendInfo info;
+  info.description = std::move(description);
+  info.family = std::move(family);
+  info.library = std::move(library);
+  info.library_version = std::move(library_version);
+  info.thread_safe = true;
+  return info;
 }
 
 const char* ToString(BackendRole role) {

@@ -178,13 +178,21 @@ Eigen::Matrix<double, 9, 1> QuasiStaticProblem::ContactLinearVelocities(
   return vel;
 }
 
+QuasiStaticProblem::ConstraintTerms QuasiStaticProblem::Terms(
+    const Eigen::Ref<const Eigen::VectorXd>& z) const {
+  const int nm = num_motion();
+  return {nm,
+          6 + num_passive_,
+          z.segment<9>(nm),
+          ContactLinearVelocities(z),
+          1.0 / v0_,
+          params_.mu,
+          params_.epsilon * params_.epsilon};
+}
+
 void QuasiStaticProblem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& z,
                                      Eigen::Ref<Eigen::VectorXd> g) const {
-  const int nm = num_motion(), ns = 6 + num_passive_;
-  const auto f = z.segment<9>(nm);
-  const Eigen::Matrix<double, 9, 1> vel = ContactLinearVelocities(z);
-  const double inv_v0 = 1.0 / v0_, mu = params_.mu,
-               eps2 = params_.epsilon * params_.epsilon;
+  const auto [nm, ns, f, vel, inv_v0, mu, eps2] = Terms(z);
   for (int i = 0; i < 3; ++i) g(i) = vel(3 * i + 2) * inv_v0;  // E1
   g.segment(3, ns).noalias() = statics_f_ * f;                 // E2, E3
   g.segment(3, ns) += statics_0_;
@@ -204,11 +212,7 @@ void QuasiStaticProblem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& z,
 void QuasiStaticProblem::ConstraintJacobian(
     const Eigen::Ref<const Eigen::VectorXd>& z,
     Eigen::Ref<Eigen::MatrixXd> jac) const {
-  const int nm = num_motion(), ns = 6 + num_passive_;
-  const auto f = z.segment<9>(nm);
-  const Eigen::Matrix<double, 9, 1> vel = ContactLinearVelocities(z);
-  const double inv_v0 = 1.0 / v0_, mu = params_.mu,
-               eps2 = params_.epsilon * params_.epsilon;
+  const auto [nm, ns, f, vel, inv_v0, mu, eps2] = Terms(z);
   jac.setZero();
   for (int i = 0; i < 3; ++i)
     jac.row(i).head(nm) = vel_m_.row(3 * i + 2) * inv_v0;

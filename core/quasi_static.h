@@ -117,6 +117,13 @@ class QuasiStaticProblem final : public NlpProblem {
   // (v_x, v_y, v_z) of the three contacts [m/s] at scaled unknowns z.
   Eigen::Matrix<double, 9, 1> ContactLinearVelocities(
       const Eigen::Ref<const Eigen::VectorXd>& z) const;
+  // What the constraints at z and their Jacobian both start from.
+  struct ConstraintTerms {
+    int nm, ns;                          // motion unknowns, statics rows
+    Eigen::Matrix<double, 9, 1> f, vel;  // contact forces, linear velocities
+    double inv_v0, mu, eps2;             // 1 / v0, mu, epsilon^2
+  };
+  ConstraintTerms Terms(const Eigen::Ref<const Eigen::VectorXd>& z) const;
 
   const KinematicModel& model_;
   QuasiStaticParameters params_;

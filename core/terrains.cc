@@ -25,14 +25,18 @@ std::string Num(double v) {
 
 double Deg(double rad) { return rad * 180.0 / std::numbers::pi; }
 
+// Throws SceneError "<what>: must be finite, got <v>" unless v is finite.
+void RequireFinite(const std::string& what, double v) {
+  if (!std::isfinite(v))
+    throw SceneError(what + ": must be finite, got " + Num(v));
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------- plane ----
 
 PlaneTerrain::PlaneTerrain(double height) : height_(height) {
-  if (!std::isfinite(height)) {
-    throw SceneError("plane height: must be finite, got " + Num(height));
-  }
+  RequireFinite("plane height", height);
 }
 
 TerrainJet PlaneTerrain::Evaluate(double, double) const {
@@ -52,12 +56,8 @@ InclineTerrain::InclineTerrain(double beta_rad, double gamma_rad, double height)
     throw SceneError("incline beta: must be finite with |beta| < pi/2, got " +
                      Num(beta_rad));
   }
-  if (!std::isfinite(gamma_rad)) {
-    throw SceneError("incline gamma: must be finite, got " + Num(gamma_rad));
-  }
-  if (!std::isfinite(height)) {
-    throw SceneError("incline height: must be finite, got " + Num(height));
-  }
+  RequireFinite("incline gamma", gamma_rad);
+  RequireFinite("incline height", height);
   const double t = std::tan(beta_rad);
   gx_ = t * std::cos(gamma_rad);
   gy_ = t * std::sin(gamma_rad);
@@ -85,14 +85,9 @@ GaussianTerrain::GaussianTerrain(std::vector<GaussianBump> bumps)
   for (std::size_t k = 0; k < bumps_.size(); ++k) {
     const GaussianBump& b = bumps_[k];
     const std::string p = "bumps[" + std::to_string(k) + "].";
-    if (!std::isfinite(b.amplitude)) {
-      throw SceneError(p + "amplitude: must be finite, got " +
-                       Num(b.amplitude));
-    }
-    if (!std::isfinite(b.x))
-      throw SceneError(p + "x: must be finite, got " + Num(b.x));
-    if (!std::isfinite(b.y))
-      throw SceneError(p + "y: must be finite, got " + Num(b.y));
+    RequireFinite(p + "amplitude", b.amplitude);
+    RequireFinite(p + "x", b.x);
+    RequireFinite(p + "y", b.y);
     if (!(b.sigma > 0.0) || !std::isfinite(b.sigma)) {
       throw SceneError(p + "sigma: must be > 0 and finite, got " +
                        Num(b.sigma));
@@ -185,16 +180,11 @@ std::string GaussianTerrain::Describe() const {
 SinusoidTerrain::SinusoidTerrain(std::vector<SinusoidComponent> components,
                                  double height)
     : components_(std::move(components)), height_(height) {
-  if (!std::isfinite(height)) {
-    throw SceneError("sinusoid height: must be finite, got " + Num(height));
-  }
+  RequireFinite("sinusoid height", height);
   for (std::size_t k = 0; k < components_.size(); ++k) {
     const SinusoidComponent& c = components_[k];
     const std::string p = "components[" + std::to_string(k) + "].";
-    if (!std::isfinite(c.amplitude)) {
-      throw SceneError(p + "amplitude: must be finite, got " +
-                       Num(c.amplitude));
-    }
+    RequireFinite(p + "amplitude", c.amplitude);
     if (!(c.wavelength_x > 0.0)) {
       throw SceneError(p + "wavelength_x: must be > 0 (or .inf), got " +
                        Num(c.wavelength_x));
@@ -203,12 +193,8 @@ SinusoidTerrain::SinusoidTerrain(std::vector<SinusoidComponent> components,
       throw SceneError(p + "wavelength_y: must be > 0 (or .inf), got " +
                        Num(c.wavelength_y));
     }
-    if (!std::isfinite(c.phase_x)) {
-      throw SceneError(p + "phase_x: must be finite, got " + Num(c.phase_x));
-    }
-    if (!std::isfinite(c.phase_y)) {
-      throw SceneError(p + "phase_y: must be finite, got " + Num(c.phase_y));
-    }
+    RequireFinite(p + "phase_x", c.phase_x);
+    RequireFinite(p + "phase_y", c.phase_y);
   }
 }
 
@@ -437,9 +423,7 @@ HeightmapTerrain HeightmapTerrain::FromCsv(const std::string& path) {
       if (res.ec != std::errc() || res.ptr != last) {
         throw SceneError(loc + ": not a number, got \"" + s + "\"");
       }
-      if (!std::isfinite(v)) {
-        throw SceneError(loc + ": must be finite, got " + Num(v));
-      }
+      RequireFinite(loc, v);
       if (!header_done) {
         if (!xs.empty() && !(v > xs.back())) {
           throw SceneError(loc + ": x must be strictly increasing, got " +

@@ -245,20 +245,33 @@ double ReadDouble(const YAML::Node& node, const std::string& path,
   return v;
 }
 
-std::int64_t ReadInt(const YAML::Node& node, const std::string& path,
-                     std::int64_t min, std::int64_t max) {
+namespace {
+// An unquoted integer scalar ("+" allowed) that fits T; `expected` names what
+// the key takes in the message.
+template <typename T>
+T ParseInteger(const YAML::Node& node, const std::string& path,
+               const char* expected) {
   if (!node.IsScalar() || IsQuoted(node)) {
-    Fail(path, "expected an integer, got " + DescribeNode(node));
+    Fail(path,
+         std::string("expected ") + expected + ", got " + DescribeNode(node));
   }
   const std::string& s = node.Scalar();
   const char* first = s.data();
   const char* last = s.data() + s.size();
   if (first != last && *first == '+') ++first;
-  std::int64_t v = 0;
+  T v = 0;
   const auto res = std::from_chars(first, last, v);
   if (first == last || res.ec != std::errc() || res.ptr != last) {
-    Fail(path, "expected an integer, got " + DescribeNode(node));
+    Fail(path,
+         std::string("expected ") + expected + ", got " + DescribeNode(node));
   }
+  return v;
+}
+}  // namespace
+
+std::int64_t ReadInt(const YAML::Node& node, const std::string& path,
+                     std::int64_t min, std::int64_t max) {
+  const std::int64_t v = ParseInteger<std::int64_t>(node, path, "an integer");
   if (v < min || v > max) {
     Fail(path, "must be in [" + std::to_string(min) + ", " +
                    std::to_string(max) + "], got " + std::to_string(v));
@@ -267,19 +280,7 @@ std::int64_t ReadInt(const YAML::Node& node, const std::string& path,
 }
 
 std::uint64_t ReadUint64(const YAML::Node& node, const std::string& path) {
-  if (!node.IsScalar() || IsQuoted(node)) {
-    Fail(path, "expected a non-negative integer, got " + DescribeNode(node));
-  }
-  const std::string& s = node.Scalar();
-  const char* first = s.data();
-  const char* last = s.data() + s.size();
-  if (first != last && *first == '+') ++first;
-  std::uint64_t v = 0;
-  const auto res = std::from_chars(first, last, v);
-  if (first == last || res.ec != std::errc() || res.ptr != last) {
-    Fail(path, "expected a non-negative integer, got " + DescribeNode(node));
-  }
-  return v;
+  return ParseInteger<std::uint64_t>(node, path, "a non-negative integer");
 }
 
 std::string ReadString(const YAML::Node& node, const std::string& path) {

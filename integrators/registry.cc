@@ -25,14 +25,10 @@ constexpr double kRk4RealStabilityBound = 2.785;
 BackendInfo Info(const char* description, const char* family,
                  const char* library, const char* version, double zoh,
                  double coupled) {
-  BackendInfo info;
-  info.description = description;
-  info.family = family;
-  info.library = library;
-  info.library_version = version;
+  BackendInfo info =
+      ThreadSafeBackendInfo(description, family, library, version);
   info.seconds_per_hold_zoh = zoh;
   info.seconds_per_hold_coupled = coupled;
-  info.thread_safe = true;
   return info;
 }
 

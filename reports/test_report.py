@@ -76,6 +76,40 @@ def write_csv(path, header, rows):
         writer.writerows(rows)
 
 
+def edit_csv(path, edit):
+    """Rewrites the CSV file at path as edit(header, rows) -> (header, rows)."""
+    header, rows = read_csv(path)
+    write_csv(path, *edit(header, rows))
+
+
+def drop_column(name):
+    """An edit_csv edit that removes column name."""
+    def edit(header, rows):
+        drop = header.index(name)
+        return ([h for i, h in enumerate(header) if i != drop],
+                [[v for i, v in enumerate(r) if i != drop] for r in rows])
+    return edit
+
+
+def set_column(name, value, first_only=False):
+    """An edit_csv edit that sets column name to value (in the first row only
+    with first_only)."""
+    def edit(header, rows):
+        for row in rows[:1] if first_only else rows:
+            row[header.index(name)] = value
+        return header, rows
+    return edit
+
+
+def infeasible_friction_cells(test):
+    """The INFEASIBLE_FRICTION cells of test's dt stability chart (some)."""
+    data = test.manifest()["fig_stability_dt"]["data"]
+    cells = [c for p in data["panels"] for c in p["cells"]
+             if c["status"] == "INFEASIBLE_FRICTION"]
+    test.assertTrue(cells)
+    return cells
+
+
 class Fixture:
     """One fixture + report shared by the tests, and copies to mutate."""
     root = None
@@ -126,6 +160,14 @@ class GoodReportTest(unittest.TestCase):
     def manifest(self):
         with open(os.path.join(self.report_dir, "figures.json")) as handle:
             return {entry["name"]: entry for entry in json.load(handle)}
+
+    def assert_html(self, has=(), lacks=()):
+        """index.html contains every text of has and none of lacks."""
+        html = self.html()
+        for text in has:
+            self.assertIn(text, html)
+        for text in lacks:
+            self.assertNotIn(text, html)
 
     def test_exit_code_and_last_line_is_index_path(self):
         self.assertEqual(self.result.returncode, 0, self.result.stderr)
@@ -252,18 +294,12 @@ class GoodReportTest(unittest.TestCase):
             self.assertTrue(all(mu > make_fixture.REF_MU_MIN["paper_pvc"] for mu, _ in curve))
         # Sliding and creep apart (issue #21 item 4): pvc is stated as creep,
         # never as a slip ratio against paper mode's sliding.
-        html = self.html()
-        self.assertIn("paper_pvc no sliding; creep", html)
-        self.assertIn("proportional to ε", html)
-        self.assertNotIn("less than paper", html)
-        self.assertNotIn("paper_pvc slips", html)
-        self.assertIn("paper slides", html)
+        self.assert_html(
+            has=["paper_pvc no sliding; creep", "proportional to ε", "paper slides"],
+            lacks=["less than paper", "paper_pvc slips"])
 
     def test_blowup_is_numerical_not_friction_limit(self):
-        data = self.manifest()["fig_stability_dt"]["data"]
-        cells = [c for p in data["panels"] for c in p["cells"]
-                 if c["status"] == "INFEASIBLE_FRICTION"]
-        self.assertTrue(cells)
+        cells = infeasible_friction_cells(self)
         for cell in cells:
             self.assertEqual(cell["cls"], "numerical", cell)
             self.assertEqual(cell["detail"], "drift_blowup", cell)
@@ -285,18 +321,14 @@ class GoodReportTest(unittest.TestCase):
             self.assertTrue(any(label.startswith(".") for label in labels), labels)
 
     def test_references_findings_validity_and_repro(self):
-        html = self.html()
-        self.assertIn('id="findings"', html)
-        self.assertIn("For RMS position error ≤", html)
-        self.assertIn("References</h2>", html)
-        self.assertIn("estimated error", html)
-        self.assertIn("Quasi-static validity", html)
-        self.assertIn("quasi-static valid", html)
-        self.assertIn("matplotlib", html)
+        self.assert_html(
+            has=['id="findings"', "For RMS position error ≤", "References</h2>",
+                 "estimated error", "Quasi-static validity", "quasi-static valid",
+                 "matplotlib"],
+            lacks=["Mixed hosts"])
         self.assertTrue(os.path.isfile(os.path.join(self.report_dir, "repro", "fixture.yaml")))
         self.assertTrue(os.path.isfile(os.path.join(self.report_dir, "repro", "scenes",
                                                     "paper.yaml")))
-        self.assertNotIn("Mixed hosts", html)
 
 
 class RobotAndReplayTest(unittest.TestCase):
@@ -365,10 +397,7 @@ class LegacyResultsTest(unittest.TestCase):
         self.assertEqual(self.manifest()["fig_work_precision"]["data"]["timing"], "min")
 
     def test_legacy_blowup_is_unclassified_not_friction(self):
-        data = self.manifest()["fig_stability_dt"]["data"]
-        cells = [c for p in data["panels"] for c in p["cells"]
-                 if c["status"] == "INFEASIBLE_FRICTION"]
-        self.assertTrue(cells)
+        cells = infeasible_friction_cells(self)
         for cell in cells:
             self.assertEqual(cell["cls"], "unknown")
             self.assertEqual(cell["colour"], plotting.UNKNOWN_COLOUR)
@@ -838,11 +867,7 @@ class BadInputTest(unittest.TestCase):
 
     def test_missing_column(self):
         target = Fixture.copy("missing_column")
-        path = os.path.join(target, "runs.csv")
-        header, rows = read_csv(path)
-        drop = header.index("err_pos_rms")
-        write_csv(path, [h for i, h in enumerate(header) if i != drop],
-                  [[v for i, v in enumerate(r) if i != drop] for r in rows])
+        edit_csv(os.path.join(target, "runs.csv"), drop_column("err_pos_rms"))
         result = run_report(target)
         self.assert_one_line_error(result, "runs.csv is missing column 'err_pos_rms'")
 
@@ -858,27 +883,19 @@ class BadInputTest(unittest.TestCase):
 
     def test_header_only(self):
         target = Fixture.copy("header_only")
-        path = os.path.join(target, "runs.csv")
-        header, _ = read_csv(path)
-        write_csv(path, header, [])
+        edit_csv(os.path.join(target, "runs.csv"), lambda header, _: (header, []))
         self.assert_one_line_error(run_report(target), "no runs")
 
     def test_no_successful_run(self):
         target = Fixture.copy("all_failed")
-        path = os.path.join(target, "runs.csv")
-        header, rows = read_csv(path)
-        status = header.index("status")
-        for row in rows:
-            row[status] = "SOLVER_FAILURE"
-        write_csv(path, header, rows)
+        edit_csv(os.path.join(target, "runs.csv"),
+                 set_column("status", "SOLVER_FAILURE"))
         self.assert_one_line_error(run_report(target), "no successful run")
 
     def test_non_numeric_field(self):
         target = Fixture.copy("bad_number")
-        path = os.path.join(target, "runs.csv")
-        header, rows = read_csv(path)
-        rows[0][header.index("dt")] = "fast"
-        write_csv(path, header, rows)
+        edit_csv(os.path.join(target, "runs.csv"),
+                 set_column("dt", "fast", first_only=True))
         self.assert_one_line_error(run_report(target), "'dt'", "fast")
 
     def test_missing_results_dir(self):
@@ -889,19 +906,16 @@ class BadInputTest(unittest.TestCase):
         target = Fixture.copy("bad_trajectory")
         traj_dir = os.path.join(target, "trajectories")
         for name in os.listdir(traj_dir):
-            path = os.path.join(traj_dir, name)
-            header, rows = read_csv(path)
-            drop = header.index("drift")
-            write_csv(path, [h for i, h in enumerate(header) if i != drop],
-                      [[v for i, v in enumerate(r) if i != drop] for r in rows])
+            edit_csv(os.path.join(traj_dir, name), drop_column("drift"))
         self.assert_one_line_error(run_report(target), "missing column 'drift'")
 
     def test_missing_mu_sweep_placeholder_unless_strict(self):
         target = Fixture.copy("no_mu_sweep")
-        path = os.path.join(target, "runs.csv")
-        header, rows = read_csv(path)
-        group = header.index("suite_group")
-        write_csv(path, header, [r for r in rows if r[group] != "mu_sweep"])
+
+        def no_mu_sweep(header, rows):
+            group = header.index("suite_group")
+            return header, [r for r in rows if r[group] != "mu_sweep"]
+        edit_csv(os.path.join(target, "runs.csv"), no_mu_sweep)
         self.assert_one_line_error(run_report(target, "--strict"), "figures 13-14")
         allowed = run_report(target)
         self.assertEqual(allowed.returncode, 0, allowed.stderr)

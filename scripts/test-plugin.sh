@@ -45,20 +45,8 @@ fi
 # The loadable plugin through the installed `quasiroll --plugin`: a suite of
 # its backends only, and the report of it.
 plugin="$tmp/build/quasiroll_example_plugin.so"
-cat > "$tmp/plugin-suite.yaml" <<YAML
-name: example-plugin
-description: the example plugin's backends through the installed CLI
-scenes:
-  - name: paper
-    file: $tmp/prefix/share/quasiroll/bench/scenes/paper.yaml
-    overrides: {time: {t_end: 0.5}}
-groups:
-  plugin:
-    nlp: [levenberg-marquardt]
-    dae: [midpoint-projection]
-    coupling: [zoh, coupled]
-    dt: [0.05]
-YAML
+sed "s|SCENE_FILE|$tmp/prefix/share/quasiroll/bench/scenes/paper.yaml|" \
+  "$src/tests/plugins/plugin_suite.yaml" > "$tmp/plugin-suite.yaml"
 "$tmp/prefix/bin/quasiroll" --plugin "$plugin" bench --suite "$tmp/plugin-suite.yaml" \
   --out "$tmp/plugin-out" --progress none
 if [ "$(grep -c ',success,' "$tmp/plugin-out/runs.csv")" != 2 ]; then

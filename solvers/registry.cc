@@ -22,13 +22,9 @@ namespace quasiroll {
 namespace {
 BackendInfo Info(const char* description, const char* family,
                  const char* library, const char* version, double cost_ratio) {
-  BackendInfo info;
-  info.description = description;
-  info.family = family;
-  info.library = library;
-  info.library_version = version;
+  BackendInfo info =
+      ThreadSafeBackendInfo(description, family, library, version);
   info.cost_ratio = cost_ratio;
-  info.thread_safe = true;
   return info;
 }
 }  // namespace

@@ -79,20 +79,24 @@ struct SlsqpSolver::Impl {
     }
   }
   void EnsureG(const double* xp) {
-    Touch(xp);
-    if (g_valid) return;
-    problem->Constraints(cache_x, g);
-    ++con_evals;
-    g_valid = true;
-    if (!g.allFinite()) Fail();
+    Ensure(xp, &g_valid, &con_evals, g,
+           [this] { problem->Constraints(cache_x, g); });
   }
   void EnsureJac(const double* xp) {
+    Ensure(xp, &jac_valid, &jac_evals, jac,
+           [this] { problem->ConstraintJacobian(cache_x, jac); });
+  }
+  // `value` (g or jac) at xp: evaluated (counted in *evals) unless still
+  // valid for the cached x.
+  template <typename Value, typename Evaluate>
+  void Ensure(const double* xp, bool* valid, int* evals, const Value& value,
+              Evaluate evaluate) {
     Touch(xp);
-    if (jac_valid) return;
-    problem->ConstraintJacobian(cache_x, jac);
-    ++jac_evals;
-    jac_valid = true;
-    if (!jac.allFinite()) Fail();
+    if (*valid) return;
+    evaluate();
+    ++*evals;
+    *valid = true;
+    if (!value.allFinite()) Fail();
   }
   [[noreturn]] void Fail() {
     nonfinite = true;

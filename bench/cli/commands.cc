@@ -74,20 +74,21 @@ void Commands::RegisterRun(CLI::App& app, const std::vector<std::string>& nlps,
   CLI::App* run = app.add_subcommand(
       "run", "Simulate a scene; writes DIR/trajectory.csv and DIR/run.json");
   run->add_option("--scene", run_.scene, "Scene YAML file")->required();
-  run->add_option("--nlp", run_.nlp, "NLP backend (see 'quasiroll list')")
+  run->add_option("--nlp", run_.request.nlp,
+                  "NLP backend (see 'quasiroll list')")
       ->check(OneOf(nlps))
       ->capture_default_str();
-  run->add_option("--dae", run_.dae,
+  run->add_option("--dae", run_.request.dae,
                   "Integrator backend (see 'quasiroll list')")
       ->check(OneOf(daes))
       ->capture_default_str();
   run->add_option("--coupling", run_.coupling, "zoh | coupled")
       ->check(OneOf({"zoh", "coupled"}))
       ->capture_default_str();
-  run->add_option("--dt", run_.dt,
+  run->add_option("--dt", run_.request.dt,
                   "Hold/output interval [s] (default: the scene's time.dt)")
       ->check(PositiveNumber());
-  run->add_option("--t-end", run_.t_end,
+  run->add_option("--t-end", run_.request.t_end,
                   "End time [s] (default: the scene's time.t_end)")
       ->check(PositiveNumber());
   AddSceneOverrides(run, &run_.overrides);
@@ -95,44 +96,44 @@ void Commands::RegisterRun(CLI::App& app, const std::vector<std::string>& nlps,
       "RK scheme of rk-baumgarte / rk-projection: rk4 | dp54 | bs32 "
       "(default: rk4; shorthand of --dae-opt rk_method=...)";
   CLI::Option* rk_method =
-      run->add_option("--rk-method", run_.rk_method, rk_help);
+      run->add_option("--rk-method", run_.request.rk_method, rk_help);
   rk_method->check(OneOf(kRkMethods));
-  deprecated_.push_back(
-      {run->add_option("--rk", run_.rk_method, "Deprecated: --rk-method")
-           ->check(OneOf(kRkMethods))
-           ->excludes(rk_method)
-           ->group("Deprecated"),
-       "--rk", "--rk-method"});
-  run->add_option("--sigma", run_.sigma,
+  deprecated_.push_back({run->add_option("--rk", run_.request.rk_method,
+                                         "Deprecated: --rk-method")
+                             ->check(OneOf(kRkMethods))
+                             ->excludes(rk_method)
+                             ->group("Deprecated"),
+                         "--rk", "--rk-method"});
+  run->add_option("--sigma", run_.request.sigma,
                   "Baumgarte gain [1/s] (rk-baumgarte; ida with --dae-index 1; "
                   "default: 5; shorthand of --dae-opt baumgarte_sigma=...)")
       ->check(NonNegativeNumber());
   CLI::Option* tol =
-      run->add_option("--tol", run_.tol,
+      run->add_option("--tol", run_.request.tol,
                       "Relative tolerance of adaptive RK and IDA (default: " +
                           bench::Num(integrator_defaults.rtol) + ")");
   tol->check(PositiveNumber());
   deprecated_.push_back(
-      {run->add_option("--rtol", run_.tol, "Deprecated: --tol")
+      {run->add_option("--rtol", run_.request.tol, "Deprecated: --tol")
            ->check(PositiveNumber())
            ->excludes(tol)
            ->group("Deprecated"),
        "--rtol", "--tol"});
-  run->add_option("--atol", run_.atol,
+  run->add_option("--atol", run_.request.atol,
                   "Absolute tolerance of adaptive RK and IDA (default: " +
                       bench::Num(integrator_defaults.atol) + ")")
       ->check(PositiveNumber());
-  AddNlpTol(run, &run_.nlp_tol);
-  run->add_option("--dae-index", run_.dae_index,
+  AddNlpTol(run, &run_.request.nlp_tol);
+  run->add_option("--dae-index", run_.request.dae_index,
                   "IDA formulation: 2 (GGL) or 1 (Baumgarte) (default: 2; "
                   "shorthand of --dae-opt dae_index=...)")
       ->check(IntegerIn(1, 2));
-  AddNlpMaxIter(run, &run_.nlp_max_iter);
-  run->add_option("--substeps", run_.substeps,
+  AddNlpMaxIter(run, &run_.request.nlp_max_iter);
+  run->add_option("--substeps", run_.request.substeps,
                   "Integrator steps per dt (RK4 step = dt / substeps; initial "
                   "step of adaptive schemes; default: 1)")
       ->check(IntegerIn(1, 100000));
-  run->add_option("--contact-check", run_.contact_check,
+  run->add_option("--contact-check", run_.request.contact_check,
                   "Sampled second-contact check every N samples, 0 = never "
                   "(default: never)")
       ->check(IntegerIn(0, 1000000000));
@@ -157,8 +158,9 @@ void Commands::Register(CLI::App& app) {
   const std::vector<std::string> nlps = NlpSolverRegistry::Names();
   const std::vector<std::string> daes = IntegratorRegistry::Names();
   // Defaults: the registered backends with the default role.
-  solve_.nlp = run_.nlp = NlpSolverRegistry::WithRole(BackendRole::kDefault);
-  run_.dae = IntegratorRegistry::WithRole(BackendRole::kDefault);
+  solve_.nlp = run_.request.nlp =
+      NlpSolverRegistry::WithRole(BackendRole::kDefault);
+  run_.request.dae = IntegratorRegistry::WithRole(BackendRole::kDefault);
 
   CLI::App* pose = app.add_subcommand(
       "pose", "Print the initial consistent configuration of a scene");
@@ -484,22 +486,9 @@ int RunRun(const RunArgs& args) {
   CheckOutputDirectory("--out", args.out);
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
-  bench::RunRequest request;
+  bench::RunRequest request = args.request;
   SetSceneOverrides(args.overrides, &request);
-  request.nlp = args.nlp;
-  request.dae = args.dae;
   request.coupling = CouplingFromString(args.coupling);
-  request.dt = args.dt;
-  request.t_end = args.t_end;
-  request.tol = args.tol;
-  request.atol = args.atol;
-  request.nlp_tol = args.nlp_tol;
-  request.nlp_max_iter = args.nlp_max_iter;
-  request.substeps = args.substeps;
-  request.contact_check = args.contact_check;
-  request.rk_method = args.rk_method;
-  request.sigma = args.sigma;
-  request.dae_index = args.dae_index;
   request.nlp_options = ParseOptionFlags(args.nlp_opts, "--nlp-opt");
   request.dae_options = ParseOptionFlags(args.dae_opts, "--dae-opt");
   bench::ResolvedRun resolved =

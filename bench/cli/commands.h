@@ -12,6 +12,7 @@
 
 #include "quasiroll/bench/cli/bench_command.h"
 #include "quasiroll/bench/cli/cli_support.h"
+#include "quasiroll/bench/harness/run_request.h"
 
 namespace quasiroll::cli {
 
@@ -39,18 +40,15 @@ struct SolveArgs {
 
 struct RunArgs {
   std::string scene;
+  // The flags that are RunRequest keys of the same type; its nlp and dae are
   // "" until Commands::Register: the registry's default backends.
-  std::string nlp;
-  std::string dae;
+  bench::RunRequest request;
+  // The flags RunRun converts into the request.
   std::string coupling = "zoh";
-  std::optional<double> dt, t_end;
   SceneOverrides overrides;
-  std::optional<std::string> rk_method;
-  std::optional<double> sigma, tol, atol, nlp_tol;
-  std::optional<int> dae_index, substeps, contact_check, nlp_max_iter;
+  std::vector<std::string> nlp_opts, dae_opts;  // --nlp-opt / --dae-opt
   std::string out = "out/run";
   std::string progress = "auto";
-  std::vector<std::string> nlp_opts, dae_opts;  // --nlp-opt / --dae-opt
 };
 
 struct ListArgs {

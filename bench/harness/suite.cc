@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "quasiroll/bench/harness/run_request.h"
+#include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/yaml_util.h"
 
@@ -76,11 +77,9 @@ RunRequest RunSpec::Request() const {
 namespace {
 
 std::string ReadFileOrEmpty(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return "";
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  std::string text;
+  ReadTextFile(path, &text);  // leaves "" when the file cannot be opened
+  return text;
 }
 
 bool IsSafeName(const std::string& s) {
@@ -452,21 +451,22 @@ std::vector<Axis> ReadSceneFieldAxes(const YAML::Node& node,
 class OptionTables {
  public:
   const OptionTable& Nlp(const std::string& name) {
-    auto it = nlp_.find(name);
-    if (it == nlp_.end())
-      it = nlp_.emplace(name, NlpSolverRegistry::Create(name)->option_table())
-               .first;
-    return it->second;
+    return Find<NlpSolverRegistry>(name, &nlp_);
   }
   const OptionTable& Dae(const std::string& name) {
-    auto it = dae_.find(name);
-    if (it == dae_.end())
-      it = dae_.emplace(name, IntegratorRegistry::Create(name)->option_table())
-               .first;
-    return it->second;
+    return Find<IntegratorRegistry>(name, &dae_);
   }
 
  private:
+  template <typename Registry>
+  static const OptionTable& Find(const std::string& name,
+                                 std::map<std::string, OptionTable>* tables) {
+    auto it = tables->find(name);
+    if (it == tables->end())
+      it = tables->emplace(name, Registry::Create(name)->option_table()).first;
+    return it->second;
+  }
+
   std::map<std::string, OptionTable> nlp_, dae_;
 };
 
@@ -658,20 +658,22 @@ void ReadSceneDefaultedAxes(const YAML::Node& node, const std::string& path,
 void ReadGenericAxes(const YAML::Node& node, const std::string& path,
                      const Suite& suite, OptionTables* tables, GroupSpec* g) {
   g->generic_axes = ReadSceneFieldAxes(node, path, g->scene_idx, suite);
-  for (Axis& a : ReadOptionAxes(
-           node, path, "nlp_options", g->nlps,
-           [tables](const std::string& b) -> const OptionTable& {
-             return tables->Nlp(b);
-           },
-           "NLP backend"))
-    g->generic_axes.push_back(std::move(a));
-  for (Axis& a : ReadOptionAxes(
-           node, path, "dae_options", g->daes,
-           [tables](const std::string& b) -> const OptionTable& {
-             return tables->Dae(b);
-           },
-           "integrator"))
-    g->generic_axes.push_back(std::move(a));
+  // The NLP, then the integrator options.
+  struct OptionAxes {
+    const char* key;
+    const std::vector<std::string>& backends;
+    const OptionTable& (OptionTables::*table)(const std::string&);
+    const char* role;
+  };
+  for (const OptionAxes& k :
+       {OptionAxes{"nlp_options", g->nlps, &OptionTables::Nlp, "NLP backend"},
+        OptionAxes{"dae_options", g->daes, &OptionTables::Dae, "integrator"}}) {
+    auto table = [&](const std::string& b) -> const OptionTable& {
+      return (tables->*k.table)(b);
+    };
+    for (Axis& a : ReadOptionAxes(node, path, k.key, k.backends, table, k.role))
+      g->generic_axes.push_back(std::move(a));
+  }
 }
 
 // Reads and checks every key of a group. The order of the reads is the order
@@ -934,12 +936,11 @@ Suite LoadSuiteFromString(const std::string& text, const std::string& origin,
 }
 
 Suite LoadSuite(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw SceneError(path + ": cannot open suite file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  Suite s = LoadSuiteFromString(ss.str(), path,
-                                fs::path(path).parent_path().string());
+  std::string text;
+  if (!ReadTextFile(path, &text))
+    throw SceneError(path + ": cannot open suite file");
+  Suite s =
+      LoadSuiteFromString(text, path, fs::path(path).parent_path().string());
   s.path = path;
   return s;
 }

@@ -72,12 +72,14 @@ std::string PoseText(const Scene& scene) {
   return json;
 }
 
-std::string SolveText(const Scene& scene_in, const std::string& nlp,
-                      std::optional<double> mu, std::optional<double> eps,
-                      std::optional<std::string> mode,
-                      std::optional<double> nlp_tol,
-                      std::optional<int> nlp_max_iter,
-                      const GivenOptions& nlp_options) {
+// The request keys a solve and a run share: the scene overrides and the
+// NLP backend with its tolerance, iteration limit and options.
+bench::RunRequest SolveRequest(const std::string& nlp, std::optional<double> mu,
+                               std::optional<double> eps,
+                               std::optional<std::string> mode,
+                               std::optional<double> nlp_tol,
+                               std::optional<int> nlp_max_iter,
+                               const GivenOptions& nlp_options) {
   bench::RunRequest request;
   request.mu = mu;
   request.eps = eps;
@@ -86,6 +88,17 @@ std::string SolveText(const Scene& scene_in, const std::string& nlp,
   request.nlp_tol = nlp_tol;
   request.nlp_max_iter = nlp_max_iter;
   request.nlp_options = nlp_options;
+  return request;
+}
+
+std::string SolveText(const Scene& scene_in, const std::string& nlp,
+                      std::optional<double> mu, std::optional<double> eps,
+                      std::optional<std::string> mode,
+                      std::optional<double> nlp_tol,
+                      std::optional<int> nlp_max_iter,
+                      const GivenOptions& nlp_options) {
+  const bench::RunRequest request =
+      SolveRequest(nlp, mu, eps, mode, nlp_tol, nlp_max_iter, nlp_options);
   const bench::ResolvedSolve resolved = bench::ResolveSolveRequest(
       scene_in, request, [](const std::string& key) { return key; });
   const Scene& scene = resolved.scene;
@@ -120,25 +133,19 @@ std::pair<std::string, std::string> RunText(
     std::optional<int> substeps, std::optional<int> contact_check,
     std::optional<int> nlp_max_iter, const GivenOptions& nlp_options,
     const GivenOptions& dae_options) {
-  bench::RunRequest request;
-  request.mu = mu;
-  request.eps = eps;
-  if (mode) request.mode = ModeFromString(*mode);
-  request.nlp = nlp;  // "" (Python None): the registry's default
+  bench::RunRequest request =
+      SolveRequest(nlp, mu, eps, mode, nlp_tol, nlp_max_iter, nlp_options);
   request.dae = dae;
   request.coupling = CouplingFromString(coupling);
   request.dt = dt;
   request.t_end = t_end;
   request.tol = tol;
   request.atol = atol;
-  request.nlp_tol = nlp_tol;
-  request.nlp_max_iter = nlp_max_iter;
   request.substeps = substeps;
   request.contact_check = contact_check;
   request.rk_method = rk_method;
   request.sigma = sigma;
   request.dae_index = dae_index;
-  request.nlp_options = nlp_options;
   request.dae_options = dae_options;
   // Keywords are named as written in Python: dt, t_end, dae_options.
   const bench::ResolvedRun resolved = bench::ResolveRunRequest(

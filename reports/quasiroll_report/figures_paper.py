@@ -319,32 +319,43 @@ def _wheel_figure(ctx, column, ylabel, paper_text, total=False, log=False,
     return fig, caption
 
 
-def figure_normal_forces(ctx):
-    fig, caption = _wheel_figure(
-        ctx, "n{i}", "normal force N_i [N]",
+# The per-wheel force figures: (file stem, title, column, y label, what the
+# paper shows, with the sum over the wheels).
+_WHEEL_FORCE_FIGURES = {
+    "normal_forces": (
+        "fig09_normal_forces", "Fig. 9 — normal forces", "n{i}",
+        "normal force N_i [N]",
         "Fig. 9 — the paper shows the three normal forces redistributing as "
-        "the wheels cross the bumps, their sum balancing the weight.",
-        total=True)
-    return save_figure(fig, ctx.out_dir, "fig09_normal_forces",
-                       "Fig. 9 — normal forces", caption)
+        "the wheels cross the bumps, their sum balancing the weight.", True),
+    "longitudinal_traction": (
+        "fig10_longitudinal_traction", "Fig. 10 — longitudinal traction",
+        "t{i}_lon", "longitudinal traction [N]",
+        "Fig. 10 — the paper shows the longitudinal traction each wheel must "
+        "provide to climb and descend the bumps.", False),
+    "lateral_traction": (
+        "fig11_lateral_traction", "Fig. 11 — lateral traction", "t{i}_lat",
+        "lateral traction [N]",
+        "Fig. 11 — the paper shows the lateral traction that keeps the wheels "
+        "from side-slipping on the sloped terrain.", False),
+}
+
+
+def _wheel_force_figure(ctx, name):
+    stem, title, column, ylabel, paper_text, total = _WHEEL_FORCE_FIGURES[name]
+    fig, caption = _wheel_figure(ctx, column, ylabel, paper_text, total=total)
+    return save_figure(fig, ctx.out_dir, stem, title, caption)
+
+
+def figure_normal_forces(ctx):
+    return _wheel_force_figure(ctx, "normal_forces")
 
 
 def figure_longitudinal_traction(ctx):
-    fig, caption = _wheel_figure(
-        ctx, "t{i}_lon", "longitudinal traction [N]",
-        "Fig. 10 — the paper shows the longitudinal traction each wheel must "
-        "provide to climb and descend the bumps.")
-    return save_figure(fig, ctx.out_dir, "fig10_longitudinal_traction",
-                       "Fig. 10 — longitudinal traction", caption)
+    return _wheel_force_figure(ctx, "longitudinal_traction")
 
 
 def figure_lateral_traction(ctx):
-    fig, caption = _wheel_figure(
-        ctx, "t{i}_lat", "lateral traction [N]",
-        "Fig. 11 — the paper shows the lateral traction that keeps the wheels "
-        "from side-slipping on the sloped terrain.")
-    return save_figure(fig, ctx.out_dir, "fig11_lateral_traction",
-                       "Fig. 11 — lateral traction", caption)
+    return _wheel_force_figure(ctx, "lateral_traction")
 
 
 def figure_slip(ctx):
@@ -460,6 +471,12 @@ def _failed_text(failed):
                                   for (scene, mu, what), m in sorted(parts.items()))
 
 
+def _mu_min_needs(panels):
+    """'<scene> needs μ ≥ <μ_min>' of each panel with a μ_min, '; '-joined."""
+    return "; ".join(f"{p['scene']} needs μ ≥ {fmt(p['mu_min'])}" for p in panels
+                     if is_finite(p["mu_min"]))
+
+
 def _scene_title(ctx, scene, rows):
     """The parameters held fixed over a μ-sweep panel's runs (all of the
     scene's rows, failed ones included); μ is swept, so never in it."""
@@ -562,8 +579,7 @@ def figure_traction_vs_mu(ctx):
     mu, values = _common_mu_ratio(ctx, scenes, ok, metrics, "mean_total_traction")
     compare = (", ".join(f"{s} {fmt(v)} N" for s, v in values.items()) + f" at μ={fmt(mu)}"
                if values else "no μ where every scene succeeded")
-    needs = "; ".join(f"{p['scene']} needs μ ≥ {fmt(p['mu_min'])}" for p in panels
-                      if is_finite(p["mu_min"]))
+    needs = _mu_min_needs(panels)
     caption = (
         "Fig. 13 — the paper shows how the traction the wheels develop varies "
         "with μ, for the paper's fixed-camber mode and for the passive variable "
@@ -625,8 +641,7 @@ def figure_total_slip_vs_mu(ctx):
         ordered = sorted(sliding.items(), key=lambda kv: kv[1])
         (low_s, low_v), (high_s, high_v) = ordered[0], ordered[-1]
         headline += f" {low_s} slides {fmt(high_v / low_v, 2)}× less than {high_s}."
-    needs = "; ".join(f"{p['scene']} needs μ ≥ {fmt(p['mu_min'])}" for p in panels
-                      if is_finite(p["mu_min"]))
+    needs = _mu_min_needs(panels)
     caption = (
         "Fig. 14 — the paper shows the accumulated slip falling as μ grows and "
         "the passive variable camber slipping far less than the fixed camber, "

@@ -101,6 +101,17 @@ TEST(BrokenBackendTest, StationaryPointThatIsNotTheOptimumFailsTheKit) {
       << captured.messages;
 }
 
+// The kit's optimum check on `solver` fails once, with `message`.
+void ExpectOneFalseClaimFound(NlpSolver& solver,
+                              const ReferenceProblem& problem,
+                              const std::string& message) {
+  const Captured captured =
+      Capture([&] { ExpectReferenceOptimumOrHonestFailure(solver, problem); });
+  EXPECT_EQ(captured.failures, 1) << captured.messages;
+  EXPECT_NE(captured.messages.find(message), std::string::npos)
+      << captured.messages;
+}
+
 // Claims that Solve() itself rejects are false claims to the kit, not honest
 // failures: at an infeasible point (demoted to kNumericalFailure, "claimed
 // convergence rejected") and at a feasible non-KKT point (kNotOptimal).
@@ -109,12 +120,7 @@ TEST(BrokenBackendTest, ClaimsThatSolveRejectsFailTheKit) {
     // HS71's x0 = (1, 5, 5, 1) has sum x^2 = 52 != 40.
     FixedAnswerSolver solver{Eigen::VectorXd()};  // claims x0
     Hs071Problem problem;
-    const Captured captured = Capture(
-        [&] { ExpectReferenceOptimumOrHonestFailure(solver, problem); });
-    EXPECT_EQ(captured.failures, 1) << captured.messages;
-    EXPECT_NE(captured.messages.find("false convergence claim"),
-              std::string::npos)
-        << captured.messages;
+    ExpectOneFalseClaimFound(solver, problem, "false convergence claim");
   }
   {
     // HS32 at x = (0, 0.25, 0.75): x1 + x2 + x3 = 1, 6 x2 + 4 x3 - x1^3 =
@@ -128,12 +134,8 @@ TEST(BrokenBackendTest, ClaimsThatSolveRejectsFailTheKit) {
                            ConformanceNlpOptions(), &r),
               NlpStatus::kNotOptimal)
         << r.backend_status;
-    const Captured captured = Capture(
-        [&] { ExpectReferenceOptimumOrHonestFailure(solver, problem); });
-    EXPECT_EQ(captured.failures, 1) << captured.messages;
-    EXPECT_NE(captured.messages.find("false convergence claim: not_optimal"),
-              std::string::npos)
-        << captured.messages;
+    ExpectOneFalseClaimFound(solver, problem,
+                             "false convergence claim: not_optimal");
   }
 }
 

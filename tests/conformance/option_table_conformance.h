@@ -52,8 +52,19 @@ void ExpectBackendOptionTableValid(Backend& backend) {
   EXPECT_EQ(backend.backend_options().values().size(), table.size());
   EXPECT_NO_THROW(backend.SetBackendOptions(DefaultsAsGiven(table)))
       << "the defaults, given as text, are not accepted";
-  EXPECT_THROW(backend.SetBackendOptions({{"no_such_option", "1"}}),
-               std::invalid_argument);
+  // An unknown option is rejected with a message naming it and the known
+  // ones.
+  try {
+    backend.SetBackendOptions({{"no_such_option", "1"}});
+    ADD_FAILURE() << "unknown option accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("'no_such_option'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("known: "), std::string::npos) << msg;
+    if (!table.empty()) {
+      EXPECT_NE(msg.find(table.front().name), std::string::npos) << msg;
+    }
+  }
 }
 
 }  // namespace quasiroll::conformance

@@ -12,6 +12,7 @@
 #include <memory>
 #include <numbers>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "quasiroll/core/scene.h"
@@ -24,30 +25,18 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 
 // The ten jet entries addressed by (order in x, order in y).
 double Get(const TerrainJet& j, int p, int q) {
-  switch (p * 10 + q) {
-    case 0:
-      return j.h;
-    case 10:
-      return j.hx;
-    case 1:
-      return j.hy;
-    case 20:
-      return j.hxx;
-    case 11:
-      return j.hxy;
-    case 2:
-      return j.hyy;
-    case 30:
-      return j.hxxx;
-    case 21:
-      return j.hxxy;
-    case 12:
-      return j.hxyy;
-    case 3:
-      return j.hyyy;
+  using J = TerrainJet;
+  // kEntry[p][q] = d^(p+q) h / dx^p dy^q; p + q <= 3.
+  static constexpr double J::*kEntry[4][4] = {
+      {&J::h, &J::hy, &J::hyy, &J::hyyy},
+      {&J::hx, &J::hxy, &J::hxyy, nullptr},
+      {&J::hxx, &J::hxxy, nullptr, nullptr},
+      {&J::hxxx, nullptr, nullptr, nullptr}};
+  if (p < 0 || q < 0 || p + q > 3) {
+    ADD_FAILURE() << "bad derivative index " << p << "," << q;
+    return 0.0;
   }
-  ADD_FAILURE() << "bad derivative index " << p << "," << q;
-  return 0.0;
+  return j.*kEntry[p][q];
 }
 
 struct FdCase {
@@ -439,14 +428,12 @@ TEST(RandomGaussianTest, DeterministicAndWithinRanges) {
     if (p.amplitude != c.bumps()[k].amplitude || p.x != c.bumps()[k].x)
       ++differing;
     for (const GaussianBump& q : {p, c.bumps()[k]}) {
-      EXPECT_GE(q.amplitude, amp.lo);
-      EXPECT_LT(q.amplitude, amp.hi);
-      EXPECT_GE(q.sigma, sig.lo);
-      EXPECT_LT(q.sigma, sig.hi);
-      EXPECT_GE(q.x, xr.lo);
-      EXPECT_LT(q.x, xr.hi);
-      EXPECT_GE(q.y, yr.lo);
-      EXPECT_LT(q.y, yr.hi);
+      const std::pair<double, Interval> drawn[] = {
+          {q.amplitude, amp}, {q.sigma, sig}, {q.x, xr}, {q.y, yr}};
+      for (const auto& [value, range] : drawn) {
+        EXPECT_GE(value, range.lo);
+        EXPECT_LT(value, range.hi);
+      }
     }
   }
   EXPECT_GT(differing, 25);

@@ -65,6 +65,24 @@ const Fixture& GetFixture() {
   std::abort();
 }
 
+// Runs `call` (`what` on the fuzzed `input`), which must throw
+// std::invalid_argument exactly when the input is non-finite and nothing
+// else; false when it rejected non-finite input, as it should.
+template <typename Call>
+bool RejectsOnlyNonFinite(const char* what, const char* input, bool non_finite,
+                          Call call) {
+  try {
+    call();
+  } catch (const std::invalid_argument& e) {
+    if (non_finite) return false;
+    Bug(std::string(what) + " threw for finite input: " + e.what());
+  } catch (const std::exception& e) {
+    Bug(std::string(what) + " threw " + typeid(e).name() + ": " + e.what());
+  }
+  if (non_finite) Bug(std::string("non-finite ") + input + " accepted");
+  return true;
+}
+
 bool Finite(const QuasiStaticSolution& s) {
   bool ok = s.twist.allFinite() && std::isfinite(s.gap) &&
             std::isfinite(s.residual) && s.z.allFinite();
@@ -126,16 +144,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data,
   }
 
   std::unique_ptr<QuasiStaticSolver> solver;
-  try {
+  auto construct = [&] {
     solver = std::make_unique<QuasiStaticSolver>(
         *fx.model, params, NlpSolverRegistry::Create("newton"), options);
-  } catch (const std::invalid_argument& e) {
-    if (non_finite_params) return 0;
-    Bug(std::string("constructor threw for finite input: ") + e.what());
-  } catch (const std::exception& e) {
-    Bug(std::string("constructor threw ") + typeid(e).name() + ": " + e.what());
-  }
-  if (non_finite_params) Bug("non-finite parameters accepted");
+  };
+  if (!RejectsOnlyNonFinite("constructor", "parameters", non_finite_params,
+                            construct))
+    return 0;
 
   QuasiStaticSolution solution;
   for (int k = 0; k < solves; ++k) {
@@ -153,15 +168,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data,
     if (non_finite) theta(inject % kConfigSize) = (inject & 1) ? kNaN : kInf;
 
     QuasiStaticStatus status;
-    try {
-      status = solver->Solve(theta, &solution);
-    } catch (const std::invalid_argument& e) {
-      if (non_finite) return 0;
-      Bug(std::string("Solve threw for finite input: ") + e.what());
-    } catch (const std::exception& e) {
-      Bug(std::string("Solve threw ") + typeid(e).name() + ": " + e.what());
-    }
-    if (non_finite) Bug("non-finite configuration accepted");
+    if (!RejectsOnlyNonFinite("Solve", "configuration", non_finite, [&] {
+          status = solver->Solve(theta, &solution);
+        }))
+      return 0;
     static const bool verbose =
         std::getenv("QUASIROLL_FUZZ_VERBOSE") != nullptr;
     if (verbose)

@@ -18,20 +18,8 @@ QUASIROLL_PLUGIN_PATH="$plugin" "$cli" list | grep -q levenberg-marquardt ||
   fail "QUASIROLL_PLUGIN_PATH not honoured"
 
 # A suite naming only plugin backends; --plugin after the command works too.
-cat > "$tmp/suite.yaml" <<YAML
-name: plugin
-description: the example plugin's backends on a short paper-scene run
-scenes:
-  - name: paper
-    file: $PWD/bench/scenes/paper.yaml
-    overrides: {time: {t_end: 0.5}}
-groups:
-  plugin:
-    nlp: [levenberg-marquardt]
-    dae: [midpoint-projection]
-    coupling: [zoh, coupled]
-    dt: [0.05]
-YAML
+sed "s|SCENE_FILE|$PWD/bench/scenes/paper.yaml|" tests/plugins/plugin_suite.yaml \
+  > "$tmp/suite.yaml"
 "$cli" bench --plugin "$plugin" --suite "$tmp/suite.yaml" --out "$tmp/plan" --plan > "$tmp/plan.csv"
 [ "$(wc -l < "$tmp/plan.csv")" = 3 ] || fail "plan: expected 2 runs: $(cat "$tmp/plan.csv")"
 "$cli" --plugin "$plugin" bench --suite "$tmp/suite.yaml" --out "$tmp/out" --jobs 2 \

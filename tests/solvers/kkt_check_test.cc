@@ -83,6 +83,15 @@ NlpStatus SolveWith(ClaimingBackend* backend, const NlpProblem& p,
   return backend->Solve(p, Eigen::Vector2d(1.0, 1.0), NlpOptions(), r);
 }
 
+// A backend's claim of x = (2, 2) on `p`, with the multiplier 100 or none.
+NlpStatus SolveClaimingTwoTwo(const NlpProblem& p, bool with_multipliers,
+                              NlpResult* r) {
+  ClaimingBackend backend(
+      Eigen::Vector2d(2.0, 2.0),
+      with_multipliers ? Eigen::VectorXd::Constant(1, 100) : Eigen::VectorXd());
+  return SolveWith(&backend, p, r);
+}
+
 // The case: an interior point (the row has slack 0.02), |grad f| ~
 // 1e2, zero multipliers, objective 2 % above the optimum. Relative residual:
 // r = grad f = (-101, -101) pushes against x_ub = 10 at slack 8.01:
@@ -110,11 +119,9 @@ TEST(KktCheckTest, InteriorNonStationaryPointIsDowngraded) {
 TEST(KktCheckTest, TrueOptimumKeepsConvergedWithLeastSquaresMultipliers) {
   const Bowl p(-kInf, 4.0);
   for (bool with_multipliers : {false, true}) {
-    ClaimingBackend backend(Eigen::Vector2d(2.0, 2.0),
-                            with_multipliers ? Eigen::VectorXd::Constant(1, 100)
-                                             : Eigen::VectorXd());
     NlpResult r;
-    EXPECT_EQ(SolveWith(&backend, p, &r), NlpStatus::kConverged)
+    EXPECT_EQ(SolveClaimingTwoTwo(p, with_multipliers, &r),
+              NlpStatus::kConverged)
         << r.backend_status;
     // Exact arithmetic gives 0; round-off in r = grad f + J^T lambda is
     // a few ulps of s_d = 100.
@@ -161,11 +168,9 @@ TEST(KktCheckTest, ConvergedResultCarriesTheCertifyingMultipliers) {
 TEST(KktCheckTest, WrongSignInequalityMultiplierIsCaught) {
   const Bowl p(4.0, kInf);
   for (bool with_multipliers : {false, true}) {
-    ClaimingBackend backend(Eigen::Vector2d(2.0, 2.0),
-                            with_multipliers ? Eigen::VectorXd::Constant(1, 100)
-                                             : Eigen::VectorXd());
     NlpResult r;
-    EXPECT_EQ(SolveWith(&backend, p, &r), NlpStatus::kNotOptimal)
+    EXPECT_EQ(SolveClaimingTwoTwo(p, with_multipliers, &r),
+              NlpStatus::kNotOptimal)
         << r.backend_status;
     // grad f = (-100, -100) against x_ub = 10 at slack 8: 100 * 8/9 / 100.
     EXPECT_NEAR(r.kkt_residual, 8.0 / 9.0, 1e-12) << with_multipliers;
