@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <memory>
 #include <string>
@@ -159,29 +160,35 @@ TEST(FailureCauses, FrictionStopShared) {
 // on the relative-curvature limit at 3.39 s. Never a success, whatever it
 // stops on later; within the same-place tolerance the stop is shared.
 TEST(FailureCauses, PassingThePhysicalStopIsAMissedEvent) {
-  FailureCause c =
-      ClassifyFailure(Evidence("success", 4.0, "DEGENERATE_CONTACT", 3.3906));
-  EXPECT_EQ(c.cause, "numerical");
-  EXPECT_EQ(c.detail, "missed_event");
-  // Stopping 0.17 s (more than two intervals) after it: missed too.
-  c = ClassifyFailure(
-      Evidence("DEGENERATE_CONTACT", 3.5586, "DEGENERATE_CONTACT", 3.3906));
-  EXPECT_EQ(c.detail, "missed_event");
-  c = ClassifyFailure(
-      Evidence("rhs_failure", 3.5586, "INFEASIBLE_FRICTION", 3.3906));
-  EXPECT_EQ(c.detail, "missed_event");
-  // Within StopTolerance (0.1 s here): the same stop, physical.
-  c = ClassifyFailure(
-      Evidence("DEGENERATE_CONTACT", 3.4500, "DEGENERATE_CONTACT", 3.3906));
-  EXPECT_EQ(c.cause, "physical");
-  // Stopping before it is not a missed event; nor is passing a reference
-  // that stopped for a numerical reason.
-  c = ClassifyFailure(
-      Evidence("DEGENERATE_CONTACT", 2.0, "DEGENERATE_CONTACT", 3.3906));
-  EXPECT_EQ(c.detail, "step_too_large");
-  EXPECT_EQ(
-      ClassifyFailure(Evidence("success", 4.0, "SOLVER_FAILURE", 3.39)).cause,
-      "");
+  struct Case {
+    const char* status;
+    double t_reached;
+    const char* ref_status;
+    const char* cause;
+    const char* detail;
+  };
+  // Reference stop at 3.3906 s, same-place tolerance 0.1 s here.
+  for (const Case& k : std::initializer_list<Case>{
+           // Reaching t_end past it, or stopping 0.17 s (more than two
+           // intervals) after it: missed.
+           {"success", 4.0, "DEGENERATE_CONTACT", "numerical", "missed_event"},
+           {"DEGENERATE_CONTACT", 3.5586, "DEGENERATE_CONTACT", "numerical",
+            "missed_event"},
+           {"rhs_failure", 3.5586, "INFEASIBLE_FRICTION", "numerical",
+            "missed_event"},
+           // Within the tolerance: the same stop, physical.
+           {"DEGENERATE_CONTACT", 3.45, "DEGENERATE_CONTACT", "physical",
+            "degenerate_contact"},
+           // Stopping before it is not a missed event; nor is passing a
+           // reference that stopped for a numerical reason.
+           {"DEGENERATE_CONTACT", 2.0, "DEGENERATE_CONTACT", "numerical",
+            "step_too_large"},
+           {"success", 4.0, "SOLVER_FAILURE", "", ""}}) {
+    const FailureCause c =
+        ClassifyFailure(Evidence(k.status, k.t_reached, k.ref_status, 3.3906));
+    EXPECT_EQ(c.cause, k.cause) << k.status << " at " << k.t_reached;
+    EXPECT_EQ(c.detail, k.detail) << k.status << " at " << k.t_reached;
+  }
   // A blow-up keeps its root cause.
   FailureEvidence e = Evidence("drift_exceeded", 4.0, "LIFT_OFF", 3.0);
   e.drift_max = 0.5;
