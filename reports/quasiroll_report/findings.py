@@ -167,8 +167,8 @@ def qs_findings(runs, references, meta):
     else:
         text += f"; all {len(measured)} measured problems are below it"
     if unmeasured:
-        text += (f"; {len(unmeasured)} without a measure (every run a numerical "
-                 "failure): " + ", ".join(r[0] for r in unmeasured[:4])
+        text += (f"; {len(unmeasured)} without a measure (every run failed "
+                 "numerically or stopped before a second sample): " + ", ".join(r[0] for r in unmeasured[:4])
                  + (", ..." if len(unmeasured) > 4 else ""))
     return [text + "."]
 

@@ -242,7 +242,7 @@ def qs_table(ctx):
     for label, _, count, worst, median in rows:
         if not count:
             verdict = ('<span class="note">no measure: every run failed '
-                       "numerically</span>")
+                       "numerically or stopped before a second sample</span>")
         elif worst <= threshold:
             verdict = "quasi-static valid"
         else:
