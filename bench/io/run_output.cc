@@ -319,14 +319,9 @@ void WriteStopEvent(const StopEvent& e, JsonWriter* json) {
   j.Key("t_upper").Value(e.t_upper);
   j.Key("tolerance").Value(e.tolerance);
   j.Key("indicators").BeginObject();
-  auto three = [&j](const char* key, const std::array<double, 3>& v) {
-    j.Key(key).BeginArray();
-    for (double x : v) j.Value(x);
-    j.EndArray();
-  };
-  three("tread_angle", e.indicators.tread_angle);
-  three("relative_curvature", e.indicators.relative_curvature);
-  three("second_contact", e.indicators.second_contact);
+  j.Key("tread_angle").Array(e.indicators.tread_angle);
+  j.Key("relative_curvature").Array(e.indicators.relative_curvature);
+  j.Key("second_contact").Array(e.indicators.second_contact);
   j.EndObject();
   j.Key("mu_min").Value(e.mu_min);
   j.Key("min_normal_force").Value(e.min_normal_force);
