@@ -215,19 +215,16 @@ double KktVerifier::ResidualWith(
 double KktVerifier::Verify(const NlpProblem& problem,
                            const Eigen::Ref<const Eigen::VectorXd>& x,
                            const Eigen::Ref<const Eigen::VectorXd>& g,
-                           const Eigen::Ref<const Eigen::VectorXd>& x_lb,
-                           const Eigen::Ref<const Eigen::VectorXd>& x_ub,
-                           const Eigen::Ref<const Eigen::VectorXd>& g_lb,
-                           const Eigen::Ref<const Eigen::VectorXd>& g_ub,
+                           const NlpBounds& bounds,
                            const Eigen::VectorXd* backend_multipliers,
                            double activity_tolerance, double accept_below) {
   Workspace& w = *ws_;
   const int n = problem.num_variables(), m = problem.num_constraints();
   w.Resize(n, m);
-  w.x_lb = x_lb;
-  w.x_ub = x_ub;
-  w.g_lb = g_lb;
-  w.g_ub = g_ub;
+  w.x_lb = bounds.x_lb;
+  w.x_ub = bounds.x_ub;
+  w.g_lb = bounds.g_lb;
+  w.g_ub = bounds.g_ub;
   w.g = g;
   problem.ObjectiveGradient(x, w.grad);
   if (m > 0) problem.ConstraintJacobian(x, w.jac);
@@ -247,7 +244,7 @@ double KktVerifier::Verify(const NlpProblem& problem,
   w.var_side.setZero();
   w.num_equalities = 0;
   for (int i = 0; i < m; ++i)
-    if (g_lb(i) == g_ub(i)) w.equality_rows(w.num_equalities++) = i;
+    if (w.g_lb(i) == w.g_ub(i)) w.equality_rows(w.num_equalities++) = i;
   if (w.num_equalities == n) w.SolveSquareEqualities();
   // Exactly singular J_eq (non-finite LU solution): pivoted QR instead.
   if (w.num_equalities != n || !w.lambda.allFinite()) w.SolveLeastSquares();
@@ -277,9 +274,9 @@ double KktVerifier::Verify(const NlpProblem& problem,
     return hi <= activity_tolerance ? 1 : 0;
   };
   for (int i = 0; i < m; ++i)
-    w.row_side(i) = active_side(g(i), g_lb(i), g_ub(i));
+    w.row_side(i) = active_side(g(i), w.g_lb(i), w.g_ub(i));
   for (int j = 0; j < n; ++j)
-    w.var_side(j) = active_side(x(j), x_lb(j), x_ub(j));
+    w.var_side(j) = active_side(x(j), w.x_lb(j), w.x_ub(j));
   const int active_sides =
       w.row_side.cwiseAbs().sum() + w.var_side.cwiseAbs().sum();
   if (active_sides == 0) return best;
@@ -320,6 +317,22 @@ double KktVerifier::Verify(const NlpProblem& problem,
     if (worst_var >= 0) w.var_side(worst_var) = 0;
   }
   return best;
+}
+
+void NlpBounds::Load(const NlpProblem& problem) {
+  const int n = problem.num_variables(), m = problem.num_constraints();
+  x_lb.resize(n);
+  x_ub.resize(n);
+  g_lb.resize(m);
+  g_ub.resize(m);
+  problem.GetBounds(x_lb, x_ub, g_lb, g_ub);
+}
+
+double MaxConstraintViolation(const Eigen::Ref<const Eigen::VectorXd>& x,
+                              const Eigen::Ref<const Eigen::VectorXd>& g,
+                              const NlpBounds& bounds) {
+  return MaxConstraintViolation(x, g, bounds.x_lb, bounds.x_ub, bounds.g_lb,
+                                bounds.g_ub);
 }
 
 double MaxConstraintViolation(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -433,16 +446,12 @@ void NlpSolver::ValidateInputs(const NlpProblem& problem,
       throw std::invalid_argument(os.str());
     }
   }
-  x_lb_.resize(n);
-  x_ub_.resize(n);
-  g_lb_.resize(m);
-  g_ub_.resize(m);
   g_.resize(m);
-  problem.GetBounds(x_lb_, x_ub_, g_lb_, g_ub_);
-  CheckBounds("variable", x_lb_, x_ub_);
-  CheckBounds("constraint", g_lb_, g_ub_);
+  bounds_.Load(problem);
+  CheckBounds("variable", bounds_.x_lb, bounds_.x_ub);
+  CheckBounds("constraint", bounds_.g_lb, bounds_.g_ub);
   const int equalities =
-      static_cast<int>((g_lb_.array() == g_ub_.array()).count());
+      static_cast<int>((bounds_.g_lb.array() == bounds_.g_ub.array()).count());
   if (RequiresSquareSystem() && equalities != n) {
     std::ostringstream os;
     os << "NlpSolver::Solve(" << name()
@@ -460,7 +469,7 @@ void NlpSolver::CheckAnswer(const NlpProblem& problem,
   if (finite) {
     problem.Constraints(result->x, g_);
     result->max_constraint_violation =
-        MaxConstraintViolation(result->x, g_, x_lb_, x_ub_, g_lb_, g_ub_);
+        MaxConstraintViolation(result->x, g_, bounds_);
     result->objective = problem.Objective(result->x);
     finite = std::isfinite(result->max_constraint_violation) &&
              std::isfinite(result->objective);
@@ -482,7 +491,7 @@ void NlpSolver::CheckAnswer(const NlpProblem& problem,
     // Independent first-order check (formula in nlp.h).
     const double tol = options.EffectiveKktTolerance();
     result->kkt_residual =
-        kkt_.Verify(problem, result->x, g_, x_lb_, x_ub_, g_lb_, g_ub_,
+        kkt_.Verify(problem, result->x, g_, bounds_,
                     result->has_multipliers ? &result->multipliers : nullptr,
                     std::max(options.feasibility_tolerance, tol), tol);
     // Every converged result carries multipliers: the least-squares estimate

@@ -188,6 +188,13 @@ struct NlpResult {
   std::string backend_status;  // the backend's own return code / message
 };
 
+// The bounds of a problem (NlpProblem::GetBounds). Load() allocates only when
+// the sizes change.
+struct NlpBounds {
+  Eigen::VectorXd x_lb, x_ub, g_lb, g_ub;
+  void Load(const NlpProblem& problem);
+};
+
 // Evaluates the KKT residual defined at the top of this file with
 // preallocated workspaces: after a first call with given sizes, Verify()
 // does not allocate. NlpSolver::Solve() owns one; public for tests and
@@ -206,14 +213,11 @@ class KktVerifier {
   // min(residual with *backend_multipliers (if not null), residual with
   // least-squares multipliers on the active set at `activity_tolerance`);
   // the least squares are skipped when the backend's multipliers already
-  // give <= `accept_below`. `g` = constraints at x; bounds as GetBounds().
+  // give <= `accept_below`. `g` = constraints at x.
   double Verify(const NlpProblem& problem,
                 const Eigen::Ref<const Eigen::VectorXd>& x,
                 const Eigen::Ref<const Eigen::VectorXd>& g,
-                const Eigen::Ref<const Eigen::VectorXd>& x_lb,
-                const Eigen::Ref<const Eigen::VectorXd>& x_ub,
-                const Eigen::Ref<const Eigen::VectorXd>& g_lb,
-                const Eigen::Ref<const Eigen::VectorXd>& g_ub,
+                const NlpBounds& bounds,
                 const Eigen::VectorXd* backend_multipliers,
                 double activity_tolerance, double accept_below);
   // True if the last Verify() result came from the least-squares multipliers.
@@ -290,12 +294,18 @@ class NlpSolver {
   void CheckAnswer(const NlpProblem& problem, const NlpOptions& options,
                    NlpResult* result);
 
-  Eigen::VectorXd x_lb_, x_ub_, g_lb_, g_ub_, g_;  // validation workspace
+  NlpBounds bounds_;  // validation workspace
+  Eigen::VectorXd g_;
   KktVerifier kkt_;
   std::optional<OptionValues> backend_options_;  // set before DoSolve
 };
 
-// Max violation of bounds and constraint bounds at x (>= 0).
+// Max violation of bounds and constraint bounds at x (>= 0; +inf when g has
+// a non-finite entry).
+double MaxConstraintViolation(const Eigen::Ref<const Eigen::VectorXd>& x,
+                              const Eigen::Ref<const Eigen::VectorXd>& g,
+                              const NlpBounds& bounds);
+// The same with the bounds given one by one.
 double MaxConstraintViolation(const Eigen::Ref<const Eigen::VectorXd>& x,
                               const Eigen::Ref<const Eigen::VectorXd>& g,
                               const Eigen::Ref<const Eigen::VectorXd>& x_lb,

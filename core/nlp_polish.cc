@@ -8,15 +8,6 @@
 
 namespace quasiroll {
 
-void NlpBounds::Load(const NlpProblem& problem) {
-  const int n = problem.num_variables(), m = problem.num_constraints();
-  x_lb.resize(n);
-  x_ub.resize(n);
-  g_lb.resize(m);
-  g_ub.resize(m);
-  problem.GetBounds(x_lb, x_ub, g_lb, g_ub);
-}
-
 namespace {
 
 // One polish pass. Rows targeted: equalities, violated inequality rows and,
@@ -45,8 +36,7 @@ PolishStats PolishPass(const NlpProblem& problem, const NlpBounds& b,
   }
   problem.Constraints(x, g);
   ++stats.constraint_evaluations;
-  stats.max_violation =
-      MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
+  stats.max_violation = MaxConstraintViolation(x, g, b);
   double best_violation = stats.max_violation;
   Eigen::VectorXd x_best = x;
   int accepted_at_best = 0;
@@ -96,8 +86,7 @@ PolishStats PolishPass(const NlpProblem& problem, const NlpBounds& b,
       }
       problem.Constraints(x_trial, g_trial);
       ++stats.constraint_evaluations;
-      const double v = MaxConstraintViolation(x_trial, g_trial, b.x_lb, b.x_ub,
-                                              b.g_lb, b.g_ub);
+      const double v = MaxConstraintViolation(x_trial, g_trial, b);
       bool natural = false;
       if (std::isfinite(v) && v >= stats.max_violation) {
         for (int a = 0; a < k; ++a) r(a) = g_trial(rows[a]) - targets[a];
@@ -171,8 +160,7 @@ bool LooksLocallyInfeasible(const NlpProblem& problem, const NlpBounds& b,
   problem.Constraints(x, g);
   problem.ConstraintJacobian(x, jac);
   if (!g.allFinite() || !jac.allFinite()) return false;
-  const double viol =
-      MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
+  const double viol = MaxConstraintViolation(x, g, b);
   if (viol < kInfeasibleViolation) return false;  // not clearly infeasible
   for (int i = 0; i < m; ++i)
     v(i) = g(i) < b.g_lb(i) ? g(i) - b.g_lb(i)
@@ -242,8 +230,7 @@ NlpStatus ClassifySquareSystemRoot(const NlpBounds& b,
                                    double residual_inf, double tol,
                                    int iterations, NlpResult* result) {
   char msg[160];
-  const double viol =
-      MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
+  const double viol = MaxConstraintViolation(x, g, b);
   if (viol > tol) {
     result->status = NlpStatus::kInfeasible;
     std::snprintf(msg, sizeof msg,

@@ -15,13 +15,6 @@
 
 namespace quasiroll {
 
-// The bounds of a problem (NlpProblem::GetBounds). Load() allocates only when
-// the sizes change.
-struct NlpBounds {
-  Eigen::VectorXd x_lb, x_ub, g_lb, g_ub;
-  void Load(const NlpProblem& problem);
-};
-
 struct PolishStats {
   int iterations = 0;      // Gauss-Newton steps computed (both passes)
   int accepted_steps = 0;  // of those, steps that moved the returned x

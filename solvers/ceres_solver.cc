@@ -422,8 +422,7 @@ bool CeresNlpSolver::Impl::FeasibilityPhase(const NlpOptions& options,
   g.resize(m);
   problem->Constraints(x, g);
   ++g_evals;
-  const double viol =
-      MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
+  const double viol = MaxConstraintViolation(x, g, b);
   std::snprintf(msg, sizeof msg, "LM %s after %d iterations, violation %.2e",
                 TerminationName(summary.termination_type), iterations, viol);
   result->backend_status = msg;
@@ -569,7 +568,7 @@ bool CeresNlpSolver::Impl::AugmentedLagrangianLoop(
       result->backend_status += "; non-finite constraints in the AL loop";
       return false;
     }
-    al->viol = MaxConstraintViolation(x, g, b.x_lb, b.x_ub, b.g_lb, b.g_ub);
+    al->viol = MaxConstraintViolation(x, g, b);
     // Feasibility / complementarity measure and multiplier updates.
     const double v = UpdateMultipliers(x);
     // KKT: the inner gradient is grad_x L at the updated multipliers.

@@ -160,9 +160,7 @@ bool NewtonSolver::Iterate(const NlpProblem& problem, const NlpOptions& options,
     const double r_max = w.r.lpNorm<Eigen::Infinity>();
     if (r_max <= target) {
       if (target <= polish_floor) break;
-      if (MaxConstraintViolation(x, w.g, w.bounds.x_lb, w.bounds.x_ub,
-                                 w.bounds.g_lb, w.bounds.g_ub) <= tol)
-        break;
+      if (MaxConstraintViolation(x, w.g, w.bounds) <= tol) break;
       polishing = true;
       target = std::max(polish_floor, 1e-4 * r_max);
       if (r_max <= target) break;

@@ -85,9 +85,9 @@ void BM_KktCheck(benchmark::State& state, ActuationMode mode) {
     return;
   }
   const QuasiStaticProblem& p = solver.problem();
-  const int n = p.num_variables(), m = p.num_constraints();
-  Eigen::VectorXd xl(n), xu(n), gl(m), gu(m), g(m);
-  p.GetBounds(xl, xu, gl, gu);
+  NlpBounds bounds;
+  bounds.Load(p);
+  Eigen::VectorXd g(p.num_constraints());
   p.Constraints(sol.z, g);
   const NlpOptions options;
   const double tol = options.EffectiveKktTolerance();
@@ -95,7 +95,7 @@ void BM_KktCheck(benchmark::State& state, ActuationMode mode) {
   double residual = 0;
   for (auto _ : state) {
     residual =
-        verifier.Verify(p, sol.z, g, xl, xu, gl, gu, nullptr,
+        verifier.Verify(p, sol.z, g, bounds, nullptr,
                         std::max(options.feasibility_tolerance, tol), tol);
     benchmark::DoNotOptimize(residual);
   }
