@@ -22,6 +22,7 @@
 #include "quasiroll/bench/io/json_reader.h"
 #include "quasiroll/core/dae.h"
 #include "test_support.h"
+#include "tiny_suite_fixture.h"
 
 namespace quasiroll::bench {
 namespace {
@@ -164,31 +165,26 @@ TEST(Atlas, EveryMethodOnEveryStabilityAxisWithTwentySeeds) {
   EXPECT_GE(seeds.size(), 20u);
 }
 
-class ShardMerge : public ::testing::Test {
+class ShardMerge : public TinySuiteTest<ShardMerge> {
  protected:
   static void SetUpTestSuite() {
-    root_ = FreshTempDir("quasiroll_cluster_test_");
-    suite_path_ =
-        WriteTinySuite(root_,
-                       "  wp:\n"
-                       "    nlp: [newton, ceres]\n"
-                       "    dae: [rk-projection, ida]\n"
-                       "    coupling: [zoh, coupled]\n"
-                       "    dt: 0.1\n"
-                       "  mu:\n"  // four more references
-                       "    scenes: [paper]\n"
-                       "    mu: [0.3, 0.45, 0.8, 1.0]\n"
-                       "  unstable:\n"  // a failure row
-                       "    scenes: [paper]\n"
-                       "    dae: rk-baumgarte\n"
-                       "    sigma: 200\n"
-                       "  rough:\n"  // an error row (no initial configuration)
-                       "    scenes: [paper]\n"
-                       "    roughness: 100\n");
-    suite_ = LoadSuite(suite_path_);
-    HarnessOptions o = Options("j1");
-    o.jobs = 1;
-    RunSuite(suite_, o);
+    PrepareTinySuite("quasiroll_cluster_test_",
+                     "  wp:\n"
+                     "    nlp: [newton, ceres]\n"
+                     "    dae: [rk-projection, ida]\n"
+                     "    coupling: [zoh, coupled]\n"
+                     "    dt: 0.1\n"
+                     "  mu:\n"  // four more references
+                     "    scenes: [paper]\n"
+                     "    mu: [0.3, 0.45, 0.8, 1.0]\n"
+                     "  unstable:\n"  // a failure row
+                     "    scenes: [paper]\n"
+                     "    dae: rk-baumgarte\n"
+                     "    sigma: 200\n"
+                     "  rough:\n"  // an error row (no initial configuration)
+                     "    scenes: [paper]\n"
+                     "    roughness: 100\n");
+    RunSuite(suite_, Options("j1", 1));
     // Three shards sharing one directory.
     for (int i = 0; i < kShards; ++i) {
       HarnessOptions s = Options("shared");
@@ -197,14 +193,8 @@ class ShardMerge : public ::testing::Test {
       shard_summaries_.push_back(RunSuite(suite_, s));
     }
   }
-  static void TearDownTestSuite() { fs::remove_all(root_); }
-
-  static HarnessOptions Options(const std::string& sub) {
-    HarnessOptions o;
-    o.out_dir = (root_ / sub).string();
-    o.jobs = 2;
-    o.progress = 0;
-    return o;
+  static HarnessOptions Options(const std::string& sub, int jobs = 2) {
+    return TinySuiteTest::Options(sub, jobs);
   }
   static MergeOptions Merge(std::vector<std::string> inputs,
                             const std::string& out) {
@@ -230,14 +220,8 @@ class ShardMerge : public ::testing::Test {
   }
 
   static constexpr int kShards = 3;
-  static fs::path root_;
-  static std::string suite_path_;
-  static Suite suite_;
   static std::vector<HarnessSummary> shard_summaries_;
 };
-fs::path ShardMerge::root_;
-std::string ShardMerge::suite_path_;
-Suite ShardMerge::suite_;
 std::vector<HarnessSummary> ShardMerge::shard_summaries_;
 
 TEST_F(ShardMerge, ShardsCoverTheSuiteOnceAndWriteUnderShards) {

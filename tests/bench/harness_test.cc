@@ -18,6 +18,7 @@
 #include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/bench/io/csv.h"
 #include "test_support.h"
+#include "tiny_suite_fixture.h"
 
 namespace quasiroll::bench {
 namespace {
@@ -103,54 +104,31 @@ std::string WithoutTiming(const fs::path& p) {
   return out;
 }
 
-class BenchHarness : public ::testing::Test {
+class BenchHarness : public TinySuiteTest<BenchHarness> {
  protected:
   static void SetUpTestSuite() {
-    root_ = FreshTempDir("quasiroll_harness_test_");
-    suite_path_ =
-        WriteTinySuite(root_,
-                       "  wp:\n"
-                       "    nlp: [newton, ceres]\n"
-                       "    dae: [rk-projection, rk-baumgarte]\n"
-                       "    dt: [0.05, 0.1]\n"
-                       "  ip:\n"  // ipopt-mumps runs are serialised (MUMPS)
-                       "    scenes: [paper]\n"
-                       "    nlp: [ipopt, ipopt-mumps]\n"
-                       "    dae: [rk-projection, rk-baumgarte]\n"
-                       "    dt: 0.1\n"
-                       "  unstable:\n"  // sigma * dt = 10 >> 2.785: blows up
-                       "    scenes: [paper]\n"
-                       "    dae: rk-baumgarte\n"
-                       "    sigma: 200\n"
-                       "  rough:\n"  // no initial contact configuration
-                       "    scenes: [paper]\n"
-                       "    roughness: 100\n");
-    suite_ = LoadSuite(suite_path_);
-    HarnessOptions o;
-    o.out_dir = (root_ / "j1").string();
-    o.jobs = 1;
-    o.progress = 0;
-    summary_j1_ = RunSuite(suite_, o);
-  }
-  static void TearDownTestSuite() { fs::remove_all(root_); }
-
-  static HarnessOptions Options(const std::string& sub, int jobs) {
-    HarnessOptions o;
-    o.out_dir = (root_ / sub).string();
-    o.jobs = jobs;
-    o.progress = 0;
-    return o;
+    PrepareTinySuite("quasiroll_harness_test_",
+                     "  wp:\n"
+                     "    nlp: [newton, ceres]\n"
+                     "    dae: [rk-projection, rk-baumgarte]\n"
+                     "    dt: [0.05, 0.1]\n"
+                     "  ip:\n"  // ipopt-mumps runs are serialised (MUMPS)
+                     "    scenes: [paper]\n"
+                     "    nlp: [ipopt, ipopt-mumps]\n"
+                     "    dae: [rk-projection, rk-baumgarte]\n"
+                     "    dt: 0.1\n"
+                     "  unstable:\n"  // sigma * dt = 10 >> 2.785: blows up
+                     "    scenes: [paper]\n"
+                     "    dae: rk-baumgarte\n"
+                     "    sigma: 200\n"
+                     "  rough:\n"  // no initial contact configuration
+                     "    scenes: [paper]\n"
+                     "    roughness: 100\n");
+    summary_j1_ = RunSuite(suite_, Options("j1", 1));
   }
 
-  static fs::path root_;
-  static std::string suite_path_;
-  static Suite suite_;
-  static HarnessSummary summary_j1_;
+  static inline HarnessSummary summary_j1_;
 };
-fs::path BenchHarness::root_;
-std::string BenchHarness::suite_path_;
-Suite BenchHarness::suite_;
-HarnessSummary BenchHarness::summary_j1_;
 
 TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
   ASSERT_EQ(suite_.runs.size(), 16u + 4u + 1u + 1u);

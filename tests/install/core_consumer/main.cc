@@ -45,11 +45,11 @@ class SmallQp final : public quasiroll::NlpProblem {
 int main() {
   const SmallQp p;
   const Eigen::Vector2d x(1.5, 0.5);
-  Eigen::VectorXd xl(2), xu(2), gl(1), gu(1), g(1);
-  p.GetBounds(xl, xu, gl, gu);
+  quasiroll::NlpBounds bounds;
+  bounds.Load(p);
+  Eigen::VectorXd g(1);
   p.Constraints(x, g);
-  const double violation =
-      quasiroll::MaxConstraintViolation(x, g, xl, xu, gl, gu);
+  const double violation = quasiroll::MaxConstraintViolation(x, g, bounds);
   quasiroll::KktVerifier kkt;
   const double residual = kkt.ResidualWith(p, x, Eigen::VectorXd::Ones(1));
   const auto backends = quasiroll::NlpSolverRegistry::Names();
