@@ -362,10 +362,23 @@ const char* ToString(BackendRole role) {
 }
 
 const std::vector<std::string>& RunSettingNames() {
-  static const std::vector<std::string> names = {
-      "mu",       "eps",          "mode",     "nlp",          "dae",
-      "coupling", "dt",           "t_end",    "tol",          "atol",
-      "nlp_tol",  "nlp_max_iter", "substeps", "contact_check"};
+  static const std::vector<std::string> names = {"mu",
+                                                 "eps",
+                                                 "mode",
+                                                 "nlp",
+                                                 "dae",
+                                                 "coupling",
+                                                 "dt",
+                                                 "t_end",
+                                                 "tol",
+                                                 "atol",
+                                                 "nlp_tol",
+                                                 "nlp_max_iter",
+                                                 "substeps",
+                                                 "contact_check",
+                                                 "locate_events",
+                                                 "event_points",
+                                                 "event_tolerance"};
   return names;
 }
 

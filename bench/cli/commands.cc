@@ -137,6 +137,16 @@ void Commands::RegisterRun(CLI::App& app, const std::vector<std::string>& nlps,
                   "Sampled second-contact check every N samples, 0 = never "
                   "(default: never)")
       ->check(IntegerIn(0, 1000000000));
+  run->add_option("--locate-events", run_.request.locate_events,
+                  "Locate physical limits between samples and stop there: "
+                  "true | false (default: true)");
+  run->add_option("--event-points", run_.request.event_points,
+                  "Limit-indicator points inside each hold interval for "
+                  "located stops (default: 3)")
+      ->check(IntegerIn(0, 1000));
+  run->add_option("--event-tolerance", run_.request.event_tolerance,
+                  "Bisection tolerance of a located stop [s] (default: 1e-9)")
+      ->check(PositiveNumber());
   run->add_option("--nlp-opt", run_.nlp_opts,
                   "NLP backend option key=value (repeatable; see 'quasiroll "
                   "list --options')");

@@ -113,6 +113,9 @@ void SetParameters(const RunSpec& run, const std::string& terrain_id,
   b->SetInt("substeps", run.substeps);
   b->SetInt("contact_check", run.contact_check);
   b->SetInt("nlp_max_iter", run.nlp_max_iter);
+  b->Set("locate_events", run.locate_events ? "true" : "false");
+  b->SetInt("event_points", run.event_points);
+  b->Set("event_tolerance", run.event_tolerance);
   b->Set("mu", run.mu);
   b->Set("seed", run.seed ? std::to_string(*run.seed) : "");
   b->Set("roughness", run.roughness);

@@ -76,6 +76,8 @@ void CheckValues(const RunRequest& r, const KeyNamer& namer) {
   RequireIn(namer, "dae_index", r.dae_index, 1, 2);
   RequireIn(namer, "substeps", r.substeps, 1, 100000);
   RequireIn(namer, "contact_check", r.contact_check, 0, 1000000000);
+  RequireIn(namer, "event_points", r.event_points, 0, 1000);
+  RequirePositive(namer, "event_tolerance", r.event_tolerance);
   RequirePositive(namer, "mu", r.mu);
   RequirePositive(namer, "eps", r.eps);
 }
@@ -163,6 +165,9 @@ ResolvedRun ResolveRunRequest(const Scene& base, const RunRequest& r,
   if (r.nlp_tol) o.quasi_static.residual_tolerance = *r.nlp_tol;
   if (r.nlp_max_iter) o.quasi_static.max_iterations = *r.nlp_max_iter;
   if (r.contact_check) o.second_contact_check_every = *r.contact_check;
+  if (r.locate_events) o.locate_events = *r.locate_events;
+  if (r.event_points) o.event_points = *r.event_points;
+  if (r.event_tolerance) o.event_tolerance = *r.event_tolerance;
   return out;
 }
 

@@ -32,6 +32,12 @@ struct RunRequest {
   std::optional<int> substeps;       // integrator steps per dt
   std::optional<int> contact_check;  // second-contact check every N samples,
                                      // 0 = never
+  // Located stops (SimulationOptions::locate_events, event_points,
+  // event_tolerance): on/off, indicator points per hold interval, bisection
+  // tolerance [s].
+  std::optional<bool> locate_events;
+  std::optional<int> event_points;
+  std::optional<double> event_tolerance;
   // Shorthands of integrator options (IntegratorShorthands()): applied when
   // the run's integrator has the option.
   std::optional<std::string> rk_method;

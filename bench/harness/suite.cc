@@ -59,6 +59,9 @@ RunRequest RunSpec::Request() const {
   q.nlp_max_iter = nlp_max_iter;
   q.substeps = substeps;
   q.contact_check = contact_check;
+  q.locate_events = locate_events;
+  q.event_points = event_points;
+  q.event_tolerance = event_tolerance;
   q.nlp_options = nlp_options_explicit;
   q.dae_options = dae_options_explicit;
   // Where the group gave the integrator option itself, the shorthand field
@@ -292,6 +295,13 @@ std::string CanonicalRunKey(const RunSpec& r) {
   // keys (and run ids) of existing suites stay those of the fixed grid.
   if (r.nlp_max_iter != QuasiStaticOptions{}.max_iterations)
     os << ";nlp_max_iter=" << r.nlp_max_iter;
+  const SimulationOptions events;  // the located-stop defaults
+  if (r.locate_events != events.locate_events)
+    os << ";locate_events=" << (r.locate_events ? 1 : 0);
+  if (r.event_points != events.event_points)
+    os << ";event_points=" << r.event_points;
+  if (r.event_tolerance != events.event_tolerance)
+    os << ";event_tolerance=" << Num(r.event_tolerance);
   for (const auto& [field, value] : r.scene_fields)
     os << ";scene." << field << "=" << value;
   for (const auto& [name, value] : r.nlp_options_explicit)
@@ -574,6 +584,9 @@ struct GroupSpec {
   std::vector<double> nlp_tols, sigmas;
   std::vector<std::int64_t> dae_indices, substeps, contact_checks;
   std::vector<std::int64_t> nlp_max_iters;
+  std::vector<std::string> locate_events;
+  std::vector<std::int64_t> event_points;
+  std::vector<double> event_tolerances;
   std::vector<double> roughness;
   std::vector<double> dts, epss, mus;
   std::vector<std::uint64_t> seeds;
@@ -625,6 +638,14 @@ void ReadMethodAxes(const YAML::Node& node, const std::string& path,
   g->contact_checks = ReadIntAxis(node, path, "contact_check", 0, 1000000, {0});
   g->nlp_max_iters = ReadIntAxis(node, path, "nlp_max_iter", 1, 1000000,
                                  {QuasiStaticOptions{}.max_iterations});
+  const SimulationOptions defaults;
+  g->locate_events =
+      ReadNameAxis(node, path, "locate_events", {"true", "false"}, {"true"});
+  g->event_points =
+      ReadIntAxis(node, path, "event_points", 0, 1000, {defaults.event_points});
+  g->event_tolerances =
+      ReadDoubleAxis(node, path, "event_tolerance", Bounds::Positive(),
+                     {defaults.event_tolerance});
   g->roughness =
       ReadDoubleAxis(node, path, "roughness", Bounds::NonNegative(), {1.0});
 }
@@ -700,14 +721,15 @@ void RequireNoShadowedRunSettings(const std::string& path, const GroupSpec& g,
 
 GroupSpec ReadGroupSpec(const YAML::Node& node, const std::string& path,
                         const Suite& suite, OptionTables* tables) {
-  yaml::CheckKeys(node, path,
-                  {"description",  "scenes",        "nlp",         "dae",
-                   "coupling",     "rk_method",     "dt",          "tol",
-                   "atol_ratio",   "nlp_tol",       "sigma",       "eps",
-                   "mu",           "seed",          "roughness",   "dae_index",
-                   "substeps",     "contact_check", "t_end",       "repeats",
-                   "scene_fields", "nlp_options",   "dae_options", "bounds",
-                   "nlp_max_iter"});
+  yaml::CheckKeys(
+      node, path,
+      {"description",  "scenes",        "nlp",          "dae",
+       "coupling",     "rk_method",     "dt",           "tol",
+       "atol_ratio",   "nlp_tol",       "sigma",        "eps",
+       "mu",           "seed",          "roughness",    "dae_index",
+       "substeps",     "contact_check", "t_end",        "repeats",
+       "scene_fields", "nlp_options",   "dae_options",  "bounds",
+       "nlp_max_iter", "locate_events", "event_points", "event_tolerance"});
   if (auto n = Child(node, "description"))
     yaml::ReadString(*n, JoinKey(path, "description"));
   GroupSpec g;
@@ -813,6 +835,17 @@ std::vector<Axis> GridAxes(const GroupSpec& g, const SceneAxes& s) {
       MakeAxis("nlp_max_iter", g.nlp_max_iters, [](RunSpec* r, std::int64_t v) {
         r->nlp_max_iter = static_cast<int>(v);
       }));
+  axes.push_back(MakeAxis("locate_events", g.locate_events,
+                          [](RunSpec* r, const std::string& v) {
+                            r->locate_events = v == "true";
+                          }));
+  axes.push_back(
+      MakeAxis("event_points", g.event_points, [](RunSpec* r, std::int64_t v) {
+        r->event_points = static_cast<int>(v);
+      }));
+  axes.push_back(
+      MakeAxis("event_tolerance", g.event_tolerances,
+               [](RunSpec* r, double v) { r->event_tolerance = v; }));
   for (const Axis& a : g.generic_axes) axes.push_back(a);
   return axes;
 }

@@ -108,6 +108,10 @@ struct RunSpec {
   int contact_check = 0;
   // Iteration limit of each quasi-static solve (QuasiStaticOptions).
   int nlp_max_iter = 100;
+  // Located stops (SimulationOptions defaults).
+  bool locate_events = true;
+  int event_points = 3;
+  double event_tolerance = 1e-9;  // [s]
   // Scene sweeps.
   double mu = 0;
   std::optional<std::uint64_t> seed;  // only for random gaussian terrains

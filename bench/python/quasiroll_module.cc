@@ -132,7 +132,8 @@ std::pair<std::string, std::string> RunText(
     std::optional<double> nlp_tol, std::optional<int> dae_index,
     std::optional<int> substeps, std::optional<int> contact_check,
     std::optional<int> nlp_max_iter, const GivenOptions& nlp_options,
-    const GivenOptions& dae_options) {
+    const GivenOptions& dae_options, std::optional<bool> locate_events,
+    std::optional<int> event_points, std::optional<double> event_tolerance) {
   bench::RunRequest request =
       SolveRequest(nlp, mu, eps, mode, nlp_tol, nlp_max_iter, nlp_options);
   request.dae = dae;
@@ -143,6 +144,9 @@ std::pair<std::string, std::string> RunText(
   request.atol = atol;
   request.substeps = substeps;
   request.contact_check = contact_check;
+  request.locate_events = locate_events;
+  request.event_points = event_points;
+  request.event_tolerance = event_tolerance;
   request.rk_method = rk_method;
   request.sigma = sigma;
   request.dae_index = dae_index;
@@ -268,8 +272,9 @@ PYBIND11_MODULE(_quasiroll, m) {
         py::arg("eps"), py::arg("mode"), py::arg("rk_method"), py::arg("sigma"),
         py::arg("tol"), py::arg("atol"), py::arg("nlp_tol"),
         py::arg("dae_index"), py::arg("substeps"), py::arg("contact_check"),
-        py::arg("nlp_max_iter"), py::arg("nlp_options"),
-        py::arg("dae_options"));
+        py::arg("nlp_max_iter"), py::arg("nlp_options"), py::arg("dae_options"),
+        py::arg("locate_events"), py::arg("event_points"),
+        py::arg("event_tolerance"));
   m.def("backends", [] {
     RegisterBuiltinNlpSolvers();
     RegisterBuiltinIntegrators();

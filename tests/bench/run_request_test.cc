@@ -69,6 +69,43 @@ TEST(RunRequest, TimesAreNamedAsTheFrontEndSpellsThem) {
   bad.nlp_max_iter = 0;
   EXPECT_EQ(ErrorOf(bad, Same),
             "nlp_max_iter: must be an integer in [1, 1000000], got 0");
+  RunRequest bad_events;
+  bad_events.event_tolerance = 0;
+  EXPECT_NE(ErrorOf(bad_events, Flag).find("--event-tolerance: "),
+            std::string::npos);
+  bad_events.event_tolerance.reset();
+  bad_events.event_points = 1001;
+  EXPECT_EQ(ErrorOf(bad_events, Same),
+            "event_points: must be an integer in [0, 1000], got 1001");
+}
+
+// The located-stop settings reach SimulationOptions from every front end,
+// and a suite's run key names them only off their defaults.
+TEST(RunRequest, EventSettingsReachTheSimulator) {
+  RunRequest r;
+  r.locate_events = false;
+  r.event_points = 7;
+  r.event_tolerance = 1e-6;
+  const ResolvedRun run =
+      ResolveRunRequest(LoadScene(kScenes + "paper.yaml"), r, Same);
+  EXPECT_FALSE(run.options.locate_events);
+  EXPECT_EQ(run.options.event_points, 7);
+  EXPECT_EQ(run.options.event_tolerance, 1e-6);
+  const Suite suite = LoadSuiteFromString(
+      "name: s\nscenes:\n  - {name: paper, file: paper.yaml}\ngroups:\n"
+      "  g:\n    locate_events: [true, false]\n    event_tolerance: 1.0e-6\n",
+      "<test>", kScenes);
+  ASSERT_EQ(suite.runs.size(), 2u);
+  const ResolvedRun on = ResolveRun(suite, suite.runs[0]);
+  const ResolvedRun off = ResolveRun(suite, suite.runs[1]);
+  EXPECT_TRUE(on.options.locate_events);
+  EXPECT_FALSE(off.options.locate_events);
+  EXPECT_EQ(off.options.event_tolerance, 1e-6);
+  EXPECT_EQ(off.options.event_points, SimulationOptions{}.event_points);
+  EXPECT_EQ(suite.runs[0].key.find("locate_events"), std::string::npos);
+  EXPECT_NE(suite.runs[1].key.find(";locate_events=0"), std::string::npos);
+  EXPECT_NE(suite.runs[0].key.find(";event_tolerance=1e-06"), std::string::npos)
+      << suite.runs[0].key;
 }
 
 TEST(RunRequest, ShorthandsMapOntoIntegratorOptionsOnce) {

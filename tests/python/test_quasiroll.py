@@ -159,6 +159,23 @@ def test_run_backend_options_equal_cli_flags(tmp_path):
         quasiroll.run(scene("flat"), t_end=1, dae_options="rk_method=rk4")
 
 
+def test_run_event_settings_equal_cli_flags(tmp_path):
+    # The located-stop settings are run settings like any other.
+    _, stats = quasiroll.run(scene("paper"), t_end=1, locate_events=False,
+                             event_points=5, event_tolerance=1e-6)
+    subprocess.run([BIN, "run", "--scene", os.path.join(SCENES, "paper.yaml"),
+                    "--t-end", "1", "--locate-events", "false",
+                    "--event-points", "5", "--event-tolerance", "1e-6",
+                    "--out", str(tmp_path)], check=True, capture_output=True)
+    cli = json.load(open(tmp_path / "run.json"))
+    assert stats["options"] == cli["options"]
+    events = stats["options"]["events"]
+    assert events["locate"] is False
+    assert events["points"] == 5 and events["tolerance"] == 1e-6
+    with pytest.raises(ValueError, match="event_tolerance: must be"):
+        quasiroll.run(scene("flat"), event_tolerance=0)
+
+
 def test_run_arrays_and_keyword_errors():
     d, stats = quasiroll.run(scene("flat"), t_end=1, as_frame=False)
     # Flat straight drive: x = rho * alphadot * t = 0.1 * 0.6 * t

@@ -93,7 +93,8 @@ def run(scene, nlp=None, dae=None, *, coupling="zoh", dt=None,
         t_end=None, mu=None, eps=None, mode=None, rk_method=None, sigma=None,
         tol=None, atol=None, nlp_tol=None, dae_index=None, substeps=None,
         contact_check=None, nlp_options=None, dae_options=None, as_frame=True,
-        nlp_max_iter=None):
+        nlp_max_iter=None, locate_events=None, event_points=None,
+        event_tolerance=None):
     """Simulates `scene` (`quasiroll run`). Returns (trajectory, stats):
     trajectory is a pandas DataFrame with the columns of trajectory.csv (or,
     with as_frame=False, a dict of numpy arrays), stats the run.json dict
@@ -101,6 +102,8 @@ def run(scene, nlp=None, dae=None, *, coupling="zoh", dt=None,
     Options left at None take the scene's value or the library default (nlp,
     dae: the backends registered as defaults, `quasiroll list`).
     nlp_max_iter: the iteration limit of each quasi-static solve (100).
+    locate_events, event_points, event_tolerance: located stops at physical
+    limits between samples (True, 3 points per interval, 1e-9 s).
     nlp_options / dae_options: the backends' own options as a dict (name ->
     value, as `--nlp-opt` / `--dae-opt`; `quasiroll list --options` lists
     them); an unknown or ill-typed one raises ValueError naming it. The GIL
@@ -109,7 +112,8 @@ def run(scene, nlp=None, dae=None, *, coupling="zoh", dt=None,
         scene, nlp or "", dae or "", coupling, dt, t_end, mu, eps, mode, rk_method, sigma,
         tol, atol, nlp_tol, dae_index, substeps, contact_check, nlp_max_iter,
         _given_options("nlp_options", nlp_options),
-        _given_options("dae_options", dae_options))
+        _given_options("dae_options", dae_options), locate_events,
+        event_points, event_tolerance)
     stats = json.loads(run_json)
     if as_frame:
         import pandas as pd
