@@ -205,6 +205,7 @@ void Commands::Register(CLI::App& app) {
   list->callback([this] { selected_ = [this] { return RunList(list_); }; });
 
   bench_.Register(app, &selected_);
+  atlas_.Register(app, &selected_);
   for (CLI::App* command : app.get_subcommands({})) command->allow_extras();
 }
 

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "quasiroll/bench/cli/atlas_command.h"
 #include "quasiroll/bench/cli/bench_command.h"
 #include "quasiroll/bench/cli/cli_support.h"
 #include "quasiroll/bench/harness/run_request.h"
@@ -74,6 +75,7 @@ class Commands {
   RunArgs run_;
   ListArgs list_;
   BenchCommands bench_;
+  AtlasCommand atlas_;
   std::vector<DeprecatedSpelling> deprecated_;
 };
 

@@ -1,0 +1,99 @@
+// Traversability atlas (docs/atlas.md): over a grid of planar poses
+// (x, y, heading) of a scene's terrain and the actuation modes, the smallest
+// friction coefficient that admits the commanded quasi-static motion,
+//   mu_min(Theta) = min over statically admissible forces of
+//                   max_i |f_t,i| / f_n,i                  (docs/model.md §7.7)
+// at the pose's consistent initial configuration Theta (model.md §3), the
+// wheel that attains it and the margin mu - mu_min at the scene's mu.
+//
+// A pose where the robot cannot stand is a row with its cause, never skipped:
+//   no_contact          no consistent contact configuration (§3.1)
+//   degenerate_contact  a validity check of §3.2 fails (tread angle,
+//                       relative curvature, second contact, outside terrain)
+//   singular_statics    the statics rows are rank deficient (mu_min undefined)
+//   lift_off            mu_min = +inf: no force without pulling (§7.7)
+// Cells are independent and computed in any order by any number of threads;
+// the output is ordered by cell index, so it does not depend on --jobs.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "quasiroll/core/scene.h"
+
+namespace quasiroll::bench {
+
+// One axis of the grid: `count` values evenly spaced from `lo` to `hi`
+// (both included; count 1 = lo).
+struct AtlasAxis {
+  double lo = 0.0, hi = 0.0;
+  int count = 1;
+  double Value(int i) const;
+};
+
+struct AtlasSpec {
+  std::string scene_path;
+  Scene scene;  // loaded from scene_path
+  AtlasAxis x, y;
+  int headings = 16;  // evenly spaced over [0, 2 pi)
+  std::vector<ActuationMode> modes = {ActuationMode::kPaper,
+                                      ActuationMode::kPvc};
+  // Cells are (x, y, heading, mode) with mode innermost; their count.
+  std::int64_t CellCount() const;
+  // Throws std::invalid_argument "<key>: <problem>, got <value>".
+  void Validate() const;
+};
+
+// Reads an atlas spec YAML file: {scene: PATH, x: [lo, hi, n], y: [lo, hi,
+// n], headings: N, modes: [paper, pvc]} (docs/atlas.md); relative scene paths
+// are resolved against the spec's directory. Throws SceneError naming the key.
+AtlasSpec LoadAtlasSpec(const std::string& path);
+// The same grid as one line of text (part of meta.json and the resume check).
+std::string CanonicalAtlasKey(const AtlasSpec& spec);
+
+struct AtlasCell {
+  std::int64_t index = 0;
+  double x = 0.0, y = 0.0, heading = 0.0;  // [m, m, rad]
+  ActuationMode mode = ActuationMode::kPaper;
+};
+AtlasCell CellAt(const AtlasSpec& spec, std::int64_t index);
+
+struct AtlasRow {
+  AtlasCell cell;
+  std::string status;             // "ok" or one of the causes above
+  std::string detail;             // why, for a cause ("" when ok)
+  double mu_min = 0.0;            // NaN when undefined
+  int critical_wheel = 0;         // 1-based, 0 when none
+  double margin = 0.0;            // scene mu - mu_min (NaN when undefined)
+  double min_normal_force = 0.0;  // [N] at the minimiser, NaN if undefined
+  double z = 0.0, roll = 0.0, pitch = 0.0;  // platform pose, NaN if no contact
+  double wall_s = 0.0;
+};
+
+// Evaluates one cell (allocation aside, independent of every other cell).
+AtlasRow EvaluateAtlasCell(const AtlasSpec& spec, const AtlasCell& cell);
+
+struct AtlasOptions {
+  std::string out_dir;
+  int jobs = 1;
+  bool resume = false;
+  int progress = 0;  // 0 none, 1 a line on stderr
+};
+
+struct AtlasSummary {
+  std::int64_t cells = 0, computed = 0, reused = 0;
+  std::int64_t ok = 0;
+  double wall_seconds = 0.0;
+};
+
+// Computes every cell into OUT/atlas.csv (docs/formats.md) and OUT/meta.json.
+// With `resume`, rows of an existing atlas.csv of the same grid are kept and
+// only the missing cells computed; a different grid is an error.
+AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options);
+
+// atlas.csv: the header line and one row (no trailing newline).
+std::string AtlasCsvHeader();
+std::string AtlasCsvRow(const AtlasRow& row);
+
+}  // namespace quasiroll::bench

@@ -1,0 +1,168 @@
+// The traversability atlas (bench/atlas): analytic thresholds on the 10°
+// incline, the heading dependence, causes for poses where the robot cannot
+// stand, and outputs that do not depend on --jobs or on an interruption.
+#include "quasiroll/bench/atlas/atlas.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "quasiroll/bench/io/csv.h"
+#include "test_support.h"
+
+namespace quasiroll::bench {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kPi = 3.14159265358979323846;
+
+AtlasSpec InclineSpec(int headings) {
+  AtlasSpec spec;
+  spec.scene_path = kScenes + "incline10.yaml";
+  spec.scene = LoadScene(spec.scene_path);
+  spec.headings = headings;
+  return spec;
+}
+
+// Thresholds on a 10° incline (docs/model.md §7.7 and oracle O3-num): paper
+// mode tan 10° in every heading (every joint actuated: the platform can hold
+// any heading with the friction of a block on the slope); pvc 0.318914 uphill
+// (heading 0 = up the slope of incline10.yaml) and 0.394378 downhill. The
+// 1e-6 bound is that of the oracle's six digits; mu_min itself is computed to
+// a relative 1e-11 (QuasiStaticProblem::MinimumFriction) at a contact
+// configuration solved to 1e-10 (model.md §3.1).
+TEST(TraversabilityAtlas, InclineThresholdsAreAnalytic) {
+  const AtlasSpec spec = InclineSpec(8);
+  const double tan10 = std::tan(10.0 * kPi / 180.0);
+  for (std::int64_t i = 0; i < spec.CellCount(); ++i) {
+    const AtlasCell cell = CellAt(spec, i);
+    const AtlasRow row = EvaluateAtlasCell(spec, cell);
+    ASSERT_EQ(row.status, "ok") << i << ": " << row.detail;
+    EXPECT_DOUBLE_EQ(row.margin, spec.scene.mu - row.mu_min);
+    if (cell.mode == ActuationMode::kPaper) {
+      EXPECT_NEAR(row.mu_min, tan10, 1e-9) << "heading " << cell.heading;
+    } else if (cell.heading == 0.0) {
+      EXPECT_NEAR(row.mu_min, 0.318914, 1e-6);
+    } else if (std::abs(cell.heading - kPi) < 1e-12) {
+      EXPECT_NEAR(row.mu_min, 0.394378, 1e-6);
+    }
+  }
+}
+
+// pvc: heading h and -h are mirror images across the fall line (wheels 2 and
+// 3 swap), so mu_min agrees and the critical wheel swaps 2 <-> 3; and the
+// robot across the slope needs more friction than along it.
+TEST(TraversabilityAtlas, PvcHeadingDependenceIsMirrorSymmetric) {
+  AtlasSpec spec = InclineSpec(16);
+  spec.modes = {ActuationMode::kPvc};
+  std::vector<AtlasRow> rows;
+  for (std::int64_t i = 0; i < spec.CellCount(); ++i)
+    rows.push_back(EvaluateAtlasCell(spec, CellAt(spec, i)));
+  for (int h = 1; h < 16; ++h) {
+    const AtlasRow &a = rows[h], &b = rows[16 - h];
+    EXPECT_NEAR(a.mu_min, b.mu_min, 1e-9 * a.mu_min) << h;
+    // At h = 8 (straight down) wheels 2 and 3 tie.
+    if (a.critical_wheel > 1 && h != 8) {
+      EXPECT_EQ(a.critical_wheel + b.critical_wheel, 5) << h;
+    }
+  }
+  EXPECT_GT(rows[4].mu_min, rows[0].mu_min);  // across vs up the slope
+  EXPECT_GT(rows[4].mu_min, rows[8].mu_min);  // across vs down
+}
+
+std::string WithoutWallTime(const fs::path& csv) {
+  std::istringstream in(ReadAll(csv));
+  std::string line, out;
+  while (std::getline(in, line)) out += line.substr(0, line.rfind(',')) + "\n";
+  return out;
+}
+
+// Same atlas.csv (but for wall times) with one or two threads, and after an
+// interruption that left only part of the rows (resume computes the rest).
+TEST(TraversabilityAtlas, OutputDoesNotDependOnJobsOrInterruption) {
+  const fs::path root = FreshTempDir("quasiroll_atlas_test_");
+  AtlasSpec spec;
+  spec.scene_path = kScenes + "paper.yaml";
+  spec.scene = LoadScene(spec.scene_path);
+  spec.x = {-0.5, 1.5, 3};
+  spec.y = {-0.5, 0.5, 2};
+  spec.headings = 3;
+  AtlasOptions one;
+  one.out_dir = (root / "one").string();
+  AtlasOptions two = one;
+  two.out_dir = (root / "two").string();
+  two.jobs = 2;
+  const AtlasSummary s1 = RunAtlas(spec, one);
+  RunAtlas(spec, two);
+  EXPECT_EQ(s1.cells, 36);
+  EXPECT_EQ(WithoutWallTime(root / "one" / "atlas.csv"),
+            WithoutWallTime(root / "two" / "atlas.csv"));
+  // Keep the header and the first 10 rows, and tear the 11th mid-line.
+  std::istringstream in(ReadAll(root / "two" / "atlas.csv"));
+  std::string line, cut;
+  for (int k = 0; k < 11 && std::getline(in, line); ++k) cut += line + "\n";
+  std::getline(in, line);
+  cut += line.substr(0, line.size() / 2);
+  std::ofstream(root / "two" / "atlas.csv") << cut;
+  two.resume = true;
+  const AtlasSummary resumed = RunAtlas(spec, two);
+  EXPECT_EQ(resumed.reused, 10);
+  EXPECT_EQ(resumed.computed, 26);
+  EXPECT_EQ(WithoutWallTime(root / "one" / "atlas.csv"),
+            WithoutWallTime(root / "two" / "atlas.csv"));
+  // Another grid in the same directory is refused, naming the file.
+  spec.headings = 4;
+  try {
+    RunAtlas(spec, two);
+    ADD_FAILURE() << "resume over another grid was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("atlas.csv"), std::string::npos);
+  }
+  fs::remove_all(root);
+}
+
+// A pose where the robot cannot stand is a row with its cause: a narrow
+// 5 cm spike under the front wheel (x = a = 0.25 m) leaves no consistent
+// contact.
+TEST(TraversabilityAtlas, PoseWithoutContactIsARowWithItsCause) {
+  const fs::path root = FreshTempDir("quasiroll_atlas_cause_");
+  const std::string scene = (root / "spike.yaml").string();
+  std::ofstream(scene)
+      << "name: spike\nmode: paper\nmu: 0.5\n"
+         "initial: {x: 0, y: 0, yaw: 0, joint_angles: [0, 0, 0, 0, 0, 0]}\n"
+         "terrain: {type: gaussians, bumps: [{amplitude: 0.05, x: 0.27, y: 0, "
+         "sigma: 0.01}]}\n";
+  AtlasSpec spec;
+  spec.scene_path = scene;
+  spec.scene = LoadScene(scene);
+  spec.x = {0.0, 2.0, 2};
+  spec.headings = 1;
+  spec.modes = {ActuationMode::kPaper};
+  const AtlasRow spike = EvaluateAtlasCell(spec, CellAt(spec, 0));
+  EXPECT_EQ(spike.status, "no_contact");
+  EXPECT_FALSE(spike.detail.empty());
+  EXPECT_TRUE(std::isnan(spike.mu_min));
+  const AtlasRow clear = EvaluateAtlasCell(spec, CellAt(spec, 1));
+  EXPECT_EQ(clear.status, "ok") << clear.detail;
+  fs::remove_all(root);
+}
+
+TEST(TraversabilityAtlas, InvalidGridNamesTheKey) {
+  AtlasSpec spec = InclineSpec(0);
+  try {
+    spec.Validate();
+    ADD_FAILURE() << "headings 0 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "headings: must be in [1, 100000], got 0");
+  }
+  spec.headings = 1;
+  spec.x = {1.0, 0.0, 2};
+  EXPECT_THROW(spec.Validate(), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace quasiroll::bench
