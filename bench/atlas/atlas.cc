@@ -17,6 +17,7 @@
 #include "quasiroll/bench/io/format.h"
 #include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/io/run_output.h"
+#include "quasiroll/bench/io/terrain_json.h"
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/so3.h"
@@ -262,6 +263,19 @@ void WriteAtlasMeta(const AtlasSpec& spec, const fs::path& out,
   AtomicWriteFile((out / "meta.json").string(), j.str() + "\n");
 }
 
+// OUT/terrain.json for the maps' contours (the scene file's terrain; none
+// for a scene without one, i.e. the plane z = 0, or a type the report does
+// not draw).
+void WriteAtlasTerrain(const AtlasSpec& spec, const fs::path& out) {
+  const YAML::Node root = yaml::LoadYamlFile(spec.scene_path);
+  TerrainSpec terrain;  // default: the plane z = 0
+  if (auto n = yaml::Child(root, "terrain"))
+    terrain = yaml::ReadTerrainSpec(
+        *n, "terrain", fs::path(spec.scene_path).parent_path().string());
+  const std::string json = TerrainJson(terrain);
+  if (!json.empty()) AtomicWriteFile((out / "terrain.json").string(), json);
+}
+
 }  // namespace
 
 AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options) {
@@ -311,6 +325,7 @@ AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();
   WriteAtlasMeta(spec, out, s, options.jobs);
+  WriteAtlasTerrain(spec, out);
   AtomicWriteFile((out / "atlas.csv").string(), csv);
   return s;
 }

@@ -29,6 +29,7 @@
 #include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/bench/io/runs_schema.h"
+#include "quasiroll/bench/io/terrain_json.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/quasi_static_validity.h"
 #include "quasiroll/core/slip_regimes.h"
@@ -331,45 +332,6 @@ std::string DataDirectory() {
 
 std::string ReportScriptPath() {
   return DataDirectory() + "/reports/make_report.py";
-}
-
-std::string TerrainJson(const TerrainSpec& spec) {
-  JsonWriter w;
-  w.BeginObject();
-  switch (spec.type) {
-    case TerrainSpec::Type::kPlane:
-      w.Key("type").Value("plane");
-      w.Key("height").Value(spec.height);
-      break;
-    case TerrainSpec::Type::kIncline:
-      w.Key("type").Value("incline");
-      w.Key("slope_deg").Value(spec.slope_rad * 180 / std::numbers::pi);
-      w.Key("azimuth_deg").Value(spec.azimuth_rad * 180 / std::numbers::pi);
-      w.Key("height").Value(spec.height);
-      break;
-    case TerrainSpec::Type::kGaussians: {
-      std::vector<GaussianBump> bumps = spec.bumps;
-      if (spec.random) {
-        const auto& r = *spec.random;
-        bumps = GaussianTerrain::Random(r.seed, r.count, r.amplitude, r.sigma,
-                                        r.x, r.y)
-                    .bumps();
-      }
-      w.Key("type").Value("gaussians");
-      w.Key("bumps").BeginArray();
-      for (const GaussianBump& b : bumps) {
-        w.BeginArray();
-        w.Value(b.amplitude).Value(b.x).Value(b.y).Value(b.sigma);
-        w.EndArray();
-      }
-      w.EndArray();
-      break;
-    }
-    default:
-      return "";
-  }
-  w.EndObject();
-  return w.str() + "\n";
 }
 
 // ---------------------------------------------------------------- runner

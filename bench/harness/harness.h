@@ -161,10 +161,6 @@ class Progress {
   double start_ = 0;  // steady clock, seconds
 };
 
-// JSON description of a terrain for the report ("" for types it does not
-// cover: sinusoid, heightmap).
-std::string TerrainJson(const TerrainSpec& spec);
-
 // quasiroll's run-time data directory (scenes, suites, the report
 // generator): $QUASIROLL_DATA_DIR if set, else <exe dir>/../share/quasiroll
 // when that exists (an installed prefix, or the build tree, where CMake
