@@ -113,6 +113,10 @@ def build_report(results_dir, out_dir=None, allow_missing=False):
     if not os.path.isdir(results_dir):
         raise ReportError(f"results directory not found: {results_dir}")
     out_dir = os.path.abspath(out_dir or os.path.join(results_dir, "report"))
+    if (os.path.isfile(os.path.join(results_dir, "atlas.csv"))
+            and not os.path.isfile(os.path.join(results_dir, "runs.csv"))):
+        from .atlas import build_atlas_report
+        return build_atlas_report(results_dir, out_dir)
     apply_style()
     ctx = Context(results_dir, out_dir)
     if not sel.successful(ctx.runs):
