@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -13,6 +14,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "quasiroll/bench/atlas/edge.h"
 #include "quasiroll/bench/io/csv.h"
 #include "quasiroll/bench/io/format.h"
 #include "quasiroll/bench/io/json_writer.h"
@@ -70,6 +72,9 @@ void AtlasSpec::Validate() const {
   if (headings < 1 || headings > 100000)
     Fail("headings", "must be in [1, 100000], got " + std::to_string(headings));
   if (modes.empty()) Fail("modes", "must name at least one mode, got none");
+  if (edge_cells < 0 || edge_cells > 100000)
+    Fail("edge_cells",
+         "must be in [0, 100000], got " + std::to_string(edge_cells));
   if (modes.size() == 2 && modes[0] == modes[1])
     Fail("modes",
          "a mode is named twice, got " + std::string(ToString(modes[0])));
@@ -77,7 +82,8 @@ void AtlasSpec::Validate() const {
 
 AtlasSpec LoadAtlasSpec(const std::string& path) {
   const YAML::Node root = yaml::LoadYamlFile(path);
-  yaml::CheckKeys(root, "", {"scene", "x", "y", "headings", "modes"});
+  yaml::CheckKeys(root, "",
+                  {"scene", "x", "y", "headings", "modes", "edge_cells"});
   AtlasSpec spec;
   const std::string scene =
       yaml::ReadString(yaml::Require(root, "", "scene"), "scene");
@@ -101,6 +107,9 @@ AtlasSpec LoadAtlasSpec(const std::string& path) {
                                : ActuationMode::kPaper);
     }
   }
+  if (auto n = yaml::Child(root, "edge_cells"))
+    spec.edge_cells =
+        static_cast<int>(yaml::ReadInt(*n, "edge_cells", 0, 100000));
   spec.scene = LoadScene(spec.scene_path);
   try {
     spec.Validate();
@@ -215,24 +224,33 @@ std::string AtlasCsvRow(const AtlasRow& row) {
 
 namespace {
 
+// Rows appended as cells finish, so that a killed atlas resumes from them;
+// removed once atlas.csv is complete.
+constexpr const char* kPartialName = "atlas.partial.csv";
+
 // Rows of an existing atlas.csv (cell index -> the row's text), when its
 // meta.json names the same grid; throws when it names another.
 std::map<std::int64_t, std::string> ReadFinishedRows(const AtlasSpec& spec,
                                                      const fs::path& out) {
   std::map<std::int64_t, std::string> rows;
-  std::string text, meta;
-  if (!ReadTextFile((out / "atlas.csv").string(), &text)) return rows;
+  std::string text, partial, meta;
+  const bool have_csv = ReadTextFile((out / "atlas.csv").string(), &text);
+  const bool have_partial =
+      ReadTextFile((out / kPartialName).string(), &partial);
+  if (!have_csv && !have_partial) return rows;
   if (!ReadTextFile((out / "meta.json").string(), &meta) ||
       meta.find(CanonicalAtlasKey(spec)) == std::string::npos)
     throw std::invalid_argument(
         "--resume: " + (out / "atlas.csv").string() +
         " belongs to another atlas grid (meta.json key differs from " +
         CanonicalAtlasKey(spec) + ")");
-  std::istringstream in(text);
+  // atlas.csv has a header, the partial file (rows as they were finished)
+  // none; a row is the same text in both.
+  std::istringstream in(text + partial);
   std::string line;
-  std::getline(in, line);  // header
   const std::int64_t n = spec.CellCount();
   while (std::getline(in, line)) {
+    if (line.rfind("cell,", 0) == 0) continue;  // header
     // A complete row ends with its wall time; a torn last line is dropped.
     if (line.empty() || std::count(line.begin(), line.end(), ',') < 15)
       continue;
@@ -254,6 +272,8 @@ void WriteAtlasMeta(const AtlasSpec& spec, const fs::path& out,
   j.Key("cells_ok").Value(static_cast<double>(s.ok));
   j.Key("computed").Value(static_cast<double>(s.computed));
   j.Key("reused").Value(static_cast<double>(s.reused));
+  j.Key("edge_cells").Value(spec.edge_cells);
+  j.Key("edge_solves").Value(static_cast<double>(s.edge_solves));
   j.Key("jobs").Value(jobs);
   j.Key("wall_s").Value(s.wall_seconds);
   j.Key("host").Value(ThisMachine().hostname);
@@ -297,9 +317,19 @@ AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options) {
   std::atomic<std::size_t> next{0};
   std::atomic<std::int64_t> finished{0};
   std::mutex progress_mutex;
+  WriteAtlasMeta(spec, out, s, options.jobs);  // the key, for a resume
+  const std::string partial_path = (out / kPartialName).string();
+  std::ofstream partial(partial_path, std::ios::app);
+  std::string write_error;
   auto worker = [&] {
     for (std::size_t k = next++; k < todo.size(); k = next++) {
       computed[k] = AtlasCsvRow(EvaluateAtlasCell(spec, CellAt(spec, todo[k])));
+      {
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        partial << computed[k] << '\n' << std::flush;
+        if (!partial && write_error.empty())
+          write_error = partial_path + ": write failed (disk full?)";
+      }
       const std::int64_t f = ++finished;
       if (options.progress &&
           (f % 256 == 0 || f == (std::int64_t)todo.size())) {
@@ -314,19 +344,35 @@ AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options) {
   worker();
   for (std::thread& t : threads) t.join();
   if (options.progress) std::fprintf(stderr, "\n");
+  if (!write_error.empty()) throw std::runtime_error(write_error);
   for (std::size_t k = 0; k < todo.size(); ++k) done[todo[k]] = computed[k];
   s.computed = static_cast<std::int64_t>(todo.size());
   std::string csv = AtlasCsvHeader() + "\n";
+  std::vector<std::int64_t> ok_cells;
   for (const auto& [index, line] : done) {
     csv += line + "\n";
-    if (line.find(",ok,") != std::string::npos) ++s.ok;
+    if (line.find(",ok,") != std::string::npos) ok_cells.push_back(index);
+  }
+  s.ok = static_cast<std::int64_t>(ok_cells.size());
+  AtomicWriteFile((out / "atlas.csv").string(), csv);
+  partial.close();
+  fs::remove(partial_path);
+  if (spec.edge_cells > 0) {
+    EdgeOptions edge;
+    edge.cells = spec.edge_cells;
+    std::string text = EdgeCsvHeader() + "\n";
+    for (const EdgeRow& row :
+         RunEdgeStudy(spec, ChooseEdgeCells(ok_cells, edge.cells), edge)) {
+      text += EdgeCsvRow(row) + "\n";
+      ++s.edge_solves;
+    }
+    AtomicWriteFile((out / "edge.csv").string(), text);
   }
   s.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();
   WriteAtlasMeta(spec, out, s, options.jobs);
   WriteAtlasTerrain(spec, out);
-  AtomicWriteFile((out / "atlas.csv").string(), csv);
   return s;
 }
 

@@ -39,6 +39,9 @@ struct AtlasSpec {
   int headings = 16;  // evenly spaced over [0, 2 pi)
   std::vector<ActuationMode> modes = {ActuationMode::kPaper,
                                       ActuationMode::kPvc};
+  // Cells of the edge-reliability study (edge.h; edge.csv), 0 = none. Not
+  // part of the grid's key.
+  int edge_cells = 0;
   // Cells are (x, y, heading, mode) with mode innermost; their count.
   std::int64_t CellCount() const;
   // Throws std::invalid_argument "<key>: <problem>, got <value>".
@@ -84,10 +87,13 @@ struct AtlasOptions {
 struct AtlasSummary {
   std::int64_t cells = 0, computed = 0, reused = 0;
   std::int64_t ok = 0;
+  std::int64_t edge_solves = 0;  // rows of edge.csv
   double wall_seconds = 0.0;
 };
 
-// Computes every cell into OUT/atlas.csv (docs/formats.md) and OUT/meta.json.
+// Computes every cell into OUT/atlas.csv (docs/formats.md) and OUT/meta.json,
+// then, when spec.edge_cells > 0, the edge-reliability study into
+// OUT/edge.csv.
 // With `resume`, rows of an existing atlas.csv of the same grid are kept and
 // only the missing cells computed; a different grid is an error.
 AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options);

@@ -77,6 +77,11 @@ void AtlasCommand::Register(CLI::App& app, std::function<int()>* selected) {
       ->check(IntegerIn(1, 100000));
   atlas->add_option("--modes", args_.modes, "paper and/or pvc (default: both)")
       ->check(OneOf({"paper", "pvc"}));
+  atlas
+      ->add_option("--edge-cells", args_.edge_cells,
+                   "Cells of the edge-reliability study (every NLP backend "
+                   "at mu = mu_min (1 + d); DIR/edge.csv); 0 = none")
+      ->check(IntegerIn(0, 100000));
   atlas->add_option("--out", args_.out, "Output directory")
       ->capture_default_str();
   atlas
@@ -95,7 +100,8 @@ void AtlasCommand::Register(CLI::App& app, std::function<int()>* selected) {
 }
 
 int RunAtlasCommand(const AtlasArgs& args) {
-  const bench::AtlasSpec spec = SpecFromArgs(args);
+  bench::AtlasSpec spec = SpecFromArgs(args);
+  if (args.edge_cells) spec.edge_cells = *args.edge_cells;
   bench::AtlasOptions options;
   options.out_dir = args.out;
   options.resume = args.resume;
@@ -105,11 +111,11 @@ int RunAtlasCommand(const AtlasArgs& args) {
                      (args.progress == "auto" && isatty(STDERR_FILENO));
   const bench::AtlasSummary s = bench::RunAtlas(spec, options);
   std::printf(
-      "atlas: %lld cells (%lld computed, %lld kept), %lld ok, %.1f s -> "
-      "%s/atlas.csv\n",
+      "atlas: %lld cells (%lld computed, %lld kept), %lld ok, %lld edge "
+      "solves, %.1f s -> %s/atlas.csv\n",
       static_cast<long long>(s.cells), static_cast<long long>(s.computed),
       static_cast<long long>(s.reused), static_cast<long long>(s.ok),
-      s.wall_seconds, args.out.c_str());
+      static_cast<long long>(s.edge_solves), s.wall_seconds, args.out.c_str());
   return kExitOk;
 }
 

@@ -16,6 +16,7 @@ struct AtlasArgs {
   std::vector<double> x, y;  // lo hi count
   std::optional<int> headings;
   std::vector<std::string> modes;
+  std::optional<int> edge_cells;  // overrides the spec's edge_cells
   std::string out = "out/atlas";
   std::optional<int> jobs;  // default: hardware concurrency
   bool resume = false;

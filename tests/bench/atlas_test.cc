@@ -11,6 +11,7 @@
 #include <sstream>
 #include <vector>
 
+#include "quasiroll/bench/atlas/edge.h"
 #include "quasiroll/bench/io/csv.h"
 #include "test_support.h"
 
@@ -162,6 +163,39 @@ TEST(TraversabilityAtlas, InvalidGridNamesTheKey) {
   spec.headings = 1;
   spec.x = {1.0, 0.0, 2};
   EXPECT_THROW(spec.Validate(), std::invalid_argument);
+}
+
+// Every backend at mu = mu_min (1 + d) on the 10° incline, heading up and
+// across, both modes: converges above the edge, is classified infeasible
+// below it. A claim of convergence below the edge would be counted.
+TEST(EdgeReliability, EveryBackendFindsTheEdgeOnTheIncline) {
+  AtlasSpec spec = InclineSpec(4);
+  EXPECT_EQ(ChooseEdgeCells({0, 1, 2, 3, 4, 5, 6, 7}, 4),
+            (std::vector<std::int64_t>{0, 2, 4, 6}));
+  // Cells 0-3: paper and pvc heading up the slope, then across it.
+  const std::vector<EdgeRow> rows =
+      RunEdgeStudy(spec, {0, 1, 2, 3}, EdgeOptions{});
+  ASSERT_EQ(rows.size(), 4 * 5 * NlpSolverRegistry::Names().size());
+  for (const EdgeRow& r : rows)
+    EXPECT_EQ(r.verdict, "correct")
+        << r.backend << " cell " << r.cell << " d " << r.offset << ": "
+        << r.qs_status << " / " << r.nlp_status;
+}
+
+TEST(EdgeReliability, VerdictsCountWrongClaimsAndFalseInfeasibility) {
+  using Q = QuasiStaticStatus;
+  EXPECT_STREQ(EdgeVerdict(1e-3, Q::kOk, NlpStatus::kConverged), "correct");
+  EXPECT_STREQ(EdgeVerdict(-1e-3, Q::kOk, NlpStatus::kConverged),
+               "wrong_claim");
+  EXPECT_STREQ(EdgeVerdict(1e-3, Q::kSolverFailure, NlpStatus::kInfeasible),
+               "false_infeasibility");
+  EXPECT_STREQ(EdgeVerdict(1e-3, Q::kSolverFailure, NlpStatus::kIterationLimit),
+               "failure");
+  EXPECT_STREQ(
+      EdgeVerdict(-1e-2, Q::kInfeasibleFriction, NlpStatus::kInfeasible),
+      "correct");
+  EXPECT_STREQ(EdgeVerdict(-1e-2, Q::kSolverFailure, NlpStatus::kNotRun),
+               "failure");
 }
 
 }  // namespace
