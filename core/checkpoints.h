@@ -34,7 +34,11 @@
 //                                                      output interval, not
 //                                                      of the internal step.
 // A checkpoint that coincides with an output sample (|t_c - t_k| <= 1e-9 s)
-// is that sample.
+// is that sample. A run records no checkpoint past its stop: those read from
+// the last interval beyond a stop located inside it are dropped, and where
+// a coupled run's integrator fails inside an interval (no end state, so no
+// dense output) the checkpoints before the located stop in that interval
+// are not recorded either (the run is measured over fewer checkpoints).
 //
 // Forces. The metrics compare forces and slip at checkpoints too; which
 // quasi-static solution belongs to a checkpoint is the one the method
