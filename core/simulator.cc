@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "quasiroll/core/checkpoints.h"
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/slip_regimes.h"
 
@@ -40,6 +41,10 @@ bool SimulationOptions::IsValid(std::string* why) const {
   if (!(event_tolerance > 0) || !std::isfinite(event_tolerance))
     return fail("event_tolerance: must be finite and > 0, got " +
                 std::to_string(event_tolerance));
+  for (std::size_t i = 0; i < checkpoints.size(); ++i)
+    if (!std::isfinite(checkpoints[i]) || checkpoints[i] < 0 ||
+        (i > 0 && checkpoints[i] < checkpoints[i - 1]))
+      return fail("checkpoints: must be finite, >= 0 and ascending");
   std::string inner;
   if (!integrator.IsValid(&inner)) return fail("integrator." + inner);
   if (!quasi_static.IsValid(&inner)) return fail("quasi_static." + inner);
@@ -231,34 +236,7 @@ void Simulator::Record(double t, const Configuration& theta,
                        const QuasiStaticSolution& sol, SimulationResult* result,
                        int index) const {
   TrajectorySample s;
-  s.t = t;
-  s.theta = theta;
-  Mat3 R;
-  model_->PlatformPose(theta, &R, &s.position);
-  s.rpy = RpyFromRotation(R);
-  const bool ok = sol.status == QuasiStaticStatus::kOk;
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  s.velocity = ok ? Vec3(R * sol.twist.head<3>()) : Vec3::Constant(nan);
-  s.angular_velocity = ok ? Vec3(R * sol.twist.tail<3>()) : Vec3::Constant(nan);
-  for (int j = 0; j < 6; ++j) s.joints[j] = theta(ConfigIndex::kTheta + j);
-  for (int i = 0; i < 3; ++i) {
-    ContactSample& c = s.contacts[i];
-    const ContactOutput& o = sol.contacts[i];
-    ChainState chain;
-    model_->EvaluateChain(theta, i, &chain);  // cached by the solve at theta
-    c.point = chain.p_c;
-    c.normal_force = ok ? o.normal_force : nan;
-    c.traction_lon = ok ? o.traction(0) : nan;
-    c.traction_lat = ok ? o.traction(1) : nan;
-    c.slip = ok ? o.slip.norm() : nan;
-    c.friction_use = ok ? o.friction_use : nan;
-  }
-  LoopClosure h;
-  model_->Constraints(theta, &h);
-  s.drift = h.lpNorm<Eigen::Infinity>();
-  s.gap_max = GeometricGap(*model_, theta);
-  s.nlp_status = ToString(sol.status);
-  s.nlp_iterations = sol.nlp_iterations;
+  FillSample(*model_, t, theta, sol, &s);
   if (index > 0 && !result->samples.empty())
     AccumulateSlipDistances(result->samples.back(), scene_.epsilon, &s);
   result->samples.push_back(std::move(s));
@@ -301,9 +279,20 @@ struct Simulator::Session {
         integrator(CreateIntegrator(sim.options_, &dae_options)),
         ode(*sim.model_, sim.options_.coupling, &solver),
         y(kConfigSize),
-        y_event(kConfigSize) {
+        y_event(kConfigSize),
+        checkpoints(*sim.model_, sim.options_.coupling) {
     iopts = sim.options_.integrator;
     if (iopts.step <= 0) iopts.step = sim.dt_;
+    // Coupled checkpoints: a solver of their own (core/checkpoints.h).
+    if (sim.options_.coupling == Coupling::kCoupled &&
+        !sim.options_.checkpoints.empty()) {
+      OptionValues unused;
+      QuasiStaticOptions qs = SolverOptions(sim.options_);
+      qs.extrapolate_warm_start = false;
+      checkpoint_solver = std::make_unique<QuasiStaticSolver>(
+          *sim.model_, QuasiStaticParameters::FromScene(sim.scene_),
+          CreateNlp(sim.options_, &unused), qs);
+    }
   }
   // Declared before the backends, which fill them while being created.
   OptionValues nlp_options, dae_options;
@@ -339,6 +328,9 @@ struct Simulator::Session {
   int event_solves = 0;
   long long event_iterations = 0, event_iterations_native = 0;
   int pending_wheel = -1;
+  CheckpointRecorder checkpoints;
+  std::unique_ptr<QuasiStaticSolver> checkpoint_solver;
+  double checkpoint_seconds_seen = 0;
 };
 
 // A bisection bracket: the limit is not met at a, met at b (or the state at
@@ -389,10 +381,14 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   s.curvature_before.fill(kNaN);
   s.done_located = false;
   s.done = false;
+  s.checkpoint_seconds_seen = 0;
   *result = SimulationResult{};
   result->nlp_options = s.nlp_options;
   result->dae_options = s.dae_options;
   result->samples.reserve(s.n + 1);
+  s.checkpoints.Begin(
+      options_.checkpoints.empty() ? nullptr : &options_.checkpoints,
+      s.checkpoint_solver.get(), &result->checkpoints);
   result->wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();
@@ -416,9 +412,15 @@ bool Simulator::Advance(SimulationResult* result) {
   result->jacobian_evaluations = s.ires.jacobian_evaluations;
   result->steps = s.ires.steps;
   result->rejected_steps = s.ires.rejected_steps;
+  // Checkpoints are the harness's measurement, not the method's cost.
+  const double checkpoint_seconds = s.checkpoints.seconds();
+  result->checkpoint_solves = s.checkpoints.solves();
+  result->checkpoint_iterations = s.checkpoints.iterations();
   result->wall_seconds +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-          .count();
+          .count() -
+      (checkpoint_seconds - s.checkpoint_seconds_seen);
+  s.checkpoint_seconds_seen = checkpoint_seconds;
   s.done = !more;
   return more;
 }
@@ -458,6 +460,7 @@ bool Simulator::Interval(SimulationResult* result) {
       sol.status != QuasiStaticStatus::kSolverFailure)
     LocateSampleStop(&t, result);
   Record(t, s.theta, s.sol, result, k);
+  s.checkpoints.AtSample(result->samples.back(), &result->checkpoints);
   result->t_reached = t;
   if (sol.status == QuasiStaticStatus::kOk)
     result->kkt_residual = std::fmax(result->kkt_residual, sol.kkt_residual);
@@ -514,6 +517,9 @@ bool Simulator::Interval(SimulationResult* result) {
   s.theta = s.y;
   s.k = k + 1;
   if (options_.locate_events) CheckIntervalEvents(t, t_next);
+  s.checkpoints.InInterval(t, s.theta_prev, s.sol, s.w_held, t_next, s.y,
+                           std::isnan(s.t_stop) ? t_next : s.t_stop,
+                           &result->checkpoints);
   return true;
 }
 
@@ -791,6 +797,7 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
   s.theta = br.theta_a;
   const QuasiStaticSolution& sol = s.sol;
   Record(br.a, s.theta, sol, result, s.k);
+  s.checkpoints.AtSample(result->samples.back(), &result->checkpoints);
   s.done_located = true;
   result->t_reached = br.a;
   result->status = ToString(sol.status);

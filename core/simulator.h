@@ -56,6 +56,11 @@ struct SimulationOptions {
   bool locate_events = true;
   int event_points = 3;
   double event_tolerance = 1e-9;  // [s]
+  // Checkpoints (core/checkpoints.h): times [s], sorted ascending, >= 0, at
+  // which the method's state is recorded into SimulationResult::checkpoints
+  // from each interval's dense output (the stepping is unchanged). Empty:
+  // none.
+  std::vector<double> checkpoints;
   bool IsValid(std::string* why) const;
 };
 
@@ -121,6 +126,14 @@ struct SimulationResult {
   Configuration stop_configuration =
       Configuration::Constant(std::numeric_limits<double>::quiet_NaN());
   std::vector<TrajectorySample> samples;
+  // The method's state at SimulationOptions::checkpoints up to the stop
+  // (core/checkpoints.h: dense output; forces held in zoh, solved in
+  // coupled mode); cumulative slip distances NaN.
+  std::vector<TrajectorySample> checkpoints;
+  // Quasi-static solves made for checkpoints (coupled mode), not in
+  // nlp_solves / nlp_iterations; their time is not in wall_seconds.
+  int checkpoint_solves = 0;
+  long long checkpoint_iterations = 0;
   // The located physical stop (limit "" if none).
   StopEvent event;
   // Cost counters.

@@ -30,6 +30,7 @@
 #include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/bench/io/runs_schema.h"
 #include "quasiroll/bench/io/terrain_json.h"
+#include "quasiroll/core/checkpoints.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/quasi_static_validity.h"
 #include "quasiroll/core/slip_regimes.h"
@@ -153,6 +154,7 @@ void SetNanMetrics(RowBuilder* b) {
                         "err_slip", "drift_max", "drift_final", "gap_max"})
     b->Set(c, nan);
   b->SetInt("common_samples", 0);
+  b->SetInt("checkpoints", 0);
 }
 
 FailureEvidence Evidence(const RunSpec& run, RunStatus status, double t_reached,
@@ -236,12 +238,16 @@ std::vector<std::string> MakeRow(const RunSpec& run,
   SetReference(reference, reference_error, &b);
   SetNanMetrics(&b);
   if (reference) {
+    // At the checkpoints (core/checkpoints.h), not the run's own samples.
     std::vector<double> times;
-    times.reserve(result.samples.size());
-    for (const TrajectorySample& s : result.samples) times.push_back(s.t);
-    const AccuracyMetrics a = CompareTrajectories(
-        result.samples, reference->ForTimes(times), result.success());
-    b.SetInt("common_samples", a.common_samples);
+    times.reserve(result.checkpoints.size());
+    for (const TrajectorySample& s : result.checkpoints) times.push_back(s.t);
+    const AccuracyMetrics a =
+        CompareAtCheckpoints(result.checkpoints, reference->ForTimes(times),
+                             result.success(), result.t_reached);
+    b.SetInt("common_samples",
+             CountCommonSamples(result.samples, reference->samples));
+    b.SetInt("checkpoints", a.common_samples);
     b.Set("err_pos_rms", a.pos_rms);
     b.Set("err_pos_max", a.pos_max);
     b.Set("err_final", a.final_pos);
@@ -734,7 +740,13 @@ RunOutcome ExecuteRun(const Suite& suite, const RunSpec& run,
   std::vector<std::string> row;
   SimulationResult result;
   try {
-    const ResolvedRun resolved = ResolveRun(suite, run);
+    ResolvedRun resolved = ResolveRun(suite, run);
+    if (ref) {
+      std::vector<double> ref_times;
+      for (const TrajectorySample& s : ref->samples) ref_times.push_back(s.t);
+      resolved.options.checkpoints =
+          CheckpointTimes(ref_times, run.checkpoint_interval);
+    }
     const Scene& scene = resolved.scene;
     Simulator sim(scene, resolved.options);
     result = sim.Run();
@@ -754,6 +766,8 @@ RunOutcome ExecuteRun(const Suite& suite, const RunSpec& run,
   outcome.wall_seconds = result.wall_seconds;
   AtomicWriteFile(dir + "/trajectories/" + run.run_id + ".csv",
                   TrajectoryCsv(result));
+  AtomicWriteFile(dir + "/checkpoints/" + run.run_id + ".csv",
+                  TrajectoryCsv(result.checkpoints));
   AtomicWriteFile(dir + "/runs/" + run.run_id + ".csv",
                   Header() + "\n" + outcome.row + "\n");
   return outcome;

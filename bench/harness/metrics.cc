@@ -114,6 +114,24 @@ AccuracyMetrics CompareTrajectories(const std::vector<TrajectorySample>& run,
   return m;
 }
 
+AccuracyMetrics CompareAtCheckpoints(
+    const std::vector<TrajectorySample>& checkpoints,
+    const std::vector<TrajectorySample>& ref, bool completed,
+    double t_reached) {
+  const bool at_end = completed && !checkpoints.empty() &&
+                      std::abs(checkpoints.back().t - t_reached) <= kTimeTol;
+  return CompareTrajectories(checkpoints, ref, at_end);
+}
+
+int CountCommonSamples(const std::vector<TrajectorySample>& run,
+                       const std::vector<TrajectorySample>& ref) {
+  if (ref.empty()) return 0;
+  const double t0 = ref.front().t - kTimeTol, t1 = ref.back().t + kTimeTol;
+  int n = 0;
+  for (const TrajectorySample& s : run) n += s.t >= t0 && s.t <= t1;
+  return n;
+}
+
 DriftMetrics ComputeDrift(const std::vector<TrajectorySample>& run) {
   DriftMetrics d;
   if (run.empty()) return d;

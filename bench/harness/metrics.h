@@ -53,6 +53,24 @@ AccuracyMetrics CompareTrajectories(const std::vector<TrajectorySample>& run,
                                     const std::vector<TrajectorySample>& ref,
                                     bool completed);
 
+// The runs.csv accuracy metrics (docs/harness.md, "Errors at checkpoints"):
+// CompareTrajectories over the run's checkpoint samples
+// (SimulationResult::checkpoints, core/checkpoints.h) against the reference
+// at the same times (its own samples there, or the exact solution), so
+// every err_* is a mean / max over the checkpoints common to run and
+// reference (common_samples = their number) and does not depend on the
+// run's output grid. err_final / err_final_rot: at the run's last
+// checkpoint when the run completed and that checkpoint is its end
+// (t_reached), NaN otherwise.
+AccuracyMetrics CompareAtCheckpoints(
+    const std::vector<TrajectorySample>& checkpoints,
+    const std::vector<TrajectorySample>& ref, bool completed, double t_reached);
+
+// Run samples whose time lies within the reference's span (runs.csv
+// common_samples).
+int CountCommonSamples(const std::vector<TrajectorySample>& run,
+                       const std::vector<TrajectorySample>& ref);
+
 DriftMetrics ComputeDrift(const std::vector<TrajectorySample>& run);
 
 // ------------------------------------------------- timing statistics ----

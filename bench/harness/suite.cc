@@ -314,6 +314,8 @@ std::string CanonicalRunKey(const RunSpec& r) {
     os << ";bounds=" << Num(r.bounds.drift) << "," << Num(r.bounds.gap);
   if (r.bounds.qs_inertia != defaults.qs_inertia)
     os << ";bounds.qs_inertia=" << Num(r.bounds.qs_inertia);
+  if (r.checkpoint_interval != kDefaultCheckpointInterval)
+    os << ";checkpoint_interval=" << Num(r.checkpoint_interval);
   return os.str();
 }
 
@@ -594,6 +596,7 @@ struct GroupSpec {
   int repeats = 1;
   std::vector<Axis> generic_axes;  // scene_fields, nlp_options, dae_options
   RunBounds bounds;
+  double checkpoint_interval = kDefaultCheckpointInterval;
 };
 
 // Scenes of the group (default: all of the suite's), as suite indices in the
@@ -721,15 +724,36 @@ void RequireNoShadowedRunSettings(const std::string& path, const GroupSpec& g,
 
 GroupSpec ReadGroupSpec(const YAML::Node& node, const std::string& path,
                         const Suite& suite, OptionTables* tables) {
-  yaml::CheckKeys(
-      node, path,
-      {"description",  "scenes",        "nlp",          "dae",
-       "coupling",     "rk_method",     "dt",           "tol",
-       "atol_ratio",   "nlp_tol",       "sigma",        "eps",
-       "mu",           "seed",          "roughness",    "dae_index",
-       "substeps",     "contact_check", "t_end",        "repeats",
-       "scene_fields", "nlp_options",   "dae_options",  "bounds",
-       "nlp_max_iter", "locate_events", "event_points", "event_tolerance"});
+  yaml::CheckKeys(node, path,
+                  {"description",
+                   "scenes",
+                   "nlp",
+                   "dae",
+                   "coupling",
+                   "rk_method",
+                   "dt",
+                   "tol",
+                   "atol_ratio",
+                   "nlp_tol",
+                   "sigma",
+                   "eps",
+                   "mu",
+                   "seed",
+                   "roughness",
+                   "dae_index",
+                   "substeps",
+                   "contact_check",
+                   "t_end",
+                   "repeats",
+                   "scene_fields",
+                   "nlp_options",
+                   "dae_options",
+                   "bounds",
+                   "nlp_max_iter",
+                   "locate_events",
+                   "event_points",
+                   "event_tolerance",
+                   "checkpoint_interval"});
   if (auto n = Child(node, "description"))
     yaml::ReadString(*n, JoinKey(path, "description"));
   GroupSpec g;
@@ -741,6 +765,9 @@ GroupSpec ReadGroupSpec(const YAML::Node& node, const std::string& path,
   g.bounds = suite.bounds;
   if (auto n = Child(node, "bounds"))
     g.bounds = ReadBounds(*n, JoinKey(path, "bounds"), g.bounds);
+  g.checkpoint_interval = suite.checkpoint_interval;
+  yaml::ReadOptionalDouble(node, path, "checkpoint_interval",
+                           &g.checkpoint_interval, Bounds::Positive());
   return g;
 }
 
@@ -903,6 +930,7 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
     base.t_end = s.t_end;
     base.repeats = g.repeats;
     base.bounds = g.bounds;
+    base.checkpoint_interval = g.checkpoint_interval;
     AppendGridRuns(node, path, base, scene_ref, axes, suite);
   }
 }
@@ -917,9 +945,9 @@ Suite LoadSuiteFromString(const std::string& text, const std::string& origin,
   suite.path = origin;
   suite.text_hash = Fnv1a64(text);
   const YAML::Node root = yaml::ParseYaml(text, origin);
-  yaml::CheckKeys(
-      root, "",
-      {"name", "description", "reference", "bounds", "scenes", "groups"});
+  yaml::CheckKeys(root, "",
+                  {"name", "description", "reference", "bounds",
+                   "checkpoint_interval", "scenes", "groups"});
   suite.name = origin.empty() ? "suite" : fs::path(origin).stem().string();
   if (auto n = Child(root, "name")) suite.name = yaml::ReadString(*n, "name");
   if (auto n = Child(root, "description"))
@@ -928,6 +956,8 @@ Suite LoadSuiteFromString(const std::string& text, const std::string& origin,
     suite.reference = ReadReference(*n, "reference");
   if (auto n = Child(root, "bounds"))
     suite.bounds = ReadBounds(*n, "bounds", suite.bounds);
+  yaml::ReadOptionalDouble(root, "", "checkpoint_interval",
+                           &suite.checkpoint_interval, Bounds::Positive());
 
   const YAML::Node scenes = yaml::Require(root, "", "scenes");
   if (!scenes.IsSequence() || scenes.size() == 0)

@@ -85,6 +85,15 @@ struct RunBounds {
   }
 };
 
+// Spacing of the accuracy checkpoints (suite/group key
+// `checkpoint_interval`, core/checkpoints.h, docs/harness.md "Errors at
+// checkpoints") [s]: rounded to a whole number of the reference's output
+// intervals. 0.3125 s = 25 reference intervals of the paper scene (dt 0.05 s,
+// dt_divisor 4) and a multiple of none of the default suite's dt values
+// (0.025 .. 6.4 s), so that the checkpoints fall between the samples of
+// every rung: no method's grid is favoured.
+constexpr double kDefaultCheckpointInterval = 0.3125;
+
 // One grid point: everything needed to run it, in physical units.
 struct RunSpec {
   int index = 0;  // position in grid order
@@ -119,6 +128,8 @@ struct RunSpec {
   double t_end = 0;
   int repeats = 1;
   RunBounds bounds;  // group's, else suite's, else the defaults
+  // Accuracy checkpoint spacing [s]: group's, else suite's, else the default.
+  double checkpoint_interval = kDefaultCheckpointInterval;
   // Generic axes: swept scene fields (suite key `scene_fields`), dotted path
   // -> the value as YAML flow text, in file order; applied to the scene with
   // the scene loader's rules.
@@ -149,6 +160,8 @@ struct Suite {
   std::uint64_t text_hash = 0;  // FNV-1a of the suite file's text
   ReferenceSettings reference;
   RunBounds bounds;  // suite-level `bounds` (groups may override)
+  // Suite-level `checkpoint_interval` (groups may override) [s].
+  double checkpoint_interval = kDefaultCheckpointInterval;
   std::vector<SuiteScene> scenes;
   std::vector<std::string> groups;  // in file order
   std::vector<RunSpec> runs;        // grid order

@@ -96,9 +96,13 @@ std::string TrajectoryCsvHeader() {
 }
 
 std::string TrajectoryCsv(const SimulationResult& result) {
+  return TrajectoryCsv(result.samples);
+}
+
+std::string TrajectoryCsv(const std::vector<TrajectorySample>& samples) {
   std::string out = TrajectoryCsvHeader();
   out += '\n';
-  for (const TrajectorySample& s : result.samples) {
+  for (const TrajectorySample& s : samples) {
     std::string row;
     auto add = [&row](double v) {
       if (!row.empty()) row += ',';

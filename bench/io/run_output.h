@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/core/scene.h"
@@ -21,6 +22,8 @@ bool ReadTextFile(const std::string& path, std::string* text);
 // trajectory.csv: the header line (no trailing newline) and the whole file.
 std::string TrajectoryCsvHeader();
 std::string TrajectoryCsv(const SimulationResult& result);
+// The same format for any samples (e.g. SimulationResult::checkpoints).
+std::string TrajectoryCsv(const std::vector<TrajectorySample>& samples);
 
 // Short commit hash the binary was built from ("unknown" when built outside
 // a git checkout), with "-dirty" when the tree had uncommitted changes to

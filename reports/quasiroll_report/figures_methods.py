@@ -169,6 +169,7 @@ def figure_work_precision(ctx):
         "adaptive RK scheme) is a line of its own, hollow markers, its own "
         "dashes; dashed black step = that problem's Pareto front. "
         + timing_text + " The right axis is the same time per simulated second. "
+        + _checkpoint_text(rows) +
         "Errors are against the problem's reference; a zoh method holds the "
         "quasi-static twist over each Δt, so its error falls only as O(Δt) "
         "(hold error) however accurate its integrator, while the coupled "
@@ -179,6 +180,23 @@ def figure_work_precision(ctx):
                          "1. Work-precision", caption)
     record.data = {"panels": panels, "timing": "median" if spread else "min"}
     return record
+
+
+def _checkpoint_text(rows):
+    """How the errors were measured: at checkpoints (runs.csv column
+    `checkpoints`, docs/harness.md "Errors at checkpoints") or, in results
+    written before it, at each run's own output samples."""
+    counts = [r.get("checkpoints") for r in rows]
+    if any(isinstance(c, (int, float)) and is_finite(c) and c > 0 for c in counts):
+        return ("Every error is measured at the problem's checkpoints (fixed "
+                "times every ~0.3 s and the reference's end, the same for every "
+                "Δt and rtol; the method's state there from its dense output, "
+                "its force the one it applies there: held over the interval in "
+                "zoh), so a coarse grid cannot look accurate by skipping a force "
+                "spike between its samples. ")
+    return ("These results predate the checkpoints: each error is measured at "
+            "the run's own output samples, where a coarse grid can miss force "
+            "spikes between them. ")
 
 
 # ------------------------------------------------------------------ drift

@@ -164,6 +164,13 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
           << r.at("run_id") << ": " << r.at("stop_reason");
       EXPECT_EQ(r.at("t_reached"), "0.5");
       EXPECT_LT(std::stod(r.at("err_pos_max")), 1e-4) << r.at("run_id");
+      // Errors at checkpoints (docs/harness.md): 0.3125 s = 25 reference
+      // intervals of 0.0125 s, and the end 0.5 s; their states on file.
+      EXPECT_EQ(r.at("checkpoints"), "2") << r.at("run_id");
+      const std::string cp =
+          ReadAll(root_ / "j1" / "checkpoints" / (r.at("run_id") + ".csv"));
+      EXPECT_EQ(std::count(cp.begin(), cp.end(), '\n'), 3) << cp;
+      EXPECT_NE(cp.find("\n0.3125,"), std::string::npos) << cp;
       EXPECT_EQ(
           std::stod(r.at("err_pos_max")) >= std::stod(r.at("err_pos_rms")),
           true);

@@ -171,6 +171,71 @@ TEST(BenchMetrics, EmptyInputsGiveNaN) {
   EXPECT_TRUE(std::isnan(d.drift_max));
 }
 
+// Metrics at checkpoints: rms and max over the checkpoints only (the run's
+// own samples play no part), final errors at the last checkpoint only when
+// it is the run's end.
+TEST(BenchMetrics, CheckpointMetricsAreOverTheCheckpoints) {
+  const auto ref = Curve(0.0125, 2.0);
+  // Three checkpoints on the reference grid with position errors 3, 4, 0 mm
+  // and normal-force errors 0.6, 0, 0 N on wheel 1.
+  std::vector<TrajectorySample> cp = {ref[25], ref[50], ref[160]};
+  cp[0].position.x() += 3e-3;
+  cp[1].position.y() += 4e-3;
+  cp[0].contacts[0].normal_force += 0.6;
+  AccuracyMetrics m = CompareAtCheckpoints(cp, ref, true, 2.0);
+  EXPECT_EQ(m.common_samples, 3);
+  EXPECT_NEAR(m.pos_max, 4e-3, 1e-15);
+  EXPECT_NEAR(m.pos_rms, std::sqrt((9e-6 + 16e-6) / 3), 1e-15);
+  EXPECT_NEAR(m.force_rms, std::sqrt(0.36 / 9), 1e-14);  // 3 cp x 3 wheels
+  EXPECT_EQ(m.final_pos, 0);                             // at t = 2 = t_end
+  // The run reached 2.0 but its last checkpoint is at 1.25: no final error.
+  cp.pop_back();
+  m = CompareAtCheckpoints(cp, ref, true, 2.0);
+  EXPECT_EQ(m.common_samples, 2);
+  EXPECT_TRUE(std::isnan(m.final_pos));
+  // A failed run has none either.
+  m = CompareAtCheckpoints({ref[25], ref[50]}, ref, false, 0.625);
+  EXPECT_TRUE(std::isnan(m.final_pos));
+  EXPECT_EQ(CountCommonSamples(Curve(0.05, 3.0), ref), 41);
+  EXPECT_EQ(CountCommonSamples(Curve(0.05, 3.0), {}), 0);
+}
+
+// The failure the checkpoints remove, in a synthetic fixture: the reference
+// force has a spike (+5 N, width 0.03 s) at t = 0.95 s, between the samples
+// 0.8 and 1.2 of a coarse zoh run (dt 0.4) and resolved by a fine one
+// (dt 0.025). Both track the state exactly and apply, as zoh does, the force
+// of the last sample (computed exactly there) until the next: measured at
+// their own samples both are exact (0 error: a coarse grid "wins" a tie by
+// not looking); at the checkpoints (every 0.3125 s: 0.9375 s is on the spike)
+// the coarse run pays for the spike it held through and the fine one, whose
+// held force is at most 0.025 s old, errs much less.
+TEST(BenchMetrics, CoarseGridSkippingASpikeCannotWin) {
+  auto force = [](double t) {
+    return 10.0 + 5.0 * std::exp(-std::pow((t - 0.95) / 0.03, 2));
+  };
+  auto ref = Curve(0.0125, 2.0);
+  for (auto& s : ref) s.contacts[0].normal_force = force(s.t);
+  auto zoh = [&](double dt, bool at_checkpoints) {
+    std::vector<TrajectorySample> run;
+    for (std::size_t k = 0; k < ref.size(); ++k) {
+      const double t = ref[k].t;
+      const bool sample = std::abs(t / dt - std::round(t / dt)) < 1e-9;
+      const bool checkpoint =
+          k > 0 && (k % 25 == 0 || k + 1 == ref.size());  // 0.3125 s
+      if (at_checkpoints ? !checkpoint : !sample) continue;
+      TrajectorySample s = ref[k];
+      s.contacts[0].normal_force = force(std::floor(t / dt + 1e-9) * dt);
+      run.push_back(s);
+    }
+    return CompareAtCheckpoints(run, ref, true, 2.0).force_rms;
+  };
+  EXPECT_EQ(zoh(0.4, false), 0);  // own samples: blind to the spike
+  EXPECT_EQ(zoh(0.025, false), 0);
+  const double coarse = zoh(0.4, true), fine = zoh(0.025, true);
+  EXPECT_GT(coarse, 0.5);  // 4.2 N missed at 0.9375 s, over 7 x 3 values
+  EXPECT_GT(coarse, 2 * fine) << coarse << " vs " << fine;
+}
+
 TEST(BenchMetrics, DriftAndGap) {
   auto run = Curve(0.05, 1.0);  // drift = 1e-12 (k + 1), gap = 1e-10 k
   DriftMetrics d = ComputeDrift(run);

@@ -356,6 +356,33 @@ TEST(BenchSuite, BoundsAtSuiteAndGroupLevel) {
                  {"groups.g.bounds", "mapping"});
 }
 
+// Checkpoint spacing (docs/harness.md, Errors at checkpoints): default
+// 0.3125 s, suite level, group override; the run key (and id) changes only
+// for a non-default value.
+TEST(BenchSuite, CheckpointIntervalAtSuiteAndGroupLevel) {
+  const Suite plain =
+      Load(std::string(kBase) + "groups:\n  g: {scenes: [paper]}\n");
+  EXPECT_EQ(plain.runs[0].checkpoint_interval, 0.3125);
+  EXPECT_EQ(plain.runs[0].key.find("checkpoint"), std::string::npos);
+  const Suite s = Load(std::string(kBase) +
+                       "checkpoint_interval: 0.5\n"
+                       "groups:\n"
+                       "  g: {scenes: [paper]}\n"
+                       "  h: {scenes: [paper], checkpoint_interval: 0.25}\n");
+  EXPECT_EQ(s.runs[0].checkpoint_interval, 0.5);
+  EXPECT_EQ(s.runs[1].checkpoint_interval, 0.25);
+  EXPECT_NE(s.runs[0].key.find(";checkpoint_interval=0.5"), std::string::npos)
+      << s.runs[0].key;
+  EXPECT_NE(s.runs[0].run_id.substr(s.runs[0].run_id.size() - 8),
+            plain.runs[0].run_id.substr(plain.runs[0].run_id.size() - 8));
+  ExpectRejected(
+      std::string(kBase) + "checkpoint_interval: 0\ngroups: {g: {}}\n",
+      {"checkpoint_interval", "0"});
+  ExpectRejected(
+      std::string(kBase) + "groups:\n  g: {checkpoint_interval: -1.0}\n",
+      {"groups.g.checkpoint_interval", "-1"});
+}
+
 TEST(BenchSuite, RejectsUnknownKeys) {
   ExpectRejected(std::string(kBase) + "groups:\n  g:\n    dtt: [0.1]\n",
                  {"groups.g.dtt", "unknown key"});

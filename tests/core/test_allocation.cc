@@ -53,6 +53,36 @@ TEST_P(WarmStep, AdvanceDoesNotAllocate) {
       << "allocations in 50 warmed-up steps";
 }
 
+// Recording checkpoints (core/checkpoints.h) from the dense output, here
+// every 0.0375 s (most of the 0.05 s intervals hold one), allocates nothing
+// either once the output vector is reserved by Begin().
+TEST_P(WarmStep, AdvanceWithCheckpointsDoesNotAllocate) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer owns operator new";
+#endif
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  const Scene scene =
+      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
+  SimulationOptions options;
+  options.nlp = "newton";
+  options.dae = GetParam();
+  for (int k = 1; k * 0.0375 < 3.0; ++k)
+    options.checkpoints.push_back(k * 0.0375);
+  Simulator sim(scene, options);
+  SimulationResult result;
+  sim.Begin(sim.initial_configuration(), &result);
+  for (int k = 0; k < 5; ++k)
+    ASSERT_TRUE(sim.Advance(&result)) << result.stop_reason;
+  const std::size_t recorded = result.checkpoints.size();
+  const long long before = g_allocations.load();
+  for (int k = 0; k < 50; ++k)
+    ASSERT_TRUE(sim.Advance(&result)) << result.stop_reason;
+  EXPECT_EQ(g_allocations.load() - before, 0)
+      << "allocations in 50 warmed-up steps";
+  EXPECT_GE(result.checkpoints.size(), recorded + 60);  // 2.5 s / 0.0375 s
+}
+
 INSTANTIATE_TEST_SUITE_P(RkBackends, WarmStep,
                          ::testing::Values("rk-projection", "rk-baumgarte"),
                          [](const auto& info) {
