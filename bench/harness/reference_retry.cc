@@ -93,8 +93,8 @@ void AddCosts(const SimulationResult& from, SimulationResult* to) {
 // Appends the samples of `seg` (a run started at t_off from into's last
 // sample, times relative to t_off) after into's last sample, and takes over
 // its stop. The first sample of seg is into's last state and is dropped.
-void Stitch(const SimulationResult& seg, double t_off, double h,
-            double epsilon, SimulationResult* into) {
+void Stitch(const SimulationResult& seg, double t_off, double h, double epsilon,
+            SimulationResult* into) {
   for (std::size_t k = 1; k < seg.samples.size(); ++k) {
     TrajectorySample s = seg.samples[k];
     s.t = Snap(t_off + s.t, h);
@@ -102,15 +102,13 @@ void Stitch(const SimulationResult& seg, double t_off, double h,
     into->samples.push_back(std::move(s));
   }
   into->status = seg.status;
-  into->stop_reason =
-      seg.stop_reason.empty()
-          ? ""
-          : "after a restart at t=" + Num(t_off) +
-                " s (times relative to it): " + seg.stop_reason;
+  into->stop_reason = seg.stop_reason.empty()
+                          ? ""
+                          : "after a restart at t=" + Num(t_off) +
+                                " s (times relative to it): " + seg.stop_reason;
   into->t_reached = Snap(t_off + seg.t_reached, h);
   into->event = seg.event;
-  for (double* t : {&into->event.t, &into->event.t_lower,
-                    &into->event.t_upper})
+  for (double* t : {&into->event.t, &into->event.t_lower, &into->event.t_upper})
     *t += t_off;
   into->stop_configuration = seg.stop_configuration;
   into->mu_min_at_stop = seg.mu_min_at_stop;
@@ -151,8 +149,8 @@ std::vector<Rung> Ladder(const SimulationOptions& base) {
 ReferenceAttempt Attempt(const std::string& rung, const std::string& detail,
                          double t_start, double t_end,
                          const SimulationResult& r, double h) {
-  return {rung,     detail, t_start, t_end, r.status,
-          Snap(t_start + r.t_reached, h)};
+  return {rung,  detail,   t_start,
+          t_end, r.status, Snap(t_start + r.t_reached, h)};
 }
 
 // Runs the ladder's rungs over [t0, t1] from theta0; true with *seg the first

@@ -60,10 +60,9 @@ class WindowNlp final : public NlpSolver {
   void DoSolve(const NlpProblem& problem,
                const Eigen::Ref<const Eigen::VectorXd>& x0,
                const NlpOptions& options, NlpResult* result) override {
-    const bool fails =
-        is_b_ ? g_window.fail_b
-              : !g_window.fail_a_tight_only ||
-                    options.feasibility_tolerance < 1e-10;
+    const bool fails = is_b_ ? g_window.fail_b
+                             : !g_window.fail_a_tight_only ||
+                                   options.feasibility_tolerance < 1e-10;
     if (fails && InWindow(problem)) {
       result->x = x0;
       result->status = NlpStatus::kNumericalFailure;
@@ -91,8 +90,9 @@ void RegisterWindowBackends() {
         [] { return std::make_unique<WindowNlp>(false); });
     BackendInfo b = ThreadSafeBackendInfo("newton failing on demand", "test-b");
     b.cost_ratio = 0.5;
-    NlpSolverRegistry::Register("test-window-b", std::move(b),
-                                [] { return std::make_unique<WindowNlp>(true); });
+    NlpSolverRegistry::Register("test-window-b", std::move(b), [] {
+      return std::make_unique<WindowNlp>(true);
+    });
   });
 }
 
@@ -118,8 +118,9 @@ void SetWindow(const SimulationResult& plain) {
   auto dist = [&](double t) {
     for (const TrajectorySample& s : plain.samples)
       if (std::abs(s.t - t) < 1e-9)
-        return std::hypot(s.theta(ConfigIndex::Xg(0)) - start(ConfigIndex::Xg(0)),
-                          s.theta(ConfigIndex::Yg(0)) - start(ConfigIndex::Yg(0)));
+        return std::hypot(
+            s.theta(ConfigIndex::Xg(0)) - start(ConfigIndex::Xg(0)),
+            s.theta(ConfigIndex::Yg(0)) - start(ConfigIndex::Yg(0)));
     ADD_FAILURE() << "no sample at " << t;
     return 0.0;
   };
@@ -157,7 +158,8 @@ class ReferenceRetry : public ::testing::Test {
           worst, (r.samples[k].position - plain_.samples[k].position).norm());
     }
     EXPECT_LT(worst, 1e-9);
-    const auto& c = r.samples.back().contacts, &p = plain_.samples.back().contacts;
+    const auto &c = r.samples.back().contacts,
+               &p = plain_.samples.back().contacts;
     for (int i = 0; i < 3; ++i)
       EXPECT_NEAR(c[i].creep_distance, p[i].creep_distance,
                   1e-6 * p[i].creep_distance + 1e-15);
@@ -263,7 +265,7 @@ TEST_F(ReferenceRetry, PersistentFailureIsAReferenceFailure) {
   ASSERT_TRUE(retries->is_array());
   const std::vector<JsonValue>& items = retries->items();
   ASSERT_EQ(items.size(), 6u);
-  const char* rungs[] = {"primary", "step/4", "step/16",
+  const char* rungs[] = {"primary", "step/4",  "step/16",
                          "nlp",     "relaxed", "rerun"};
   for (std::size_t i = 0; i < 6; ++i) {
     EXPECT_EQ(items[i].Find("rung")->str(), rungs[i]);
@@ -282,16 +284,15 @@ TEST_F(ReferenceRetry, RunRowsCarryTheReferenceStop) {
   g_window.fail_b = true;
   const std::filesystem::path root = FreshTempDir("quasiroll_refretry_rows_");
   const std::string suite_path = (root / "s.yaml").string();
-  std::ofstream(suite_path)
-      << "reference: {nlp: test-window-a}\n"
-         "scenes:\n"
-         "  - {name: paper, file: "
-      << kScenes
-      << "paper.yaml, overrides: {time: {t_end: 2}}}\n"
-         "groups:\n"
-         "  g:\n"
-         "    scenes: [paper]\n"
-         "    coupling: [zoh]\n";
+  std::ofstream(suite_path) << "reference: {nlp: test-window-a}\n"
+                               "scenes:\n"
+                               "  - {name: paper, file: "
+                            << kScenes
+                            << "paper.yaml, overrides: {time: {t_end: 2}}}\n"
+                               "groups:\n"
+                               "  g:\n"
+                               "    scenes: [paper]\n"
+                               "    coupling: [zoh]\n";
   const Suite suite = LoadSuite(suite_path);
   HarnessOptions o;
   o.out_dir = (root / "out").string();
