@@ -493,6 +493,7 @@ struct ReferenceRunInfo {
   double check_wall = std::numeric_limits<double>::quiet_NaN();
   double mu_min_wall = std::numeric_limits<double>::quiet_NaN();
   ReferenceRetryLog retries;  // the ladder's attempts (none if analytic)
+  int check_rescues = 0;      // intervals the check's ladder rescued
 };
 
 // Fills *ref from the cache files if they hold this key; true on a complete
@@ -582,7 +583,12 @@ void RunCheckReference(const Scene& scene, const ReferenceSettings& settings,
   const SimulationOptions co = CheckReferenceOptions(scene, settings, method);
   ref->check_method = DescribeReferenceMethod(co);
   try {
-    const SimulationResult check = Simulator(scene, co).Run();
+    // The check runs the same retry ladder, so that a rescued stretch of the
+    // reference is checked too.
+    ReferenceRetryLog check_log;
+    const SimulationResult check =
+        RunReferenceWithRetries(scene, co, &check_log);
+    info->check_rescues = check_log.rescues;
     info->check_status = check.status;
     info->check_t_reached = check.t_reached;
     info->check_wall = check.wall_seconds;
@@ -638,6 +644,7 @@ void WriteReferenceCache(const std::string& csv_path,
   w.Key("check_wall_s").Value(info.check_wall);
   w.Key("reference_stop").Value(ref.stop);
   w.Key("rescues").Value(ref.rescues);
+  w.Key("check_rescues").Value(info.check_rescues);
   w.Key("retries").BeginArray();
   for (const ReferenceAttempt& a : info.retries.attempts) {
     w.BeginObject();
