@@ -13,6 +13,7 @@
 #include <memory>
 #include <mutex>
 #include <sstream>
+#include <stdexcept>
 
 #include "quasiroll/bench/harness/harness.h"
 #include "quasiroll/bench/harness/reference.h"
@@ -33,6 +34,7 @@ struct FailureWindow {
   double x0 = 0, y0 = 0, lo = 0, hi = 0;
   bool fail_a_tight_only = false;  // a fails only at a tolerance < 1e-10
   bool fail_b = false;             // b fails in the window too
+  bool b_throws = false;           // b throws (misuse) in the window
 };
 FailureWindow g_window;
 
@@ -63,6 +65,8 @@ class WindowNlp final : public NlpSolver {
     const bool fails = is_b_ ? g_window.fail_b
                              : !g_window.fail_a_tight_only ||
                                    options.feasibility_tolerance < 1e-10;
+    if (is_b_ && g_window.b_throws && InWindow(problem))
+      throw std::invalid_argument("test-window-b: cannot take this problem");
     if (fails && InWindow(problem)) {
       result->x = x0;
       result->status = NlpStatus::kNumericalFailure;
@@ -240,6 +244,24 @@ TEST_F(ReferenceRetry, RescuedByTheRelaxedTolerance) {
   for (std::size_t k = 0; k < r.samples.size(); ++k)
     EXPECT_LT((r.samples[k].position - plain_.samples[k].position).norm(),
               1e-6);
+}
+
+// A rung whose backend throws inside a solve (misuse of the backend) fails
+// like any other rung (the quasi-static solver reports SOLVER_FAILURE), and
+// the ladder goes on to the next rung.
+TEST_F(ReferenceRetry, AThrowingRungIsAFailedAttempt) {
+  g_window.fail_a_tight_only = true;
+  g_window.b_throws = true;
+  ReferenceRetryLog log;
+  const SimulationResult r =
+      ComputeNumericalReference(PaperScene(), WindowSettings(), nullptr, &log);
+  EXPECT_TRUE(r.success()) << r.stop_reason;
+  ASSERT_EQ(log.attempts.size(), 6u);
+  EXPECT_EQ(log.attempts[3].rung, "nlp");
+  EXPECT_EQ(log.attempts[3].status, "SOLVER_FAILURE");
+  EXPECT_EQ(r.samples.size(), plain_.samples.size());
+  EXPECT_EQ(log.attempts[4].rung, "relaxed");
+  EXPECT_EQ(log.attempts[4].status, "success");
 }
 
 TEST_F(ReferenceRetry, PersistentFailureIsAReferenceFailure) {
