@@ -516,6 +516,22 @@ class SelectionTest(unittest.TestCase):
         # A chart cell: the model's limit ranks above a physical stop.
         physical = dict(model, cause="physical", cause_detail="friction_limit")
         self.assertEqual(sel.stability_cell([physical, model])["cls"], "model")
+        # A run past a reference that failed numerically (reference_stop
+        # reference_failure) is marked: its reach is not verified.
+        past = dict(ok, reference_stop="reference_failure")
+        cell = sel.stability_cell([past])
+        self.assertTrue(cell["ref_failed"])
+        self.assertTrue(cell["label"].endswith(sel.REFERENCE_FAILURE_MARK))
+        plain = sel.stability_cell([dict(ok, reference_stop="physical:lift_off")])
+        self.assertFalse(plain["ref_failed"])
+        self.assertFalse(plain["label"].endswith(sel.REFERENCE_FAILURE_MARK))
+        from quasiroll_report import html_page
+        self.assertIn("<strong>reference failure</strong>",
+                      html_page._reference_stop_cell({"reference_stop": "reference_failure"},
+                                                     {}))
+        self.assertEqual(html_page._reference_stop_cell(
+            {"reference_stop": "end", "rescues": 2}, {}),
+            "<td>end (2 intervals retried)</td>")
 
     def test_paper_run_is_most_accurate_at_mu_half(self):
         run = sel.paper_run(self.runs(), lambda r: True)

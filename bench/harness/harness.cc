@@ -139,6 +139,7 @@ void SetReference(const Reference* ref, const std::string& error,
     b->Set("ref_kind", ref->kind);
     b->Set("ref_status", ref->status);
     b->Set("ref_hash", ref->hash);
+    b->Set("reference_stop", ref->stop);
     if (!std::isnan(ref->mu_min_max)) b->Set("ref_mu_min", ref->mu_min_max);
     if (!std::isnan(ref->err_est)) b->Set("ref_err_est", ref->err_est);
   } else {

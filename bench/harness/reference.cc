@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "quasiroll/bench/harness/metrics.h"
+#include "quasiroll/bench/harness/reference_retry.h"
 #include "quasiroll/bench/io/csv.h"
 #include "quasiroll/bench/io/json_reader.h"
 #include "quasiroll/bench/io/json_writer.h"
@@ -265,11 +266,6 @@ std::string ReferenceKey(const Scene& scene, const TerrainSpec& terrain,
 
 namespace {
 
-bool PhysicalStop(const std::string& status) {
-  return status == "INFEASIBLE_FRICTION" || status == "LIFT_OFF" ||
-         status == "DEGENERATE_CONTACT";
-}
-
 // The numerical reference's options: "rk4" at a fixed step (the primary
 // method), "dp54" at rtol 1e-10 (the fallback after a numerical breakdown).
 SimulationOptions NumericalReferenceOptions(const Scene& scene,
@@ -296,22 +292,27 @@ SimulationOptions NumericalReferenceOptions(const Scene& scene,
 
 SimulationResult ComputeNumericalReference(const Scene& scene,
                                            const ReferenceSettings& settings,
-                                           std::string* method) {
+                                           std::string* method,
+                                           ReferenceRetryLog* log) {
   RegisterBuiltinNlpSolvers();
   RegisterBuiltinIntegrators();
+  ReferenceRetryLog local;
+  if (!log) log = &local;
   SimulationOptions o = NumericalReferenceOptions(scene, settings, "rk4");
-  Simulator sim(scene, o);
-  SimulationResult result = sim.Run();
+  SimulationResult result = RunReferenceWithRetries(scene, o, log);
   if (method) *method = "rk4";
-  if (result.success() || PhysicalStop(result.status)) return result;
-  // A numerical breakdown (solver or integrator failure) of the primary
-  // configuration: try DP5(4) at rtol 1e-10 (other stage points) and keep
+  if (log->stop != "reference_failure") return result;
+  // A numerical breakdown the retry ladder could not pass: rerun the whole
+  // reference with DP5(4) at rtol 1e-10 (other stage points) and keep
   // whichever gets further.
   o = NumericalReferenceOptions(scene, settings, "dp54");
   Simulator alt(scene, o);
   SimulationResult second = alt.Run();
+  log->attempts.push_back({"rerun", DescribeReferenceMethod(o), 0, alt.t_end(),
+                           second.status, second.t_reached});
   if (second.success() || second.t_reached > result.t_reached) {
     if (method) *method = "dp54";
+    log->stop = ReferenceStopOf(second);
     return second;
   }
   return result;
@@ -491,6 +492,8 @@ struct ReferenceRunInfo {
   double check_t_reached = std::numeric_limits<double>::quiet_NaN();
   double check_wall = std::numeric_limits<double>::quiet_NaN();
   double mu_min_wall = std::numeric_limits<double>::quiet_NaN();
+  ReferenceRetryLog retries;  // the ladder's attempts (none if analytic)
+  int check_rescues = 0;      // intervals the check's ladder rescued
 };
 
 // Fills *ref from the cache files if they hold this key; true on a complete
@@ -518,12 +521,16 @@ bool LoadCachedReference(const std::string& csv_path,
     ref->stop_reason = StringMember(json, "stop_reason");
     ref->method = StringMember(json, "method");
     ref->check_method = StringMember(json, "check_method");
-    bool has_mu = false, has_err = false;
+    ref->stop = StringMember(json, "reference_stop");
+    bool has_mu = false, has_err = false, has_rescues = false;
     ref->mu_min_max = NumberMember(json, "ref_mu_min", &has_mu);
     ref->err_est = NumberMember(json, "ref_err_est", &has_err);
+    ref->rescues =
+        static_cast<int>(NumberMember(json, "rescues", &has_rescues));
     if (ac != AnalyticCase::kNone) ref->analytic.emplace(scene, terrain, ac);
-    // A cache written before these fields existed is recomputed.
-    if (has_mu && has_err) return true;
+    // A cache written before these fields existed (or before the retry
+    // ladder) is recomputed.
+    if (has_mu && has_err && has_rescues && !ref->stop.empty()) return true;
     ref->samples.clear();
   } catch (const std::runtime_error&) {
     ref->samples.clear();  // corrupt cache: recompute
@@ -576,7 +583,12 @@ void RunCheckReference(const Scene& scene, const ReferenceSettings& settings,
   const SimulationOptions co = CheckReferenceOptions(scene, settings, method);
   ref->check_method = DescribeReferenceMethod(co);
   try {
-    const SimulationResult check = Simulator(scene, co).Run();
+    // The check runs the same retry ladder, so that a rescued stretch of the
+    // reference is checked too.
+    ReferenceRetryLog check_log;
+    const SimulationResult check =
+        RunReferenceWithRetries(scene, co, &check_log);
+    info->check_rescues = check_log.rescues;
     info->check_status = check.status;
     info->check_t_reached = check.t_reached;
     info->check_wall = check.wall_seconds;
@@ -592,7 +604,8 @@ SimulationResult ComputeCheckedNumericalReference(
     const Scene& scene, const ReferenceSettings& settings, Reference* ref,
     ReferenceRunInfo* info) {
   std::string method;
-  SimulationResult result = ComputeNumericalReference(scene, settings, &method);
+  SimulationResult result =
+      ComputeNumericalReference(scene, settings, &method, &info->retries);
   ref->kind = method == "rk4" ? "numerical" : "numerical:" + method;
   ref->method = DescribeReferenceMethod(
       NumericalReferenceOptions(scene, settings, method));
@@ -629,6 +642,21 @@ void WriteReferenceCache(const std::string& csv_path,
   w.Key("check_status").Value(info.check_status);
   w.Key("check_t_reached").Value(info.check_t_reached);
   w.Key("check_wall_s").Value(info.check_wall);
+  w.Key("reference_stop").Value(ref.stop);
+  w.Key("rescues").Value(ref.rescues);
+  w.Key("check_rescues").Value(info.check_rescues);
+  w.Key("retries").BeginArray();
+  for (const ReferenceAttempt& a : info.retries.attempts) {
+    w.BeginObject();
+    w.Key("rung").Value(a.rung);
+    w.Key("detail").Value(a.detail);
+    w.Key("t_start").Value(a.t_start);
+    w.Key("t_end").Value(a.t_end);
+    w.Key("status").Value(a.status);
+    w.Key("t_reached").Value(a.t_reached);
+    w.EndObject();
+  }
+  w.EndArray();
   w.Key("key").Value(ref.key);
   w.EndObject();
   AtomicWriteFile(csv_path, csv);
@@ -663,6 +691,8 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
           : ComputeCheckedNumericalReference(scene, settings, &ref, &info);
   ref.status = result.status;
   ref.stop_reason = result.stop_reason;
+  ref.stop = ReferenceStopOf(result);
+  ref.rescues = info.retries.rescues;
   const std::string csv = TrajectoryCsv(result);
   // Always use the samples as stored (exact round trip), so that a cached
   // and a fresh reference give bit-identical metrics.

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "quasiroll/bench/harness/reference_retry.h"
 #include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/simulator.h"
@@ -79,6 +80,11 @@ struct Reference {
   std::string kind;    // "analytic:flat" ..., "numerical", "numerical:dp54"
   std::string status;  // "success" or the numerical run's status
   std::string stop_reason;
+  // Why the reference ended (runs.csv reference_stop, reference_retry.h):
+  // "end", "physical:<limit>" or "reference_failure".
+  std::string stop;
+  // Failing intervals the retry ladder passed (0 for an analytic reference).
+  int rescues = 0;
   std::string scene;  // suite scene name (informational)
   // Max over the reference samples of the quasi-static solver's mu_min
   // (runs.csv ref_mu_min); NaN when not computed (analytic references).
@@ -104,14 +110,16 @@ std::string ReferenceKey(const Scene& scene, const TerrainSpec& terrain,
 
 // Numerical reference: coupled mode, rk-projection with RK4 at step
 // scene.dt / (dt_divisor * substeps), output every scene.dt / dt_divisor,
-// settings.nlp at settings.residual_tolerance. If that run breaks down
-// numerically (a status other than success, INFEASIBLE_FRICTION, LIFT_OFF,
-// DEGENERATE_CONTACT), it is repeated with DP5(4) at rtol 1e-10, atol 1e-12
+// settings.nlp at settings.residual_tolerance, run with the retry ladder
+// (reference_retry.h). If it still ends in a reference failure (a status
+// other than success, INFEASIBLE_FRICTION, LIFT_OFF, DEGENERATE_CONTACT), it
+// is repeated whole with DP5(4) at rtol 1e-10, atol 1e-12 (attempt "rerun")
 // and the run that gets further is returned; *method (optional) receives
-// "rk4" or "dp54".
+// "rk4" or "dp54", *log (optional) the attempts and the returned run's stop.
 SimulationResult ComputeNumericalReference(const Scene& scene,
                                            const ReferenceSettings& settings,
-                                           std::string* method = nullptr);
+                                           std::string* method = nullptr,
+                                           ReferenceRetryLog* log = nullptr);
 
 // The check reference of a numerical reference computed with
 // `primary_method` ("rk4" or "dp54"): coupled, on the same output grid,

@@ -479,6 +479,12 @@ def _stability_figure(ctx, chart):
         + (f" Dotted line: the friction the scene needs, {mu_text} (the solver's "
            "μ_min maximised over the reference trajectory)." if mu_text else "")
         + _axis_caption(chart)
+        + (f" {sel.REFERENCE_FAILURE_MARK} = the reference of that cell failed "
+           "numerically before t_end although its retry ladder ran "
+           "(reference_stop = reference_failure, docs/harness.md): the reach "
+           "past the reference's stop is not verified, so the cell's fraction "
+           "is no evidence of more reach than the truth."
+           if any(c.get("ref_failed") for c in cells) else "")
         + (" Unclassified failures (old results without the `cause` column) "
            "show the status the run reported; a numerical blow-up can report a "
            "quasi-static status such as INFEASIBLE_FRICTION, so do not read "

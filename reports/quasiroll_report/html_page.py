@@ -183,6 +183,22 @@ def _reference_method(spec):
     return "; ".join(parts)
 
 
+def _reference_stop_cell(spec, run):
+    """Why the reference ended (reference_stop: end, physical:<limit>,
+    reference_failure), a reference failure in bold: no run is credited
+    with reach past it (docs/harness.md, Reference retries)."""
+    stop = spec.get("reference_stop") or run.get("reference_stop", "")
+    if not isinstance(stop, str) or not stop:
+        return "<td>n/a</td>"
+    rescues = spec.get("rescues")
+    note = (f" ({int(rescues)} interval{'s' if rescues != 1 else ''} retried)"
+            if isinstance(rescues, (int, float)) and not isinstance(rescues, bool)
+            and rescues > 0 else "")
+    if stop == "reference_failure":
+        return f"<td><strong>reference failure</strong>{escape(note)}</td>"
+    return f"<td>{escape(stop)}{escape(note)}</td>"
+
+
 def references_table(ctx):
     used = {}
     for run in ctx.runs:
@@ -197,7 +213,7 @@ def references_table(ctx):
         out.append('<p class="note">No <code>ref_err_est</code> column: the references\' '
                    "own errors were not estimated by this harness version.</p>")
     out += ["<table>", "<tr><th>problem</th><th>reference (ref_hash)</th><th>kind</th>"
-            "<th>method</th><th>status</th><th>t_reached [s]</th>"
+            "<th>method</th><th>status</th><th>stop</th><th>t_reached [s]</th>"
             "<th>estimated error [m]</th><th>μ_min along it</th><th>runs</th></tr>"]
     for ref_hash, run in sorted(used.items(), key=lambda kv: problem_sort_key(kv[1])):
         spec = ctx.references.get(ref_hash, {})
@@ -212,6 +228,7 @@ def references_table(ctx):
             f"<td>{escape(spec.get('kind', run.get('ref_kind', '')) or 'unknown')}</td>"
             f"<td>{escape(_reference_method(spec) if spec else 'references/' + ref_hash + '.json missing')}</td>"
             f"<td>{escape(str(spec.get('status', run.get('ref_status', ''))))}</td>"
+            + _reference_stop_cell(spec, run)
             + _num(float(spec["t_reached"]) if isinstance(spec.get("t_reached"), (int, float))
                    and not isinstance(spec.get("t_reached"), bool)
                    else math.nan) + _num(est) + _num(mu_min)
@@ -389,7 +406,12 @@ def render_page(ctx, summary, bands, figures, warnings, findings=(), replay=""):
               "<p>Every run is compared with the reference of its problem "
               "(docs/harness.md, References); its estimated error is the largest "
               "position difference to a second reference of a different method "
-              "family, the floor below which no run's error is meaningful.</p>",
+              "family, the floor below which no run's error is meaningful. "
+              "<em>stop</em> says why it ended: <code>end</code>, a physical "
+              "limit (<code>physical:&lt;limit&gt;</code>), or a <strong>reference "
+              "failure</strong> (its own numerical failure, left after the retry "
+              "ladder of docs/harness.md): no run is credited with reach past "
+              "a failed reference.</p>",
               references_table(ctx),
               '<h2 id="validity">Quasi-static validity</h2>', qs_table(ctx),
               "<h2>Figures</h2>",

@@ -527,9 +527,25 @@ def stability_cell(rows):
         label = "?"
     if 0 < failed < len(rows):
         label += f" ({failed}/{len(rows)})"
+    # The reference itself failed numerically (runs.csv reference_stop): what
+    # the runs reach past its stop is not checked against the truth.
+    ref_failed = any(is_reference_failure(r) for r in rows)
+    if ref_failed:
+        label += REFERENCE_FAILURE_MARK
     return {"cls": cls, "detail": detail, "frac": frac, "label": label,
             "n": len(rows), "failed": failed, "status": worst["status"],
-            "run_id": worst["run_id"]}
+            "run_id": worst["run_id"], "ref_failed": ref_failed}
+
+
+# Appended to a stability cell's label whose reference failed numerically.
+REFERENCE_FAILURE_MARK = "†"
+
+
+def is_reference_failure(run):
+    """True when the run's reference stopped on its own numerical failure
+    after the retry ladder (runs.csv reference_stop = reference_failure;
+    docs/harness.md, Reference retries)."""
+    return run.get("reference_stop", "") == "reference_failure"
 
 
 def substeps_of(run):

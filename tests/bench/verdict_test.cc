@@ -180,10 +180,17 @@ TEST(FailureCauses, PassingThePhysicalStopIsAMissedEvent) {
            {"DEGENERATE_CONTACT", 3.45, "DEGENERATE_CONTACT", "physical",
             "degenerate_contact"},
            // Stopping before it is not a missed event; nor is passing a
-           // reference that stopped for a numerical reason.
+           // reference that stopped for a numerical reason (reference_stop
+           // reference_failure: SOLVER_FAILURE, SINGULAR or an integrator
+           // status left after the retry ladder, bench/harness/
+           // reference_retry.h).
            {"DEGENERATE_CONTACT", 2.0, "DEGENERATE_CONTACT", "numerical",
             "step_too_large"},
-           {"success", 4.0, "SOLVER_FAILURE", "", ""}}) {
+           {"success", 4.0, "SOLVER_FAILURE", "", ""},
+           {"success", 4.0, "SINGULAR", "", ""},
+           {"success", 4.0, "rhs_failure", "", ""},
+           {"LIFT_OFF", 3.9, "step_size_too_small", "numerical",
+            "step_too_large"}}) {
     const FailureCause c =
         ClassifyFailure(Evidence(k.status, k.t_reached, k.ref_status, 3.3906));
     EXPECT_EQ(c.cause, k.cause) << k.status << " at " << k.t_reached;
