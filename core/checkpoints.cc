@@ -99,6 +99,14 @@ void CheckpointRecorder::Begin(const std::vector<double>* times,
   if (solver_) solver_->Reset();
 }
 
+void CheckpointRecorder::Rewind(double t0, std::vector<TrajectorySample>* out) {
+  if (!times_) return;
+  while (!out->empty() && out->back().t > t0 + kTimeTol) out->pop_back();
+  next_ = static_cast<std::size_t>(
+      std::upper_bound(times_->begin(), times_->end(), t0 + kTimeTol) -
+      times_->begin());
+}
+
 void CheckpointRecorder::AtSample(const TrajectorySample& sample,
                                   std::vector<TrajectorySample>* out) {
   if (!times_) return;

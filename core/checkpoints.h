@@ -98,6 +98,10 @@ class CheckpointRecorder {
   // at its time take it.
   void AtSample(const TrajectorySample& sample,
                 std::vector<TrajectorySample>* out);
+  // The interval after t0 is integrated again (a switch restart, core/
+  // switch_events.h): the checkpoints recorded after t0 are dropped and
+  // InInterval records them anew.
+  void Rewind(double t0, std::vector<TrajectorySample>* out);
   // The interval [t0, t1] was integrated from theta0 (sample solve sol0,
   // joint rates w0 applied at t0) to theta1; checkpoints in (t0, t_limit)
   // (t_limit <= t1: a located stop) are recorded from the dense output.

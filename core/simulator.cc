@@ -45,6 +45,9 @@ bool SimulationOptions::IsValid(std::string* why) const {
     if (!std::isfinite(checkpoints[i]) || checkpoints[i] < 0 ||
         (i > 0 && checkpoints[i] < checkpoints[i - 1]))
       return fail("checkpoints: must be finite, >= 0 and ascending");
+  if (!(switch_step_tolerance > 0))
+    return fail("switch_step_tolerance: must be > 0, got " +
+                std::to_string(switch_step_tolerance));
   std::string inner;
   if (!integrator.IsValid(&inner)) return fail("integrator." + inner);
   if (!quasi_static.IsValid(&inner)) return fail("quasi_static." + inner);
@@ -331,6 +334,11 @@ struct Simulator::Session {
   CheckpointRecorder checkpoints;
   std::unique_ptr<QuasiStaticSolver> checkpoint_solver;
   double checkpoint_seconds_seen = 0;
+  // Switches: a second solver for the probes of the location (created on
+  // the first switch), so that locating leaves the run's warm starts alone.
+  std::unique_ptr<QuasiStaticSolver> probe_solver;
+  // Intervals starting before this time are integrated resolved.
+  double resolve_until = -std::numeric_limits<double>::infinity();
 };
 
 // A bisection bracket: the limit is not met at a, met at b (or the state at
@@ -380,6 +388,7 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   s.curvature_now.fill(kNaN);
   s.curvature_before.fill(kNaN);
   s.done_located = false;
+  s.resolve_until = -std::numeric_limits<double>::infinity();
   s.done = false;
   s.checkpoint_seconds_seen = 0;
   *result = SimulationResult{};
@@ -437,6 +446,9 @@ bool Simulator::Interval(SimulationResult* result) {
   result->nlp_solves += sol.nlp_solves;
   result->nlp_iterations += sol.nlp_iterations;
   result->nlp_iterations_native += sol.nlp_iterations_native;
+  if (options_.locate_switches && !pending && s.have_prev &&
+      sol.status == QuasiStaticStatus::kOk)
+    RestartAtSwitches(t, result);
   const bool check_contact =
       options_.second_contact_check_every > 0 &&
       (k % options_.second_contact_check_every == 0 || pending);
@@ -486,9 +498,7 @@ bool Simulator::Interval(SimulationResult* result) {
   }
   s.w_held = s.solver.problem().JointSpaceVelocity(sol.z);
   s.ode.Hold(s.w_held);
-  s.y = s.theta;
-  const IntegratorStatus st =
-      s.integrator->Integrate(s.ode, t, t_next, s.y, s.iopts, &s.ires);
+  const IntegratorStatus st = IntegrateInterval(t, t_next);
   if (st != IntegratorStatus::kSuccess) {
     result->t_reached = s.ires.t_reached;
     if (s.ode.nlp_failed()) {
@@ -809,6 +819,119 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
                         " inside the integrator (located): " + sol.message;
   SetStopEvent(br.a, result);
   return true;
+}
+
+// The solve s.sol at the sample time t follows the interval [s.t_prev, t]
+// (start s.theta_prev, held twist s.w_held). A wheel whose class
+// (core/switch_events.h) differs from the last recorded sample's is
+// located on the interval's cubic Hermite dense output (F at both ends from
+// the twists solved there; zoh: the held twist), solving the quasi-static
+// problem at each probe state with a separate solver. Coupled mode then
+// integrates the interval again from s.theta_prev with a restart at every
+// located switch and re-solves at t; zoh keeps its trajectory.
+void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
+  Session& s = *session_;
+  if (result->samples.empty() || !(t > s.t_prev)) return;
+  std::array<double, 3> slip0, slip1;
+  bool change = false;
+  for (int i = 0; i < 3; ++i) {
+    slip0[i] = result->samples.back().contacts[i].slip;
+    slip1[i] = s.sol.contacts[i].slip.norm();
+    const double g0 = SwitchIndicator(slip0[i], scene_.epsilon);
+    const double g1 = SwitchIndicator(slip1[i], scene_.epsilon);
+    change = change || (g0 >= 0) != (g1 >= 0);  // false for a NaN
+  }
+  if (!change) return;
+  const bool coupled = options_.coupling == Coupling::kCoupled;
+  const Configuration th0 = s.theta_prev, th1 = s.theta;
+  const double h = t - s.t_prev;
+  const Vec12 w1 =
+      coupled ? s.solver.problem().JointSpaceVelocity(s.sol.z) : s.w_held;
+  Configuration f0, f1;
+  const bool dense =
+      model_->Rhs(th0, s.w_held, &f0) && model_->Rhs(th1, w1, &f1);
+  if (!s.probe_solver) {
+    OptionValues unused;
+    s.probe_solver = std::make_unique<QuasiStaticSolver>(
+        *model_, QuasiStaticParameters::FromScene(scene_),
+        CreateNlp(options_, &unused), options_.quasi_static);
+  }
+  QuasiStaticSolution& probe = s.sol_event;
+  auto evaluate = [&](double tm, std::array<double, 3>* slip) {
+    const double frac = (tm - s.t_prev) / h;
+    const Configuration q = dense
+                                ? HermiteState(th0, f0, th1, f1, h, frac)
+                                : Configuration((1 - frac) * th0 + frac * th1);
+    s.probe_solver->Solve(q, &probe);
+    result->nlp_solves += probe.nlp_solves;
+    result->nlp_iterations += probe.nlp_iterations;
+    result->nlp_iterations_native += probe.nlp_iterations_native;
+    if (probe.status != QuasiStaticStatus::kOk) return false;
+    for (int i = 0; i < 3; ++i) (*slip)[i] = probe.contacts[i].slip.norm();
+    return true;
+  };
+  const std::size_t first = result->switches.size();
+  LocateSwitches(s.t_prev, t, slip0, slip1, scene_.epsilon,
+                 options_.event_tolerance, evaluate, &result->switches);
+  if (!coupled) return;
+  const double tolerance = SwitchStepTolerance();
+  Eigen::VectorXd& y = s.y_event;
+  y = th0;
+  double ta = s.t_prev;
+  for (std::size_t j = first; j <= result->switches.size(); ++j) {
+    const bool end = j == result->switches.size();
+    const double tb = end ? t : result->switches[j].t;
+    if (!end && (!result->switches[j].located ||
+                 !(tb > ta + options_.event_tolerance) || !(tb < t)))
+      continue;
+    if (!end && std::isfinite(tolerance))
+      s.resolve_until = std::max(s.resolve_until, tb + kSwitchResolveWindow);
+    // A failure keeps the interval as first integrated.
+    if (!IntegrateResolved(ta, tb, tolerance, kSwitchMinStep, Advance(), &y))
+      return;
+    ta = tb;
+  }
+  s.theta = y;
+  // The checkpoints of the interval came from the first integration.
+  s.checkpoints.Rewind(s.t_prev, &result->checkpoints);
+  s.checkpoints.InInterval(s.t_prev, th0, s.sol, s.w_held, t, s.theta, t,
+                           &result->checkpoints);
+  s.solver.Solve(s.theta, &s.sol);
+  result->nlp_solves += s.sol.nlp_solves;
+  result->nlp_iterations += s.sol.nlp_iterations;
+  result->nlp_iterations_native += s.sol.nlp_iterations_native;
+}
+
+// Step doubling for fixed-step integrators (core/switch_events.h,
+// "Resolution"); +inf (no refinement) for adaptive ones.
+double Simulator::SwitchStepTolerance() const {
+  return IntegratorRegistry::Info(options_.dae)
+                 .IsAdaptive(session_->dae_options)
+             ? std::numeric_limits<double>::infinity()
+             : options_.switch_step_tolerance;
+}
+
+SegmentAdvance Simulator::Advance() {
+  Session* s = session_.get();
+  return [s](double a, double b, Eigen::VectorXd* y) {
+    return s->integrator->Integrate(s->ode, a, b, *y, s->iopts, &s->ires) ==
+           IntegratorStatus::kSuccess;
+  };
+}
+
+// Integrates s.theta over [t, t_next] into s.y: resolved (step doubling)
+// within kSwitchResolveWindow after a located switch in coupled mode,
+// falling back to one call of the integrator if that fails.
+IntegratorStatus Simulator::IntegrateInterval(double t, double t_next) {
+  Session& s = *session_;
+  s.y = s.theta;
+  if (t < s.resolve_until) {
+    if (IntegrateResolved(t, t_next, SwitchStepTolerance(), kSwitchMinStep,
+                          Advance(), &s.y))
+      return IntegratorStatus::kSuccess;
+    s.y = s.theta;
+  }
+  return s.integrator->Integrate(s.ode, t, t_next, s.y, s.iopts, &s.ires);
 }
 
 namespace {

@@ -20,6 +20,7 @@
 #include "quasiroll/core/limit_events.h"
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/scene.h"
+#include "quasiroll/core/switch_events.h"
 
 namespace quasiroll {
 
@@ -61,6 +62,22 @@ struct SimulationOptions {
   // from each interval's dense output (the stepping is unchanged). Empty:
   // none.
   std::vector<double> checkpoints;
+  // Switches (model.md §8.6, core/switch_events.h): when a wheel's
+  // stick/slide class differs at two consecutive samples, the change is
+  // located by bisection (to event_tolerance) on quasi-static solves at
+  // states of the interval's cubic Hermite dense output and recorded in
+  // SimulationResult::switches; in coupled mode the interval is then
+  // integrated again as [t_k, t_s1], [t_s1, t_s2], ..., [t_sn, t_k+1]. zoh
+  // records only (its held-twist right-hand side has no kink inside an
+  // interval). Off: nothing is located or recorded and no interval is
+  // restarted. Runs without a switch are the same either way.
+  bool locate_switches = true;
+  // Coupled mode, fixed-step integrators: those segments, and every
+  // interval starting within kSwitchResolveWindow after a located switch,
+  // are integrated with step doubling until one step and two half steps
+  // agree to this (infinity norm of Theta), down to pieces of
+  // kSwitchMinStep (core/switch_events.h, "Resolution").
+  double switch_step_tolerance = 1e-13;
   bool IsValid(std::string* why) const;
 };
 
@@ -136,6 +153,8 @@ struct SimulationResult {
   long long checkpoint_iterations = 0;
   // The located physical stop (limit "" if none).
   StopEvent event;
+  // The located stick/slide switches, in time order (locate_switches).
+  std::vector<SwitchEvent> switches;
   // Cost counters.
   int nlp_solves = 0;
   long long nlp_iterations = 0;         // comparable count (core/nlp.h)
@@ -207,6 +226,12 @@ class Simulator {
   bool LocateSampleStop(double* t, SimulationResult* result);
   bool LocateIntegratorStop(double t0, double t1, SimulationResult* result);
   void SetStopEvent(double t, SimulationResult* result) const;
+  // Switches (core/switch_events.h): locates class changes between the last
+  // sample and s.sol at t; in coupled mode restarts the interval there.
+  void RestartAtSwitches(double t, SimulationResult* result);
+  double SwitchStepTolerance() const;
+  SegmentAdvance Advance();
+  IntegratorStatus IntegrateInterval(double t, double t_next);
   void Record(double t, const Configuration& theta,
               const QuasiStaticSolution& sol, SimulationResult* result,
               int index) const;

@@ -332,6 +332,24 @@ void WriteStopEvent(const StopEvent& e, JsonWriter* json) {
   j.EndObject();
 }
 
+// The located stick/slide switches (core/switch_events.h, docs/formats.md).
+void WriteSwitches(const std::vector<SwitchEvent>& switches, JsonWriter* json) {
+  JsonWriter& j = *json;
+  j.BeginArray();
+  for (const SwitchEvent& e : switches) {
+    j.BeginObject();
+    j.Key("time").Value(e.t);
+    j.Key("wheel").Value(e.wheel);
+    j.Key("from").Value(RegimeName(e.from_sliding));
+    j.Key("to").Value(RegimeName(e.to_sliding));
+    j.Key("located").Value(e.located);
+    j.Key("t_lower").Value(e.t_lower);
+    j.Key("t_upper").Value(e.t_upper);
+    j.EndObject();
+  }
+  j.EndArray();
+}
+
 std::string RunJson(const Scene& scene, const SimulationOptions& options,
                     double dt, double t_end, const SimulationResult& r) {
   JsonWriter j;
@@ -361,6 +379,8 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.Key("creep_distance").Value(slip.creep);
   j.Key("event");  // the physical limit the run stopped on (model.md §8.6)
   WriteStopEvent(r.event, &j);
+  j.Key("switches");  // stick/slide switches (model.md §8.6)
+  WriteSwitches(r.switches, &j);
   j.Key("scene").BeginObject();
   j.Key("name").Value(scene.name);
   j.Key("file").Value(scene.source_path);
@@ -407,6 +427,9 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
                                               : "samples_only");
   j.Key("points").Value(options.event_points);
   j.Key("tolerance").Value(options.event_tolerance);
+  // Switches (model.md §8.6): located and recorded in both couplings; the
+  // interval restarted at them in coupled mode.
+  j.Key("switches").Value(options.locate_switches);
   j.EndObject();
   // Backend options: as given, and as used (every option of the table).
   auto write_options = [&j](const char* key, const GivenOptions& given,

@@ -1,0 +1,118 @@
+#include "quasiroll/core/switch_events.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "quasiroll/core/slip_regimes.h"
+
+namespace quasiroll {
+
+static_assert(kSwitchSlipOverEpsilon == kSlidingSlipOverEpsilon,
+              "switches and the sliding/creep split classify alike");
+
+double SwitchIndicator(double slip_speed, double epsilon) {
+  if (std::isnan(slip_speed)) return SwitchEvent::kNaN;
+  const double scale = kSwitchSlipOverEpsilon * epsilon;
+  return (slip_speed - scale) / (slip_speed + scale);
+}
+
+int LocateSwitches(double t0, double t1, const std::array<double, 3>& slip0,
+                   const std::array<double, 3>& slip1, double epsilon,
+                   double tolerance, const SlipEvaluator& evaluate,
+                   std::vector<SwitchEvent>* out) {
+  if (!(t1 > t0))
+    throw std::invalid_argument("LocateSwitches: t1 must be > t0");
+  if (!(tolerance > 0))
+    throw std::invalid_argument("LocateSwitches: tolerance must be > 0");
+  if (!(epsilon > 0))
+    throw std::invalid_argument("LocateSwitches: epsilon must be > 0");
+  const std::size_t first = out->size();
+  std::array<double, 3> slip;
+  for (int i = 0; i < 3; ++i) {
+    const double g0 = SwitchIndicator(slip0[i], epsilon);
+    const double g1 = SwitchIndicator(slip1[i], epsilon);
+    if (std::isnan(g0) || std::isnan(g1) || (g0 >= 0) == (g1 >= 0)) continue;
+    SwitchEvent e;
+    e.wheel = i + 1;
+    e.from_sliding = g0 >= 0;
+    e.to_sliding = g1 >= 0;
+    double a = t0, b = t1;
+    bool ok = true;
+    while (b - a > tolerance) {
+      const double m = 0.5 * (a + b);
+      if (!(m > a && m < b)) break;  // round-off
+      if (!evaluate(m, &slip)) {
+        ok = false;
+        break;
+      }
+      const double g = SwitchIndicator(slip[i], epsilon);
+      if (std::isnan(g)) {
+        ok = false;
+        break;
+      }
+      ((g >= 0) == e.from_sliding ? a : b) = m;
+    }
+    e.t_lower = a;
+    e.t_upper = b;
+    e.t = b;
+    e.located = ok;
+    out->push_back(e);
+  }
+  std::sort(out->begin() + static_cast<std::ptrdiff_t>(first), out->end(),
+            [](const SwitchEvent& x, const SwitchEvent& y) {
+              return x.t < y.t || (x.t == y.t && x.wheel < y.wheel);
+            });
+  return static_cast<int>(out->size() - first);
+}
+
+bool IntegrateResolved(double a, double b, double tolerance, double min_step,
+                       const SegmentAdvance& advance, Eigen::VectorXd* y) {
+  if (!(b > a)) throw std::invalid_argument("IntegrateResolved: b must be > a");
+  if (!(min_step > 0))
+    throw std::invalid_argument("IntegrateResolved: min_step must be > 0");
+  if (!(tolerance < std::numeric_limits<double>::infinity()))
+    return advance(a, b, y);
+  // March forward (warm starts of the solves along the way stay near the
+  // state): try h as two half steps, then as one; accept the two halves
+  // when they agree with the one step, then try 2h; else halve h. A state
+  // from which no step of min_step succeeds (a quasi-static solve that
+  // cannot meet its tolerance there, seen at the centre of a transition) is
+  // left by redoing the step that reached it at 0.6, 0.36, ... of its size
+  // (up to kMaxBackups times), so that the march lands elsewhere.
+  constexpr int kMaxBackups = 8;
+  double t = a, h = b - a;
+  double t_back = a, h_back = 0;
+  Eigen::VectorXd one, two, y_back = *y;
+  int backups = 0;
+  while (t < b) {
+    h = std::min(h, b - t);
+    const double m = t + 0.5 * h, e = h >= b - t ? b : t + h;
+    if (!(m > t && m < e)) return e > t ? advance(t, e, y) : true;  // ulps
+    two = *y;
+    const bool ok_two = advance(t, m, &two) && advance(m, e, &two);
+    one = *y;
+    const bool ok_one = ok_two && advance(t, e, &one);
+    const bool last = h <= min_step;
+    if (ok_two && (last || (ok_one && (one - two).lpNorm<Eigen::Infinity>() <=
+                                          tolerance))) {
+      if (t > t_back || backups == 0) backups = 0;
+      t_back = t;
+      h_back = e - t;
+      y_back = *y;
+      *y = two;
+      t = e;
+      h *= 2.0;
+    } else if (last) {
+      if (!(h_back > 0) || ++backups > kMaxBackups) return false;
+      t = t_back;
+      *y = y_back;
+      h = std::pow(0.6, backups) * h_back;
+    } else {
+      h *= 0.5;
+    }
+  }
+  return true;
+}
+
+}  // namespace quasiroll

@@ -1,0 +1,123 @@
+// Switches of the quasi-static solution's structure (docs/model.md §8.6,
+// "Switches"): per wheel, stick or slide, located between output samples
+// so that an integrator can be restarted there instead of stepping across
+// the kink of the right-hand side.
+//
+// Classification (the same as core/slip_regimes.h, so that a recorded
+// switch and the sliding/creep split agree): with the regularised Coulomb
+// law C, sigma_i f_ti + mu f_ni s_i = 0, sigma_i = sqrt(|s_i|^2 + eps^2),
+// a wheel's friction use is u_i = |f_ti|/(mu f_ni) = |s_i|/sigma_i and
+//   wheel i slides  <=>  |s_i| >= kappa eps  <=>  u_i >= u* = kappa /
+//   sqrt(1 + kappa^2),                          kappa = 100 (u* = 0.99995),
+// and sticks (creeps at a speed proportional to eps) otherwise. The two
+// forms are the same test: u = |s|/sqrt(|s|^2 + eps^2) is increasing in
+// |s|. In terms of the friction-cone margin m_i = (mu f_ni - |f_ti|) /
+// (mu f_ni) = 1 - u_i a wheel sticks while m_i > 1 - u* = 5.0e-5.
+//
+// Indicator: the continuous, bounded function of the slip speed
+//   g_i = (|s_i| - kappa eps) / (|s_i| + kappa eps)   in [-1, 1),
+// g_i >= 0 <=> sliding. It is continuous wherever the quasi-static solution
+// is (|s_i| is a continuous function of the solution, and the solution is a
+// smooth function of Theta where the equality Jacobian is regular), so a
+// class that differs at two times brackets a crossing of g_i = 0 that
+// bisection can locate. g_i is the slip speed relative to the
+// regularisation scale (>= 0: sliding) and, written with the cone margin,
+// g_i < 0 <=> m_i > 1 - u* (the sticking wheel's distance from its cone).
+//
+// Location: LocateSwitches bisects each wheel whose class differs at the two
+// ends of [t0, t1] on a caller-supplied evaluation of the slips at interior
+// times (the simulator: the quasi-static solve at states of the interval's
+// cubic Hermite dense output, core/limit_events.h), keeping the invariant
+// "class at t_lower = class at t0, class at t_upper = class at t1" until
+// t_upper - t_lower <= tolerance. The switch time is t_upper (the first
+// state found in the new class). A wheel that changes class twice within
+// [t0, t1] has the same class at both ends and is not seen (the samples
+// bound the resolution, as for any sampled detection).
+//
+// Resolution (coupled mode, fixed-step methods): with eps > 0 a switch is
+// not a kink but a steep, smooth transition whose width scales with eps
+// (on the paper scene the slip of one wheel rises from 1e-6 to 2.6e-5 m/s
+// and two others fall within ~1 ms while the located class change lies a
+// few ms before or after it). A restart at one point cannot keep a step of
+// Delta t >> 1 ms from crossing it, and such a step errs by about
+// |Delta V| x width (3e-8 m there) whatever Delta t is. So the segments of
+// an interval with a switch are integrated by IntegrateResolved: step
+// doubling on the run's own integrator, [a, b] accepted when one step and
+// two half steps agree,
+//   || y_(a->b) - y_(a->m->b) ||_inf <= tolerance,   m = (a + b)/2,
+// keeping the two-half-step result (its local error is that difference
+// / (2^p - 1) for a method of order p), and otherwise bisected, down to
+// min_step. Adaptive methods resolve the transition with their own error
+// control and are given each segment whole.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <functional>
+#include <limits>
+#include <vector>
+
+namespace quasiroll {
+
+// |s| / eps at the stick/slide boundary (= kSlidingSlipOverEpsilon of
+// core/slip_regimes.h).
+inline constexpr double kSwitchSlipOverEpsilon = 100.0;
+
+// g = (|s| - kappa eps)/(|s| + kappa eps); NaN for a NaN slip.
+double SwitchIndicator(double slip_speed, double epsilon);
+
+// "slide" or "stick".
+inline const char* RegimeName(bool sliding) {
+  return sliding ? "slide" : "stick";
+}
+
+// One located change of a wheel's class.
+struct SwitchEvent {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  double t = kNaN;  // = t_upper when located, else the sample time t1
+  double t_lower = kNaN, t_upper = kNaN;
+  int wheel = -1;  // 1-based
+  bool from_sliding = false, to_sliding = false;
+  // Located: bracket width <= tolerance. Not located (an evaluation failed
+  // inside the bracket): the bracket is the part of [t0, t1] narrowed so
+  // far and t = t_upper.
+  bool located = false;
+};
+
+// Slip speeds |s_i| [m/s] of the three wheels at time t; false if they
+// cannot be evaluated there (e.g. a failed quasi-static solve).
+using SlipEvaluator = std::function<bool(double t, std::array<double, 3>*)>;
+
+// Appends to *out one event per wheel whose class (slip0 at t0, slip1 at t1)
+// differs, located by bisection of `evaluate` to `tolerance` seconds,
+// sorted by time. Returns the number appended. Throws std::invalid_argument
+// for t1 <= t0, tolerance <= 0 or epsilon <= 0.
+int LocateSwitches(double t0, double t1, const std::array<double, 3>& slip0,
+                   const std::array<double, 3>& slip1, double epsilon,
+                   double tolerance, const SlipEvaluator& evaluate,
+                   std::vector<SwitchEvent>* out);
+
+// The shortest piece IntegrateResolved refines to in the simulator [s].
+inline constexpr double kSwitchMinStep = 1e-7;
+// How long after a located switch the simulator keeps integrating
+// resolved [s]: the located class change is not the steepest point of the
+// transition. With the cone margin 1 - u falling at a rate r, a wheel
+// heading for its cone creeps at |s| = eps / sqrt(2 (1 - u)), so it passes
+// kappa eps 1 / (2 r kappa^2) before the margin's extrapolated zero, where
+// the slip jumps (paper scene: r = 0.0116/s, 4.3 ms, measured 2.9029 s vs
+// 2.9072 s); 0.05 s covers r >= 0.001/s. A switch out of sliding lies after
+// its transition, inside the interval it is located in.
+inline constexpr double kSwitchResolveWindow = 0.05;
+
+// One call of the run's integrator from a to b on *y (false: it failed).
+using SegmentAdvance =
+    std::function<bool(double a, double b, Eigen::VectorXd* y)>;
+
+// Integrates *y from a to b with `advance`, refined by step doubling as
+// above (tolerance = +inf: one call). False if a call fails on a piece of
+// min_step or shorter (*y then unspecified). Throws std::invalid_argument
+// for b <= a or min_step <= 0.
+bool IntegrateResolved(double a, double b, double tolerance, double min_step,
+                       const SegmentAdvance& advance, Eigen::VectorXd* y);
+
+}  // namespace quasiroll

@@ -1,0 +1,249 @@
+// Switches (model.md §8.6, core/switch_events.h): the stick/slide indicator,
+// switches placed between two samples located to the stated tolerance, the
+// resolved integration across a kink, and the switches of the paper scene.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "quasiroll/core/simulator.h"
+#include "quasiroll/core/slip_regimes.h"
+#include "quasiroll/core/switch_events.h"
+
+namespace quasiroll {
+namespace {
+
+constexpr double kEps = 1e-8;
+
+TEST(SwitchEvents, IndicatorSignIsTheSlidingClassification) {
+  const double at = kSwitchSlipOverEpsilon * kEps;
+  EXPECT_EQ(SwitchIndicator(at, kEps), 0.0);
+  EXPECT_EQ(SwitchIndicator(0.0, kEps), -1.0);
+  EXPECT_TRUE(std::isnan(SwitchIndicator(std::nan(""), kEps)));
+  // (|s| - k eps)/(|s| + k eps) at |s| = 3 k eps: 2/4.
+  EXPECT_DOUBLE_EQ(SwitchIndicator(3 * at, kEps), 0.5);
+  double previous = -2;
+  for (double s = 0; s < 1e-3; s = 2 * s + 1e-10) {
+    const double g = SwitchIndicator(s, kEps);
+    EXPECT_GT(g, previous) << s;  // increasing in |s|
+    EXPECT_EQ(g >= 0, IsSliding(s, kEps)) << s;
+    previous = g;
+  }
+}
+
+// Slips that cross kappa eps at known times between two samples: wheel 2
+// starts sliding at t2, wheel 3 stops at t3, wheel 1 keeps its class.
+TEST(SwitchEvents, SwitchesBetweenSamplesAreLocatedToTheTolerance) {
+  const double t0 = 2.0, t1 = 2.4, t2 = 2.123456789, t3 = 2.0333333333;
+  const double at = kSwitchSlipOverEpsilon * kEps;
+  auto slips = [&](double t) -> std::array<double, 3> {
+    return {0.5 * at, at * std::exp(40.0 * (t - t2)),
+            at * (1.0 - 3.0 * (t - t3))};
+  };
+  int evaluations = 0;
+  SlipEvaluator evaluate = [&](double t, std::array<double, 3>* s) {
+    EXPECT_GT(t, t0);
+    EXPECT_LT(t, t1);
+    ++evaluations;
+    *s = slips(t);
+    return true;
+  };
+  const double tolerance = 1e-9;
+  std::vector<SwitchEvent> out;
+  ASSERT_EQ(LocateSwitches(t0, t1, slips(t0), slips(t1), kEps, tolerance,
+                           evaluate, &out),
+            2);
+  EXPECT_GT(evaluations, 2 * 20);  // 0.4 s / 2^k <= 1e-9 takes 29 halvings
+  const SwitchEvent& a = out[0];   // sorted by time: wheel 3 first
+  EXPECT_EQ(a.wheel, 3);
+  EXPECT_TRUE(a.from_sliding);
+  EXPECT_FALSE(a.to_sliding);
+  const SwitchEvent& b = out[1];
+  EXPECT_EQ(b.wheel, 2);
+  EXPECT_FALSE(b.from_sliding);
+  EXPECT_TRUE(b.to_sliding);
+  for (const SwitchEvent& e : out) {
+    const double exact = e.wheel == 2 ? t2 : t3;
+    EXPECT_TRUE(e.located);
+    EXPECT_LE(e.t_upper - e.t_lower, tolerance);
+    // The bracket contains the crossing (up to round-off in slips(t)).
+    EXPECT_LE(e.t_lower, exact + 1e-15);
+    EXPECT_GE(e.t_upper, exact - 1e-15);
+    EXPECT_EQ(e.t, e.t_upper);
+    EXPECT_NEAR(e.t, exact, tolerance);
+  }
+}
+
+TEST(SwitchEvents, AFailedEvaluationLeavesTheSwitchUnlocated) {
+  const double at = kSwitchSlipOverEpsilon * kEps;
+  SlipEvaluator fails = [](double, std::array<double, 3>*) { return false; };
+  std::vector<SwitchEvent> out;
+  ASSERT_EQ(
+      LocateSwitches(0.0, 1.0, {at, 0, 0}, {0, 0, 0}, kEps, 1e-9, fails, &out),
+      1);
+  EXPECT_FALSE(out[0].located);
+  EXPECT_EQ(out[0].wheel, 1);
+  EXPECT_EQ(out[0].t_lower, 0.0);
+  EXPECT_EQ(out[0].t_upper, 1.0);
+  // No class change, no event, no evaluation.
+  EXPECT_EQ(LocateSwitches(0.0, 1.0, {at, 0, 0}, {2 * at, 0, 0}, kEps, 1e-9,
+                           fails, &out),
+            0);
+  EXPECT_THROW(LocateSwitches(1.0, 1.0, {}, {}, kEps, 1e-9, fails, &out),
+               std::invalid_argument);
+  EXPECT_THROW(LocateSwitches(0.0, 1.0, {}, {}, kEps, 0.0, fails, &out),
+               std::invalid_argument);
+}
+
+// y' = max(0, t - c): y'' jumps at c, so one classical RK4 step across c
+// errs by O(h^3); resolved, the pieces that do not straddle c are exact
+// (y is piecewise quadratic) and the one that does is refined until the
+// step-doubling difference is below the tolerance.
+TEST(SwitchEvents, ResolvedIntegrationAcrossAKinkMeetsTheTolerance) {
+  const double c = 0.1234, a = 0.0, b = 0.4;
+  auto f = [c](double t) { return std::max(0.0, t - c); };
+  int calls = 0;
+  SegmentAdvance rk4 = [&](double t0, double t1, Eigen::VectorXd* y) {
+    ++calls;
+    const double h = t1 - t0;
+    (*y)(0) += h / 6 * (f(t0) + 4 * f(t0 + h / 2) + f(t1));
+    return true;
+  };
+  const double exact = 0.5 * (b - c) * (b - c);
+  Eigen::VectorXd one = Eigen::VectorXd::Zero(1);
+  rk4(a, b, &one);
+  EXPECT_GT(std::abs(one(0) - exact), 1e-4);
+  for (double tolerance : {1e-8, 1e-12}) {
+    Eigen::VectorXd y = Eigen::VectorXd::Zero(1);
+    ASSERT_TRUE(IntegrateResolved(a, b, tolerance, 1e-9, rk4, &y));
+    // Accepted pieces keep the two-half-step value, whose error is at most
+    // the accepted difference (Simpson's error halves by 2^3 per halving
+    // of a straddling piece); a few pieces straddle c over the march.
+    EXPECT_LE(std::abs(y(0) - exact), 4 * tolerance) << tolerance;
+  }
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(1);
+  calls = 0;
+  ASSERT_TRUE(IntegrateResolved(a, b, std::numeric_limits<double>::infinity(),
+                                1e-9, rk4, &y));
+  EXPECT_EQ(calls, 1);  // adaptive methods: one call
+  SegmentAdvance fails = [](double, double, Eigen::VectorXd*) { return false; };
+  EXPECT_FALSE(IntegrateResolved(a, b, 1e-8, 1e-3, fails, &y));
+  EXPECT_THROW(IntegrateResolved(b, a, 1e-8, 1e-3, fails, &y),
+               std::invalid_argument);
+}
+
+SimulationResult RunPaper(double dt, Coupling coupling, bool locate,
+                          double t_end = 3.2) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  const Scene scene =
+      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
+  SimulationOptions o;
+  o.dt = dt;
+  o.t_end = t_end;
+  o.coupling = coupling;
+  o.locate_switches = locate;
+  return Simulator(scene, o).Run();
+}
+
+// The paper scene's first switch: wheel 1 starts sliding at ~2.9029 s
+// (coupled RK4 at dt = 1e-4 s without location: its slip passes 1e-6 m/s
+// between the samples 2.9025 and 2.9030 s), then wheel 3 stops at ~2.919 s.
+TEST(SwitchEvents, PaperSceneFirstSwitchIsLocatedInsideTheInterval) {
+  for (Coupling coupling : {Coupling::kCoupled, Coupling::kZoh}) {
+    const SimulationResult r = RunPaper(0.4, coupling, true);
+    ASSERT_TRUE(r.success()) << r.stop_reason;
+    ASSERT_GE(r.switches.size(), 2u) << ToString(coupling);
+    const SwitchEvent& e = r.switches[0];
+    EXPECT_EQ(e.wheel, 1);
+    EXPECT_FALSE(e.from_sliding);
+    EXPECT_TRUE(e.to_sliding);
+    EXPECT_TRUE(e.located);
+    EXPECT_LE(e.t_upper - e.t_lower, 1e-9);
+    // zoh at dt = 0.4 s is first order, its path off the coupled one: the
+    // switch is its own (2.9047 s), checked against a wider window.
+    const double slack = coupling == Coupling::kZoh ? 0.01 : 0.0;
+    EXPECT_GT(e.t, 2.9025 - slack);
+    EXPECT_LT(e.t, 2.9030 + slack);
+    EXPECT_EQ(r.switches[1].wheel, 3);
+    EXPECT_TRUE(r.switches[1].from_sliding);
+    EXPECT_GT(r.switches[1].t, 2.91);
+    EXPECT_LT(r.switches[1].t, 2.93);
+    const SimulationResult off = RunPaper(0.4, coupling, false);
+    EXPECT_TRUE(off.switches.empty());
+    if (coupling == Coupling::kZoh) {
+      // zoh records only: the trajectory is the same with and without.
+      ASSERT_EQ(off.samples.size(), r.samples.size());
+      EXPECT_EQ((off.samples.back().theta - r.samples.back().theta).norm(), 0);
+    }
+  }
+}
+
+// Without a switch nothing changes: the first 2.8 s have none.
+TEST(SwitchEvents, NoSwitchNoChange) {
+  const SimulationResult on = RunPaper(0.4, Coupling::kCoupled, true, 2.8);
+  const SimulationResult off = RunPaper(0.4, Coupling::kCoupled, false, 2.8);
+  ASSERT_TRUE(on.success());
+  EXPECT_TRUE(on.switches.empty());
+  ASSERT_EQ(on.samples.size(), off.samples.size());
+  for (std::size_t k = 0; k < on.samples.size(); ++k)
+    EXPECT_EQ((on.samples[k].theta - off.samples[k].theta).norm(), 0) << k;
+  EXPECT_EQ(on.nlp_solves, off.nlp_solves);
+  EXPECT_EQ(on.steps, off.steps);
+}
+
+// Max over t = 0.4 k of |COM position - reference| [m].
+double LadderError(const SimulationResult& r, const SimulationResult& ref) {
+  double worst = 0;
+  for (const TrajectorySample& a : r.samples) {
+    const double k = a.t / 0.4;
+    if (std::abs(k - std::round(k)) > 1e-9) continue;
+    for (const TrajectorySample& b : ref.samples)
+      if (std::abs(b.t - a.t) < 1e-9)
+        worst = std::max(worst, (a.position - b.position).norm());
+  }
+  return worst;
+}
+
+// The coupled RK4 dt ladder of the whole 20 s paper scene (issue #21):
+// without switch location it is not monotone (the error at 0.2 s exceeds
+// the one at 0.4 s: 1.75e-6 vs 1.25e-6 m); with it, it is monotone and at
+// least 10x lower on every rung (measured 30-790x; model.md §8.6). The
+// reference is coupled dp54 with rtol 1e-12 at dt = 0.003125, whose error
+// control resolves the transitions (with and without location it agrees
+// with itself to 1.1e-13 m, far below every rung). Its slope is about 2,
+// not 4 (model.md §8.6), so no order is asserted here.
+TEST(SwitchEvents, PaperSceneCoupledRk4LadderIsMonotoneWithSwitches) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  const Scene scene =
+      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
+  SimulationOptions ro;
+  ro.coupling = Coupling::kCoupled;
+  ro.dt = 0.003125;
+  ro.t_end = 20;
+  ro.dae_options["rk_method"] = "dp54";
+  ro.integrator.rtol = 1e-12;
+  ro.integrator.atol = 1e-15;
+  const SimulationResult ref = Simulator(scene, ro).Run();
+  ASSERT_TRUE(ref.success()) << ref.stop_reason;
+  std::vector<double> on, off;
+  for (double dt : {0.4, 0.2, 0.1, 0.05, 0.025, 0.0125}) {
+    for (bool locate : {true, false}) {
+      const SimulationResult r = RunPaper(dt, Coupling::kCoupled, locate, 20.0);
+      ASSERT_TRUE(r.success()) << dt << " " << r.stop_reason;
+      (locate ? on : off).push_back(LadderError(r, ref));
+    }
+  }
+  EXPECT_GT(off[1], off[0]);  // the defect the location removes
+  for (std::size_t j = 0; j < on.size(); ++j) {
+    if (j > 0) {
+      EXPECT_LT(on[j], on[j - 1]) << j;
+    }
+    EXPECT_LT(10 * on[j], off[j]) << j;
+  }
+}
+
+}  // namespace
+}  // namespace quasiroll
