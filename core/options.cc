@@ -378,7 +378,8 @@ const std::vector<std::string>& RunSettingNames() {
                                                  "contact_check",
                                                  "locate_events",
                                                  "event_points",
-                                                 "event_tolerance"};
+                                                 "event_tolerance",
+                                                 "locate_switches"};
   return names;
 }
 

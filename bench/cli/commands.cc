@@ -147,6 +147,9 @@ void Commands::RegisterRun(CLI::App& app, const std::vector<std::string>& nlps,
   run->add_option("--event-tolerance", run_.request.event_tolerance,
                   "Bisection tolerance of a located stop [s] (default: 1e-9)")
       ->check(PositiveNumber());
+  run->add_option("--locate-switches", run_.request.locate_switches,
+                  "Locate slide/stick switches between samples and restart "
+                  "coupled integration there: true | false (default: true)");
   run->add_option("--nlp-opt", run_.nlp_opts,
                   "NLP backend option key=value (repeatable; see 'quasiroll "
                   "list --options')");

@@ -118,6 +118,7 @@ void SetParameters(const RunSpec& run, const std::string& terrain_id,
   b->Set("locate_events", run.locate_events ? "true" : "false");
   b->SetInt("event_points", run.event_points);
   b->Set("event_tolerance", run.event_tolerance);
+  b->Set("locate_switches", run.locate_switches ? "true" : "false");
   b->Set("mu", run.mu);
   b->Set("seed", run.seed ? std::to_string(*run.seed) : "");
   b->Set("roughness", run.roughness);

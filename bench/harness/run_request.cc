@@ -168,6 +168,7 @@ ResolvedRun ResolveRunRequest(const Scene& base, const RunRequest& r,
   if (r.locate_events) o.locate_events = *r.locate_events;
   if (r.event_points) o.event_points = *r.event_points;
   if (r.event_tolerance) o.event_tolerance = *r.event_tolerance;
+  if (r.locate_switches) o.locate_switches = *r.locate_switches;
   return out;
 }
 

@@ -38,6 +38,9 @@ struct RunRequest {
   std::optional<bool> locate_events;
   std::optional<int> event_points;
   std::optional<double> event_tolerance;
+  // Switches located and coupled intervals restarted there
+  // (SimulationOptions::locate_switches).
+  std::optional<bool> locate_switches;
   // Shorthands of integrator options (IntegratorShorthands()): applied when
   // the run's integrator has the option.
   std::optional<std::string> rk_method;

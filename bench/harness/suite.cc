@@ -62,6 +62,7 @@ RunRequest RunSpec::Request() const {
   q.locate_events = locate_events;
   q.event_points = event_points;
   q.event_tolerance = event_tolerance;
+  q.locate_switches = locate_switches;
   q.nlp_options = nlp_options_explicit;
   q.dae_options = dae_options_explicit;
   // Where the group gave the integrator option itself, the shorthand field
@@ -302,6 +303,8 @@ std::string CanonicalRunKey(const RunSpec& r) {
     os << ";event_points=" << r.event_points;
   if (r.event_tolerance != events.event_tolerance)
     os << ";event_tolerance=" << Num(r.event_tolerance);
+  if (r.locate_switches != events.locate_switches)
+    os << ";locate_switches=" << (r.locate_switches ? 1 : 0);
   for (const auto& [field, value] : r.scene_fields)
     os << ";scene." << field << "=" << value;
   for (const auto& [name, value] : r.nlp_options_explicit)
@@ -589,6 +592,7 @@ struct GroupSpec {
   std::vector<std::string> locate_events;
   std::vector<std::int64_t> event_points;
   std::vector<double> event_tolerances;
+  std::vector<std::string> locate_switches;
   std::vector<double> roughness;
   std::vector<double> dts, epss, mus;
   std::vector<std::uint64_t> seeds;
@@ -644,6 +648,8 @@ void ReadMethodAxes(const YAML::Node& node, const std::string& path,
   const SimulationOptions defaults;
   g->locate_events =
       ReadNameAxis(node, path, "locate_events", {"true", "false"}, {"true"});
+  g->locate_switches =
+      ReadNameAxis(node, path, "locate_switches", {"true", "false"}, {"true"});
   g->event_points =
       ReadIntAxis(node, path, "event_points", 0, 1000, {defaults.event_points});
   g->event_tolerances =
@@ -753,7 +759,8 @@ GroupSpec ReadGroupSpec(const YAML::Node& node, const std::string& path,
                    "locate_events",
                    "event_points",
                    "event_tolerance",
-                   "checkpoint_interval"});
+                   "checkpoint_interval",
+                   "locate_switches"});
   if (auto n = Child(node, "description"))
     yaml::ReadString(*n, JoinKey(path, "description"));
   GroupSpec g;
@@ -873,6 +880,10 @@ std::vector<Axis> GridAxes(const GroupSpec& g, const SceneAxes& s) {
   axes.push_back(
       MakeAxis("event_tolerance", g.event_tolerances,
                [](RunSpec* r, double v) { r->event_tolerance = v; }));
+  axes.push_back(MakeAxis("locate_switches", g.locate_switches,
+                          [](RunSpec* r, const std::string& v) {
+                            r->locate_switches = v == "true";
+                          }));
   for (const Axis& a : g.generic_axes) axes.push_back(a);
   return axes;
 }

@@ -121,6 +121,7 @@ struct RunSpec {
   bool locate_events = true;
   int event_points = 3;
   double event_tolerance = 1e-9;  // [s]
+  bool locate_switches = true;    // SimulationOptions::locate_switches
   // Scene sweeps.
   double mu = 0;
   std::optional<std::uint64_t> seed;  // only for random gaussian terrains

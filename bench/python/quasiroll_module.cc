@@ -133,7 +133,8 @@ std::pair<std::string, std::string> RunText(
     std::optional<int> substeps, std::optional<int> contact_check,
     std::optional<int> nlp_max_iter, const GivenOptions& nlp_options,
     const GivenOptions& dae_options, std::optional<bool> locate_events,
-    std::optional<int> event_points, std::optional<double> event_tolerance) {
+    std::optional<int> event_points, std::optional<double> event_tolerance,
+    std::optional<bool> locate_switches) {
   bench::RunRequest request =
       SolveRequest(nlp, mu, eps, mode, nlp_tol, nlp_max_iter, nlp_options);
   request.dae = dae;
@@ -147,6 +148,7 @@ std::pair<std::string, std::string> RunText(
   request.locate_events = locate_events;
   request.event_points = event_points;
   request.event_tolerance = event_tolerance;
+  request.locate_switches = locate_switches;
   request.rk_method = rk_method;
   request.sigma = sigma;
   request.dae_index = dae_index;
@@ -274,7 +276,7 @@ PYBIND11_MODULE(_quasiroll, m) {
         py::arg("dae_index"), py::arg("substeps"), py::arg("contact_check"),
         py::arg("nlp_max_iter"), py::arg("nlp_options"), py::arg("dae_options"),
         py::arg("locate_events"), py::arg("event_points"),
-        py::arg("event_tolerance"));
+        py::arg("event_tolerance"), py::arg("locate_switches"));
   m.def("backends", [] {
     RegisterBuiltinNlpSolvers();
     RegisterBuiltinIntegrators();

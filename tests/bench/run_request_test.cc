@@ -86,11 +86,13 @@ TEST(RunRequest, EventSettingsReachTheSimulator) {
   r.locate_events = false;
   r.event_points = 7;
   r.event_tolerance = 1e-6;
+  r.locate_switches = false;
   const ResolvedRun run =
       ResolveRunRequest(LoadScene(kScenes + "paper.yaml"), r, Same);
   EXPECT_FALSE(run.options.locate_events);
   EXPECT_EQ(run.options.event_points, 7);
   EXPECT_EQ(run.options.event_tolerance, 1e-6);
+  EXPECT_FALSE(run.options.locate_switches);
   const Suite suite = LoadSuiteFromString(
       "name: s\nscenes:\n  - {name: paper, file: paper.yaml}\ngroups:\n"
       "  g:\n    locate_events: [true, false]\n    event_tolerance: 1.0e-6\n",

@@ -162,10 +162,12 @@ def test_run_backend_options_equal_cli_flags(tmp_path):
 def test_run_event_settings_equal_cli_flags(tmp_path):
     # The located-stop settings are run settings like any other.
     _, stats = quasiroll.run(scene("paper"), t_end=1, locate_events=False,
-                             event_points=5, event_tolerance=1e-6)
+                             event_points=5, event_tolerance=1e-6,
+                             locate_switches=False)
     subprocess.run([BIN, "run", "--scene", os.path.join(SCENES, "paper.yaml"),
                     "--t-end", "1", "--locate-events", "false",
                     "--event-points", "5", "--event-tolerance", "1e-6",
+                    "--locate-switches", "false",
                     "--out", str(tmp_path)], check=True, capture_output=True)
     cli = json.load(open(tmp_path / "run.json"))
     assert stats["options"] == cli["options"]

@@ -94,7 +94,7 @@ def run(scene, nlp=None, dae=None, *, coupling="zoh", dt=None,
         tol=None, atol=None, nlp_tol=None, dae_index=None, substeps=None,
         contact_check=None, nlp_options=None, dae_options=None, as_frame=True,
         nlp_max_iter=None, locate_events=None, event_points=None,
-        event_tolerance=None):
+        event_tolerance=None, locate_switches=None):
     """Simulates `scene` (`quasiroll run`). Returns (trajectory, stats):
     trajectory is a pandas DataFrame with the columns of trajectory.csv (or,
     with as_frame=False, a dict of numpy arrays), stats the run.json dict
@@ -104,6 +104,8 @@ def run(scene, nlp=None, dae=None, *, coupling="zoh", dt=None,
     nlp_max_iter: the iteration limit of each quasi-static solve (100).
     locate_events, event_points, event_tolerance: located stops at physical
     limits between samples (True, 3 points per interval, 1e-9 s).
+    locate_switches: locate slide/stick switches and restart coupled
+    integration there (True).
     nlp_options / dae_options: the backends' own options as a dict (name ->
     value, as `--nlp-opt` / `--dae-opt`; `quasiroll list --options` lists
     them); an unknown or ill-typed one raises ValueError naming it. The GIL
@@ -113,7 +115,7 @@ def run(scene, nlp=None, dae=None, *, coupling="zoh", dt=None,
         tol, atol, nlp_tol, dae_index, substeps, contact_check, nlp_max_iter,
         _given_options("nlp_options", nlp_options),
         _given_options("dae_options", dae_options), locate_events,
-        event_points, event_tolerance)
+        event_points, event_tolerance, locate_switches)
     stats = json.loads(run_json)
     if as_frame:
         import pandas as pd
