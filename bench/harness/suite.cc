@@ -292,6 +292,7 @@ std::string CanonicalRunKey(const RunSpec& r) {
   // keys (and run ids) of existing suites stay those of the fixed grid.
   if (r.nlp_max_iter != QuasiStaticOptions{}.max_iterations)
     os << ";nlp_max_iter=" << r.nlp_max_iter;
+  if (r.exclusive) os << ";exclusive=1";
   for (const auto& [field, value] : r.scene_fields)
     os << ";scene." << field << "=" << value;
   for (const auto& [name, value] : r.nlp_options_explicit)
@@ -579,6 +580,7 @@ struct GroupSpec {
   std::vector<std::uint64_t> seeds;
   double t_end_override = 0;
   int repeats = 1;
+  bool exclusive = false;
   std::vector<Axis> generic_axes;  // scene_fields, nlp_options, dae_options
   RunBounds bounds;
 };
@@ -651,6 +653,9 @@ void ReadSceneDefaultedAxes(const YAML::Node& node, const std::string& path,
   if (auto n = Child(node, "repeats"))
     g->repeats =
         static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "repeats"), 1, 1000));
+  if (auto n = Child(node, "exclusive"))
+    g->exclusive = yaml::ReadEnum(*n, JoinKey(path, "exclusive"),
+                                  {"true", "false"}) == "true";
 }
 
 // Generic axes in file order: scene fields, then backend options (validated
@@ -707,7 +712,7 @@ GroupSpec ReadGroupSpec(const YAML::Node& node, const std::string& path,
                    "mu",           "seed",          "roughness",   "dae_index",
                    "substeps",     "contact_check", "t_end",       "repeats",
                    "scene_fields", "nlp_options",   "dae_options", "bounds",
-                   "nlp_max_iter"});
+                   "nlp_max_iter", "exclusive"});
   if (auto n = Child(node, "description"))
     yaml::ReadString(*n, JoinKey(path, "description"));
   GroupSpec g;
@@ -869,6 +874,7 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
     base.scene = sc.name;
     base.t_end = s.t_end;
     base.repeats = g.repeats;
+    base.exclusive = g.exclusive;
     base.bounds = g.bounds;
     AppendGridRuns(node, path, base, scene_ref, axes, suite);
   }
