@@ -82,13 +82,12 @@ def _plot_series(ax, series, styles):
 
 
 def _draw_front(ax, front):
-    """The non-dominated points (selection.dominates): black rings, joined
-    in order of error by a thin dashed line."""
+    """The non-dominated points (selection.dominates): black rings (not
+    joined: under the tie rule the set need not be monotone)."""
     if not front:
         return
     fx = [p["err"] for p in front]
     fy = [p["wall"] for p in front]
-    ax.plot(fx, fy, color="black", linestyle=(0, (4, 2)), linewidth=0.8, zorder=1)
     ax.scatter(fx, fy, s=70, facecolors="none", edgecolors="black", linewidths=0.9,
                zorder=5)
 
@@ -175,7 +174,7 @@ def figure_work_precision(ctx):
                            "exclusive": all(p["exclusive"] for rungs in series.values()
                                             for p in rungs),
                            "ref_err_est": problem["ref_err_est"]})
-    extra = [Line2D([], [], color="black", linestyle=(0, (4, 2)), marker="o",
+    extra = [Line2D([], [], color="black", linestyle="none", marker="o", markersize=9,
                     markerfacecolor="none", label="non-dominated (beaten by\n"
                     "> IQR in time and > 1 %\nin error by no point)"),
              Patch(facecolor="#e8c07a", alpha=0.5,

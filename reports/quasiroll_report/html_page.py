@@ -166,8 +166,18 @@ def recommendation_table(tables, styles):
                 "<th>fastest pair P</th><th>at Δt [s] / rtol</th><th>err [m]</th>"
                 "<th>median time T [s]</th><th>IQR [s]</th><th>timed alone</th>"
                 "<th>indistinguishable within the IQR</th></tr>"]
-        for rec in recs:
-            target = escape(fmt(rec["target"]))
+        for k, rec in enumerate(recs):
+            nxt = recs[k + 1] if k + 1 < len(recs) else None
+            if nxt is not None and nxt["winner"] is not None \
+                    and nxt["winner"] is rec["winner"] and nxt["ties"] == rec["ties"]:
+                continue  # the same answer for a tighter E: one row for the range
+            first = k
+            while first > 0 and recs[first - 1]["winner"] is not None \
+                    and recs[first - 1]["winner"] is rec["winner"] \
+                    and recs[first - 1]["ties"] == rec["ties"]:
+                first -= 1
+            target = escape(fmt(rec["target"]) if first == k else
+                            f"{fmt(recs[first]['target'])} … {fmt(rec['target'])}")
             if rec["winner"] is None:
                 out.append(f"<tr><td>{target}</td><td></td><td colspan=\"7\">"
                            "no method reaches it</td></tr>")
