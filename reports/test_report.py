@@ -253,6 +253,33 @@ class GoodReportTest(unittest.TestCase):
         cpl = [p for p in panels if p["t_end"] == [make_fixture.T_END_CPL]]
         self.assertTrue(all(line.endswith("/coupled") for p in cpl for line in p["lines"]))
 
+    def test_recommendation_table_closes_the_report(self):
+        html = self.html()
+        self.assertEqual(html.count('<h3 class="recommendation">'), 2, "one per problem")
+        self.assertGreater(html.index('id="recommendation"'), html.index('id="reproduction"'))
+        self.assertIn("Timed on ", html)
+        runs = read_runs(Fixture.good)[0]
+        for problem, floor, recs in sel.recommendation_tables(runs):
+            reached = [r for r in recs if r["winner"] is not None]
+            self.assertTrue(reached, problem["label"])
+            for rec in reached:
+                # the winner reaches E and nothing of its problem reaching E is faster
+                self.assertLessEqual(rec["winner"]["err"], rec["target"])
+                faster = [r for r in problem["rows"] if r["err_pos_rms"] <= rec["target"]
+                          and sel.timing(r)[0] < rec["winner"]["wall"]]
+                self.assertEqual(faster, [], rec["target"])
+
+    def test_work_precision_points_labelled(self):
+        panels = self.manifest()["fig_work_precision"]["data"]["panels"]
+        runs = sel.work_precision_rows(read_runs(Fixture.good)[0])
+        for panel in panels:
+            for line, labels in panel["labels"].items():
+                dts = sorted({r["dt"] for r in runs if r["method"] == line
+                              and r[panel["metric"]] > 0
+                              and r["ref_hash"] == panel["ref_hashes"][0]
+                              and r["status"] == "success"}, reverse=True)
+                self.assertEqual(labels, [f"{dt:g}" for dt in dts], line)
+
     def test_bands_table_per_problem(self):
         runs = read_runs(Fixture.good)[0]
         bands = sel.accuracy_bands(runs)
@@ -971,3 +998,77 @@ def main():
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+def _point(err, wall, iqr=0.0, label="", method="m"):
+    return {"err": err, "wall": wall, "wall_q1": wall - iqr / 2, "wall_q3": wall + iqr / 2,
+            "label": label, "method": method, "exclusive": True}
+
+
+class WorkPrecisionRulesTest(unittest.TestCase):
+    """The dominance rule and the recommendation table (issue 21 item 7), on
+    hand-made points whose verdicts follow from the rule's two thresholds."""
+
+    def test_tie_in_error_never_dominates(self):
+        # 1.6x slower but only 2e-6 relative error apart: the tie of the old
+        # front. Neither is worse by more than 1 % in error: both stay.
+        fast, slow = _point(1.0e-4, 1.0), _point(1.0e-4 * (1 + 2e-6), 1.6)
+        self.assertFalse(sel.dominates(fast, slow))
+        self.assertEqual(len(sel.non_dominated([fast, slow])), 2)
+
+    def test_timing_within_iqr_never_dominates(self):
+        # 10x the error but only 0.05 s slower with an IQR of 0.1 s.
+        a, b = _point(1e-3, 1.05, iqr=0.1), _point(1e-4, 1.0, iqr=0.02)
+        self.assertFalse(sel.dominates(b, a))
+        # the same slowdown with no spread is beyond the timing noise
+        self.assertTrue(sel.dominates(_point(1e-4, 1.0), _point(1e-3, 1.05)))
+
+    def test_worse_beyond_both_thresholds_is_dominated(self):
+        best = _point(1e-5, 1.0, iqr=0.1)
+        worse = _point(1e-5 * 1.02, 1.2, iqr=0.1)   # +2 % error, +0.2 s > IQR
+        edge = _point(1e-5 * 1.009, 1.5, iqr=0.1)   # +0.9 % error only
+        front = sel.non_dominated([best, worse, edge])
+        self.assertIn(best, front)
+        self.assertNotIn(worse, front)
+        self.assertIn(edge, front)
+
+    def test_error_floor_spread_of_best_tightest_rungs(self):
+        series = {"a": [_point(1e-2, 1), _point(1e-6, 4)],
+                  "b": [_point(1e-3, 1), _point(4e-6, 3)],
+                  "c": [_point(1e-2, 1), _point(1e-3, 2)]}   # 1000x above: not best
+        low, high, lines = sel.error_floor(series)
+        self.assertEqual((low, high), (1e-6, 4e-6))
+        self.assertEqual(lines, ["a", "b"])
+
+    def test_recommendation_fastest_per_decade_with_ties(self):
+        series = {
+            "slow/accurate": [_point(3e-3, 2.0, 0.1, "0.4"), _point(2e-6, 8.0, 0.4, "0.1")],
+            "fast/coarse": [_point(5e-3, 0.5, 0.05, "0.2"), _point(6e-4, 1.0, 0.05, "0.05")],
+            "twin": [_point(8e-4, 1.04, 0.2, "0.05")],
+        }
+        points = [p for rungs in series.values() for p in rungs]
+        low, high, _ = sel.error_floor(series)
+        targets = sel.recommendation_targets(points, low)
+        # decades from above the largest error (5e-3 -> 1e-2) to the floor (2e-6 -> 1e-6)
+        self.assertEqual(targets, [1e-2, 1e-3, 1e-4, 1e-5, 1e-6])
+        recs = {r["target"]: r for r in sel.recommendations(series, targets)}
+        self.assertEqual(recs[1e-2]["line"], "fast/coarse")
+        self.assertEqual(recs[1e-2]["winner"]["label"], "0.2")
+        self.assertEqual(recs[1e-3]["line"], "fast/coarse")
+        self.assertEqual(recs[1e-3]["winner"]["wall"], 1.0)
+        # twin is 0.04 s slower, within the larger IQR (0.2 s): indistinguishable
+        self.assertEqual(recs[1e-3]["ties"], ["twin"])
+        self.assertAlmostEqual(recs[1e-3]["iqr"], 0.05)
+        self.assertEqual(recs[1e-4]["line"], "slow/accurate")
+        self.assertEqual(recs[1e-4]["ties"], [])
+        self.assertIsNone(recs[1e-6]["winner"])
+
+    def test_rung_labels(self):
+        self.assertEqual(sel.rung_label(0.1, 1e-6, True), "1e-6")
+        self.assertEqual(sel.rung_label(0.05, 1e-8, False), "0.05")
+
+    def test_quartiles_from_repeats_match_harness_definition(self):
+        run = {"wall_s_median": 0.3, "wall_s": 0.1, "timings": [0.5, 0.1, 0.4, 0.2, 0.3]}
+        self.assertEqual(sel.timing_quartiles(run), (0.3, 0.2, 0.4))
+        run.update({"wall_s_q1": 0.25, "wall_s_q3": 0.35})
+        self.assertEqual(sel.timing_quartiles(run), (0.3, 0.25, 0.35))

@@ -6,7 +6,8 @@
 Compares (docs/cluster.md, "What is identical"):
   runs.csv   byte for byte after dropping the timing and host columns
              (wall_s, wall_s_median, wall_s_min, wall_s_max, wall_s_all,
-             wall_per_sim_s, host, cpu_model) from both;
+             wall_per_sim_s, host, cpu_model, wall_s_q1, wall_s_q3,
+             wall_s_iqr, timing_exclusive) from both;
   meta.json  key by key, in order, after dropping the invocation keys
              (machine, jobs, resume, options, shard, start_time, end_time,
              wall_s, runs_executed, runs_resumed, merge, mpi, command);
@@ -33,7 +34,8 @@ import os
 import sys
 
 TIMING_AND_HOST_COLUMNS = {"wall_s", "wall_s_median", "wall_s_min", "wall_s_max",
-                           "wall_s_all", "wall_per_sim_s", "host", "cpu_model"}
+                           "wall_s_all", "wall_per_sim_s", "host", "cpu_model",
+                           "wall_s_q1", "wall_s_q3", "wall_s_iqr", "timing_exclusive"}
 INVOCATION_META_KEYS = {"machine", "jobs", "resume", "options", "shard", "start_time",
                         "end_time", "wall_s", "runs_executed", "runs_resumed", "merge", "mpi",
                         "command"}

@@ -31,11 +31,12 @@ const std::vector<std::string>& InvocationMetaKeys() {
 }
 
 const std::vector<std::string>& TimingAndHostColumns() {
-  // wall_s* and wall_per_sim_s: timing (docs/harness.md); host, cpu_model:
-  // the machine that executed the row.
+  // wall_s*, wall_per_sim_s and timing_exclusive: timing (docs/harness.md);
+  // host, cpu_model: the machine that executed the row.
   static const std::vector<std::string> columns = {
       "wall_s",     "wall_s_median",  "wall_s_min", "wall_s_max",
-      "wall_s_all", "wall_per_sim_s", "host",       "cpu_model"};
+      "wall_s_all", "wall_per_sim_s", "host",       "cpu_model",
+      "wall_s_q1",  "wall_s_q3",      "wall_s_iqr", "timing_exclusive"};
   return columns;
 }
 

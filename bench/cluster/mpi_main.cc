@@ -206,21 +206,33 @@ class Dispatcher {
     SortBiggestFirst(&references_);
   }
 
-  // Next task, or false if none is ready now.
+  // Next task, or false if none is ready now. A run of an exclusive group
+  // (suite key `exclusive`) is handed out only when no other task is out,
+  // and nothing else while it is: it runs alone on the whole job (ranks may
+  // share a node), after the shared runs that are ready.
   bool Next(Task* task) {
+    if (alone_out_) return false;
     if (!references_.empty()) {
       *task = references_.back();
       references_.pop_back();
-      return true;
+    } else if (!ready_.empty()) {
+      *task = ready_.back();
+      ready_.pop_back();
+    } else if (!alone_.empty() && out_ == 0) {
+      *task = alone_.back();
+      alone_.pop_back();
+      alone_out_ = true;
+    } else {
+      return false;
     }
-    if (ready_.empty()) return false;
-    *task = ready_.back();
-    ready_.pop_back();
+    ++out_;
     return true;
   }
 
   // Handles a worker's reply; throws on a worker's I/O error.
   void Result(const std::string& reply) {
+    --out_;
+    alone_out_ = false;
     std::istringstream in(reply);
     std::string kind, grid, verdict;
     std::getline(in, kind);
@@ -239,9 +251,11 @@ class Dispatcher {
         progress_.Message("reference for scene " + plan_.references[r].label +
                           " failed: " + error);
       for (int k : waiting_[r])
-        ready_.push_back({kRun, plan_.selected[k]->index,
-                          bench::EstimatedRunCost(*plan_.selected[k])});
+        (plan_.selected[k]->exclusive ? alone_ : ready_)
+            .push_back({kRun, plan_.selected[k]->index,
+                        bench::EstimatedRunCost(*plan_.selected[k])});
       SortBiggestFirst(&ready_);
+      SortBiggestFirst(&alone_);
       return;
     }
     std::string status, t_reached, wall, row;
@@ -275,7 +289,9 @@ class Dispatcher {
   bench::Progress& progress_;
   std::map<int, int> selected_of_grid_;
   std::vector<std::vector<int>> waiting_;  // per reference: selected runs
-  std::vector<Task> references_, ready_;
+  std::vector<Task> references_, ready_, alone_;  // alone_: exclusive runs
+  int out_ = 0;             // tasks handed out, not yet answered
+  bool alone_out_ = false;  // the task out is an exclusive run
   int runs_done_ = 0;
 };
 

@@ -124,6 +124,7 @@ void SetParameters(const RunSpec& run, const std::string& terrain_id,
   b->Set("roughness", run.roughness);
   b->Set("t_end", run.t_end);
   b->SetInt("repeats", run.repeats);
+  b->SetInt("timing_exclusive", run.exclusive ? 1 : 0);
   b->Set("host", ThisMachine().hostname);
   b->Set("cpu_model", ThisMachine().cpu);
   std::string fields = "{";
@@ -279,6 +280,9 @@ std::vector<std::string> MakeRow(const RunSpec& run,
   b.Set("wall_s_median", timing.median);
   b.Set("wall_s_min", timing.min);
   b.Set("wall_s_max", timing.max);
+  b.Set("wall_s_q1", timing.q1);
+  b.Set("wall_s_q3", timing.q3);
+  b.Set("wall_s_iqr", timing.q3 - timing.q1);
   std::string all;
   for (double w : wall_seconds) all += (all.empty() ? "" : ";") + Num(w);
   b.Set("wall_s_all", all);
@@ -313,7 +317,7 @@ std::vector<std::string> ErrorRow(const RunSpec& run,
   for (const char* c :
        {"kkt_residual", "t_reached_frac", "wall_s_median", "wall_s_min",
         "wall_s_max", "wall_per_sim_s", "qs_inertia_ratio", "sliding_distance",
-        "creep_distance"})
+        "creep_distance", "wall_s_q1", "wall_s_q3", "wall_s_iqr"})
     b.Set(c, nan);
   const FailureCause cause =
       ClassifyFailure(Evidence(run, RunStatus::kError, nan, reference));
@@ -804,6 +808,24 @@ HarnessSummary FinishSuiteOutput(const Suite& suite,
   return summary;
 }
 
+void ScheduleTasks(const std::vector<int>& classes,
+                   const std::vector<bool>& alone, int jobs,
+                   const std::function<void(int)>& fn) {
+  if (alone.size() != classes.size())
+    throw std::invalid_argument("ScheduleTasks: classes and alone differ");
+  for (const bool phase : {false, true}) {
+    std::vector<int> tasks, phase_classes;
+    for (std::size_t k = 0; k < classes.size(); ++k) {
+      if (alone[k] != phase) continue;
+      tasks.push_back(static_cast<int>(k));
+      phase_classes.push_back(classes[k]);
+    }
+    Scheduler(phase_classes, phase ? 1 : jobs).Run([&](int j) {
+      fn(tasks[j]);
+    });
+  }
+}
+
 HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
   const auto t_start = Clock::now();
   const std::string start_time = IsoTimeNow();
@@ -837,12 +859,16 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
     });
   }
 
-  // Runs.
+  // Runs: the shared ones in `jobs` threads, then the exclusive ones
+  // (group key `exclusive`) one at a time with nothing else running.
   {
     std::vector<int> classes;
-    for (int i : plan.pending)
+    std::vector<bool> alone;
+    for (int i : plan.pending) {
       classes.push_back(exclusive.Of(plan.selected[i]->nlp));
-    Scheduler(classes, jobs).Run([&](int k) {
+      alone.push_back(plan.selected[i]->exclusive);
+    }
+    ScheduleTasks(classes, alone, jobs, [&](int k) {
       const int i = plan.pending[k];
       const RunOutcome out =
           ExecuteRun(suite, *plan.selected[i], plan.terrain_ids[i],

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdio>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -75,6 +76,18 @@ std::vector<std::string> ErrorRow(const RunSpec& run,
 // Runs the suite. Throws SceneError for a bad filter; I/O errors propagate
 // as std::runtime_error. Failing runs never stop the suite.
 HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options);
+
+// The runner's scheduler: calls fn(k) once for every task k < classes.size().
+// First the tasks with alone[k] false, in `jobs` threads, in order, except
+// that a task of a non-zero class waits while another task of its class
+// runs (NLP backends whose solver objects may not run concurrently); then
+// the tasks with alone[k] true (group key `exclusive`), one at a time, each
+// starting after every other task has finished: nothing shares the cores
+// with them. The first exception thrown by fn is rethrown at the end of its
+// phase.
+void ScheduleTasks(const std::vector<int>& classes,
+                   const std::vector<bool>& alone, int jobs,
+                   const std::function<void(int)>& fn);
 
 // ------------------------------------- pieces shared by the suite drivers ----
 // RunSuite (threads), `bench --shard` (one slice per process) and

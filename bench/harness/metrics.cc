@@ -161,6 +161,16 @@ TimingStats ComputeTimingStats(std::vector<double> wall_seconds) {
   t.max = wall_seconds.back();
   t.median = n % 2 ? wall_seconds[n / 2]
                    : 0.5 * (wall_seconds[n / 2 - 1] + wall_seconds[n / 2]);
+  const auto quantile = [&](double p) {
+    const double pos = p * static_cast<double>(n - 1);
+    const std::size_t j = static_cast<std::size_t>(pos);
+    const double f = pos - static_cast<double>(j);
+    return j + 1 < n
+               ? wall_seconds[j] + f * (wall_seconds[j + 1] - wall_seconds[j])
+               : wall_seconds[j];
+  };
+  t.q1 = quantile(0.25);
+  t.q3 = quantile(0.75);
   return t;
 }
 

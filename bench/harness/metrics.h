@@ -78,8 +78,13 @@ DriftMetrics ComputeDrift(const std::vector<TrajectorySample>& run);
 struct TimingStats {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   double min = kNaN, median = kNaN, max = kNaN;  // over the repeats [s]
+  double q1 = kNaN, q3 = kNaN;  // first and third quartiles [s]
 };
-// Median = middle value, or the mean of the two middle values.
+// Median = middle value, or the mean of the two middle values. Quartiles of
+// the sorted times w_0 <= .. <= w_{n-1} by linear interpolation between
+// order statistics (Hyndman-Fan type 7, numpy's default): Q(p) = w_j +
+// f (w_{j+1} - w_j) with j + f = p (n - 1); q1 = Q(1/4), q3 = Q(3/4), so the
+// IQR q3 - q1 is 0 for one repeat and (w_1 - w_0) / 2 for two.
 TimingStats ComputeTimingStats(std::vector<double> wall_seconds);
 
 }  // namespace quasiroll::bench

@@ -305,6 +305,7 @@ std::string CanonicalRunKey(const RunSpec& r) {
     os << ";event_tolerance=" << Num(r.event_tolerance);
   if (r.locate_switches != events.locate_switches)
     os << ";locate_switches=" << (r.locate_switches ? 1 : 0);
+  if (r.exclusive) os << ";exclusive=1";
   for (const auto& [field, value] : r.scene_fields)
     os << ";scene." << field << "=" << value;
   for (const auto& [name, value] : r.nlp_options_explicit)
@@ -598,6 +599,7 @@ struct GroupSpec {
   std::vector<std::uint64_t> seeds;
   double t_end_override = 0;
   int repeats = 1;
+  bool exclusive = false;
   std::vector<Axis> generic_axes;  // scene_fields, nlp_options, dae_options
   RunBounds bounds;
   double checkpoint_interval = kDefaultCheckpointInterval;
@@ -681,6 +683,9 @@ void ReadSceneDefaultedAxes(const YAML::Node& node, const std::string& path,
   if (auto n = Child(node, "repeats"))
     g->repeats =
         static_cast<int>(yaml::ReadInt(*n, JoinKey(path, "repeats"), 1, 1000));
+  if (auto n = Child(node, "exclusive"))
+    g->exclusive = yaml::ReadEnum(*n, JoinKey(path, "exclusive"),
+                                  {"true", "false"}) == "true";
 }
 
 // Generic axes in file order: scene fields, then backend options (validated
@@ -760,7 +765,8 @@ GroupSpec ReadGroupSpec(const YAML::Node& node, const std::string& path,
                    "event_points",
                    "event_tolerance",
                    "checkpoint_interval",
-                   "locate_switches"});
+                   "locate_switches",
+                   "exclusive"});
   if (auto n = Child(node, "description"))
     yaml::ReadString(*n, JoinKey(path, "description"));
   GroupSpec g;
@@ -940,6 +946,7 @@ void ExpandGroup(const YAML::Node& node, const std::string& path,
     base.scene = sc.name;
     base.t_end = s.t_end;
     base.repeats = g.repeats;
+    base.exclusive = g.exclusive;
     base.bounds = g.bounds;
     base.checkpoint_interval = g.checkpoint_interval;
     AppendGridRuns(node, path, base, scene_ref, axes, suite);

@@ -128,6 +128,10 @@ struct RunSpec {
   double roughness = 1.0;             // gaussian amplitude scale factor
   double t_end = 0;
   int repeats = 1;
+  // Timed alone (group key `exclusive`): the run starts only when no other
+  // run of the process is running, and none starts until it has finished
+  // (all its repeats), whatever --jobs is.
+  bool exclusive = false;
   RunBounds bounds;  // group's, else suite's, else the defaults
   // Accuracy checkpoint spacing [s]: group's, else suite's, else the default.
   double checkpoint_interval = kDefaultCheckpointInterval;

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -275,13 +276,22 @@ const MachineInfo& ThisMachine() {
     m.cpu = "unknown";
     std::ifstream cpuinfo("/proc/cpuinfo");
     std::string line;
-    while (std::getline(cpuinfo, line)) {
-      if (line.rfind("model name", 0) == 0) {
-        const auto colon = line.find(':');
-        if (colon != std::string::npos) m.cpu = line.substr(colon + 2);
-        break;
+    bool have_model = false;
+    while (std::getline(cpuinfo, line) &&
+           !(have_model && !std::isnan(m.cpu_mhz))) {
+      const auto colon = line.find(':');
+      if (colon == std::string::npos || colon + 2 > line.size()) continue;
+      if (!have_model && line.rfind("model name", 0) == 0) {
+        m.cpu = line.substr(colon + 2);
+        have_model = true;
+      } else if (std::isnan(m.cpu_mhz) && line.rfind("cpu MHz", 0) == 0) {
+        m.cpu_mhz = std::strtod(line.c_str() + colon + 2, nullptr);
       }
     }
+    std::ifstream max_freq(
+        "/sys/devices/system/cpu/cpu0/cpufreq/cpuinfo_max_freq");
+    double khz = 0;
+    if (max_freq >> khz && khz > 0) m.cpu_max_mhz = khz / 1000;
     m.hardware_threads = static_cast<int>(std::thread::hardware_concurrency());
     return m;
   }();
@@ -293,6 +303,8 @@ void WriteMachine(JsonWriter* json) {
   json->BeginObject();
   json->Key("hostname").Value(m.hostname);
   json->Key("cpu").Value(m.cpu);
+  json->Key("cpu_mhz").Value(m.cpu_mhz);
+  json->Key("cpu_max_mhz").Value(m.cpu_max_mhz);
   json->Key("hardware_threads").Value(m.hardware_threads);
   json->EndObject();
 }

@@ -2,6 +2,7 @@
 // trajectory.csv, run.json, and the metadata every result carries.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -41,13 +42,19 @@ struct MachineInfo {
   std::string hostname;  // gethostname(2)
   std::string cpu;       // first "model name" of /proc/cpuinfo, or "unknown"
   int hardware_threads = 0;
+  // First "cpu MHz" of /proc/cpuinfo (the clock when the process started;
+  // NaN if absent) and the rated maximum of cpufreq's cpuinfo_max_freq
+  // (NaN without cpufreq, e.g. in most virtual machines).
+  double cpu_mhz = std::numeric_limits<double>::quiet_NaN();
+  double cpu_max_mhz = std::numeric_limits<double>::quiet_NaN();
 };
 const MachineInfo& ThisMachine();
 // How this binary was built: {"type": CMAKE_BUILD_TYPE, "cxx_flags": ...,
 // "options": "QUASIROLL_WITH_IPOPT=ON,..."} (anything that can change the
 // numbers; `quasiroll merge` requires it to agree).
 void WriteBuildOptions(JsonWriter* json);
-// Host name, CPU model, core count.
+// Host name, CPU model, clock (cpu_mhz, cpu_max_mhz: null when unknown),
+// core count.
 void WriteMachine(JsonWriter* json);
 // The registered backends with their BackendInfo (core/backend_info.h):
 // {"nlp": [{"name", "description", "family", "library", "library_version",

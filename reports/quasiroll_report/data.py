@@ -71,7 +71,8 @@ DEFAULTED_COLUMNS = [
     "wall_s_median", "wall_s_min", "wall_s_max", "wall_per_sim_s",
     "qs_inertia_ratio", "ref_mu_min", "ref_err_est", "cause", "cause_detail",
     "wall_s_all", "host", "cpu_model", "ref_hash", "terrain", "rk_method",
-    "sliding_distance", "creep_distance"]
+    "sliding_distance", "creep_distance", "wall_s_q1", "wall_s_q3", "wall_s_iqr",
+    "timing_exclusive"]
 
 for _name in REQUIRED_COLUMNS + DEFAULTED_COLUMNS:
     assert _name in RUNS_COLUMNS, f"{_name} is no runs.csv column ({RUNS_SCHEMA_PATH})"

@@ -61,31 +61,60 @@ def _legend_axes(fig, gs_cell, handles, title=None):
 # ---------------------------------------------------------- work-precision
 
 def _plot_series(ax, series, styles):
+    """Each line through its rungs, the bars spanning the timing IQR (q1 to
+    q3 over the repeats), every point labelled with its Δt or rtol."""
     points = []
     for line, rungs in series.items():
         style = styles.get(rungs[0]["method"]) or method_style(rungs[0]["method"])
         errs = np.array([p["err"] for p in rungs])
         walls = np.array([p["wall"] for p in rungs])
-        spread = np.array([[p["wall"] - p["wall_lo"] for p in rungs],
-                           [p["wall_hi"] - p["wall"] for p in rungs]])
+        spread = np.array([[max(p["wall"] - p["wall_q1"], 0.0) for p in rungs],
+                           [max(p["wall_q3"] - p["wall"], 0.0) for p in rungs]])
         ax.errorbar(errs, walls, yerr=spread if np.any(spread > 0) else None,
                     capsize=2, elinewidth=0.8, label=line, **plot_style(style))
-        points += list(zip(errs.tolist(), walls.tolist()))
+        for p in rungs:
+            if p["label"]:
+                ax.annotate(p["label"], (p["err"], p["wall"]), xytext=(3, 2),
+                            textcoords="offset points", fontsize=5.5,
+                            color=style.colour, alpha=0.9, zorder=4)
+        points += rungs
     return points
 
 
+def _draw_front(ax, front):
+    """The non-dominated points (selection.dominates): black rings (not
+    joined: under the tie rule the set need not be monotone)."""
+    if not front:
+        return
+    fx = [p["err"] for p in front]
+    fy = [p["wall"] for p in front]
+    ax.scatter(fx, fy, s=70, facecolors="none", edgecolors="black", linewidths=0.9,
+               zorder=5)
+
+
 def _front_methods(series, front):
-    members = set(front)
+    members = {id(p) for p in front}
     return sorted(line for line, rungs in series.items()
-                  if any((p["err"], p["wall"]) in members for p in rungs))
+                  if any(id(p) in members for p in rungs))
 
 
 def _draw_floor(ax, estimate):
     if not is_finite(estimate) or estimate <= 0:
         return False
-    ax.axvspan(ax.get_xlim()[0] if ax.get_xlim()[0] < estimate else estimate / 10,
-               estimate, color="#bbbbbb", alpha=0.35, zorder=0, linewidth=0)
     ax.axvline(estimate, color="#555555", linestyle=":", linewidth=1.2)
+    return True
+
+
+def _draw_measured_floor(ax, low, high):
+    """The measured error floor: the spread of the best methods' errors at
+    their tightest settings (selection.error_floor), a shaded band."""
+    if not (is_finite(low) and is_finite(high) and low > 0):
+        return False
+    lo, hi = ax.get_xlim()
+    ax.axvspan(min(lo, low / 2), low, color="#bbbbbb", alpha=0.35, zorder=0, linewidth=0)
+    ax.axvspan(low, max(high, low * 1.05), color="#e8c07a", alpha=0.35, zorder=0,
+               linewidth=0)
+    ax.set_xlim(lo, hi)
     return True
 
 
@@ -95,23 +124,23 @@ def _work_precision_panel(ax, problem, metric, label, spread, styles):
     ax.set_title(f"{problem['label']} — {metric}", fontsize=9)
     if not points:
         no_data(ax, f"no successful run with finite {metric}")
-        return series, []
-    front = sel.pareto_front(points)
-    fx, fy = zip(*front)
-    ax.step(fx, fy, where="post", color="black", linestyle=(0, (4, 2)),
-            linewidth=1.0, zorder=1)
+        return series, [], (math.nan, math.nan, [])
+    front = sel.non_dominated(points)
+    _draw_front(ax, front)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel(label)
-    ax.set_ylabel("wall time [s]" + (" (median, bars min–max)" if spread else " (min)"))
+    ax.set_ylabel("wall time [s]" + (" (median, bars q1–q3)" if spread else " (min)"))
     t_end = problem["t_end"]
     if is_finite(t_end) and t_end > 0:
         sec = ax.secondary_yaxis("right", functions=(lambda w: w / t_end,
                                                      lambda s: s * t_end))
         sec.set_ylabel("wall time per simulated second [s/s]")
+    floor = sel.error_floor(series)
+    _draw_measured_floor(ax, floor[0], floor[1])
     if metric == "err_pos_rms":
         _draw_floor(ax, problem["ref_err_est"])
-    return series, front
+    return series, front, floor
 
 
 def figure_work_precision(ctx):
@@ -126,55 +155,81 @@ def figure_work_precision(ctx):
     for i, problem in enumerate(problems):
         for j, (metric, label) in enumerate(WP_METRICS):
             ax = fig.add_subplot(gs[i, j])
-            series, front = _work_precision_panel(ax, problem, metric, label, spread,
-                                                  ctx.styles)
+            series, front, floor = _work_precision_panel(ax, problem, metric, label,
+                                                         spread, ctx.styles)
             if metric == "err_pos_rms":
-                details.append((problem, series, front))
+                details.append((problem, series, front, floor))
             panels.append({"problem": problem["label"], "metric": metric,
                            "problem_key": list(problem["key"]),
                            "t_end": sorted({r["t_end"] for r in problem["rows"]
                                             if is_finite(r["t_end"])}),
                            "scenes": sorted({r["scene"] for r in problem["rows"]}),
                            "ref_hashes": sorted({r.get("ref_hash", "") for r in problem["rows"]}),
-                           "lines": list(series), "front": [list(p) for p in front],
+                           "lines": list(series),
+                           "front": [[p["err"], p["wall"]] for p in front],
+                           "front_lines": _front_methods(series, front),
+                           "labels": {line: [p["label"] for p in rungs]
+                                      for line, rungs in series.items()},
+                           "floor": [floor[0], floor[1]], "floor_lines": floor[2],
+                           "exclusive": all(p["exclusive"] for rungs in series.values()
+                                            for p in rungs),
                            "ref_err_est": problem["ref_err_est"]})
-    extra = [Line2D([], [], color="black", linestyle=(0, (4, 2)),
-                    label="Pareto front (this problem)")]
+    extra = [Line2D([], [], color="black", linestyle="none", marker="o", markersize=9,
+                    markerfacecolor="none", label="non-dominated (beaten by\n"
+                    "> IQR in time and > 1 %\nin error by no point)"),
+             Patch(facecolor="#e8c07a", alpha=0.5,
+                   label="measured floor: spread of\nthe best methods' tightest\nrungs"),
+             Patch(facecolor="#bbbbbb", alpha=0.5, label="below every method")]
     if any(is_finite(p["ref_err_est"]) for p in problems):
-        extra.append(Patch(facecolor="#bbbbbb", alpha=0.5,
-                           label="below the reference's\nestimated error"))
+        extra.append(Line2D([], [], color="#555555", linestyle=":",
+                            label="reference's estimated\nerror"))
     rows = [r for p in problems for r in p["rows"]]
     _legend_axes(fig, gs[:, 2], style_legend_handles(rows, extra, ctx.styles))
     parts = []
-    for problem, series, front in details:
-        best = min(front, key=lambda p: p[0]) if front else None
+    for problem, series, front, floor in details:
+        best = min(front, key=lambda p: p["err"]) if front else None
         parts.append(
             f"{problem['label']} (groups {', '.join(problem['groups'])}): "
             f"{sum(len(s) for s in series.values())} rungs of {len(series)} lines, "
-            f"most accurate err_pos_rms {fmt(best[0]) if best else 'n/a'} m in "
-            f"{fmt(best[1]) if best else 'n/a'} s, on the front: "
-            f"{', '.join(_front_methods(series, front)) or 'none'}; reference error "
-            + (f"estimate {fmt(problem['ref_err_est'])} m (grey band)"
+            f"most accurate err_pos_rms {fmt(best['err']) if best else 'n/a'} m in "
+            f"{fmt(best['wall']) if best else 'n/a'} s, non-dominated: "
+            f"{', '.join(_front_methods(series, front)) or 'none'}; measured floor "
+            + (f"{fmt(floor[0])} – {fmt(floor[1])} m ({len(floor[2])} methods)"
+               if is_finite(floor[0]) else "n/a") + "; reference error "
+            + (f"estimate {fmt(problem['ref_err_est'])} m (dotted line)"
                if is_finite(problem["ref_err_est"]) else "not estimated"))
+    exclusive = all(p["exclusive"] for p in panels)
     timing_text = (
         "The point is the median wall time over the repeats, the bars span "
-        "their minimum to maximum." if spread else
+        "their interquartile range (q1–q3). " + (
+            "Every run was timed alone (group key exclusive: no other run "
+            "shared the cores)." if exclusive else
+            "Runs of groups without the exclusive key (e.g. a tolerance ladder "
+            "with one repeat) were timed while other runs shared the cores: "
+            "their times are upper bounds.")
+        if spread else
         "Wall time is the minimum over the repeats (these results carry no "
         "timing spread: written before wall_s_median existed), so no error bars.")
     caption = (
         "Work-precision diagrams, one row per problem (scene, mode, μ, terrain, "
         "t_end: runs of different problems are never on one chart or front). "
         "Each line is one method through its Δt (or rtol) ladder, median error "
-        "over repeats; a method with non-default backend options (e.g. an "
-        "adaptive RK scheme) is a line of its own, hollow markers, its own "
-        "dashes; dashed black step = that problem's Pareto front. "
+        "over repeats, every point labelled with its Δt [s] or rtol; line style: "
+        "solid = zoh, dashed = coupled; a method with non-default backend "
+        "options (e.g. an adaptive RK scheme) is a line of its own, hollow "
+        "markers, its own dashes. Ringed points are non-dominated: no other "
+        "point of the problem is faster by more than the timing spread (the "
+        "larger IQR of the two) and more accurate by more than 1 %. "
         + timing_text + " The right axis is the same time per simulated second. "
         + _checkpoint_text(rows) +
         "Errors are against the problem's reference; a zoh method holds the "
         "quasi-static twist over each Δt, so its error falls only as O(Δt) "
         "(hold error) however accurate its integrator, while the coupled "
-        "methods converge at their integrator's order down to the reference's "
-        "own error (grey band: not resolvable). "
+        "methods converge at their integrator's order down to the error floor. "
+        "Measured floor (tan band): from the smallest error any method reaches "
+        "at its tightest rung to the largest among the methods within a factor "
+        "10 of it (the spread of the best methods' tightest settings); grey: "
+        "below every method; dotted line: the reference's own estimated error. "
         + " ".join(p + "." for p in parts) + _failed_note(ctx))
     record = save_figure(fig, ctx.out_dir, "fig_work_precision",
                          "1. Work-precision", caption)

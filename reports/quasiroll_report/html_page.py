@@ -149,6 +149,68 @@ def bands_table(bands, styles):
     return "\n".join(out)
 
 
+def recommendation_table(tables, styles):
+    """The closing table: per problem, for each decade target E of RMS
+    position error, the pair that reaches err <= E fastest."""
+    if not tables:
+        return "<p>No successful work-precision run: no recommendation.</p>"
+    out = []
+    for problem, floor, recs in tables:
+        out.append(f'<h3 class="recommendation">{escape(problem["label"])}</h3>')
+        if is_finite(floor[0]):
+            out.append(f'<p class="note">Measured error floor {escape(fmt(floor[0]))} – '
+                       f"{escape(fmt(floor[1]))} m (the tightest rungs of "
+                       f"{len(floor[2])} best methods); a target below it is reached "
+                       "by at most the methods shown.</p>")
+        out += ["<table>", "<tr><th>to reach err_pos_rms ≤ E [m]</th><th></th>"
+                "<th>fastest pair P</th><th>at Δt [s] / rtol</th><th>err [m]</th>"
+                "<th>median time T [s]</th><th>IQR [s]</th><th>timed alone</th>"
+                "<th>indistinguishable within the IQR</th></tr>"]
+        for k, rec in enumerate(recs):
+            nxt = recs[k + 1] if k + 1 < len(recs) else None
+            if nxt is not None and nxt["winner"] is not None \
+                    and nxt["winner"] is rec["winner"] and nxt["ties"] == rec["ties"]:
+                continue  # the same answer for a tighter E: one row for the range
+            first = k
+            while first > 0 and recs[first - 1]["winner"] is not None \
+                    and recs[first - 1]["winner"] is rec["winner"] \
+                    and recs[first - 1]["ties"] == rec["ties"]:
+                first -= 1
+            target = escape(fmt(rec["target"]) if first == k else
+                            f"{fmt(recs[first]['target'])} … {fmt(rec['target'])}")
+            if rec["winner"] is None:
+                out.append(f"<tr><td>{target}</td><td></td><td colspan=\"7\">"
+                           "no method reaches it</td></tr>")
+                continue
+            w = rec["winner"]
+            below = is_finite(floor[1]) and rec["target"] < floor[1]
+            note = ' <span class="note">(within the floor)</span>' if below else ""
+            out.append(
+                f"<tr><td>{target}{note}</td><td>{_swatch(styles, w['method'])}</td>"
+                f"<td>{escape(rec['line'])}</td><td>{escape(w['label'])}</td>"
+                + _num(w["err"]) + _num(w["wall"]) + _num(rec["iqr"])
+                + f"<td>{'yes' if w['exclusive'] else 'no'}</td>"
+                f"<td>{escape(', '.join(rec['ties']) or '–')}</td></tr>")
+        out.append("</table>")
+    return "\n".join(out)
+
+
+def machine_text(meta):
+    """The timing machine: CPU model and clock from meta.json's machine."""
+    machine = meta.get("machine") if isinstance(meta.get("machine"), dict) else {}
+    cpu = machine.get("cpu") or "unknown CPU"
+    mhz, max_mhz = machine.get("cpu_mhz"), machine.get("cpu_max_mhz")
+    clock = (f"{float(mhz):.0f} MHz" if isinstance(mhz, (int, float)) and is_finite(mhz)
+             else "clock unknown")
+    if isinstance(max_mhz, (int, float)) and is_finite(max_mhz):
+        clock += f" (max {float(max_mhz):.0f} MHz)"
+    threads = machine.get("hardware_threads")
+    jobs = meta.get("jobs")
+    return (f"Timed on {cpu}, {clock}"
+            + (f", {threads} hardware threads" if threads else "")
+            + (f", --jobs {jobs}" if jobs else "") + ".")
+
+
 def _reference_method(spec):
     """Human text of a reference's method from its canonical key."""
     kind = spec.get("kind", "")
@@ -382,7 +444,8 @@ def render_page(ctx, summary, bands, figures, warnings, findings=(), replay=""):
              f"<style>{CSS}</style></head><body>",
              "<h1>quasiroll comparison report</h1>",
              f"<p>{len(ctx.runs)} runs of {len(summary)} methods from "
-             f"<code>{escape(ctx.results_dir)}</code>.</p>", hosts_note(ctx)]
+             f"<code>{escape(ctx.results_dir)}</code>. {escape(machine_text(ctx.meta))}"
+             "</p>", hosts_note(ctx)]
     if warnings:
         parts.append("<ul>" + "".join(f'<li class="note">{escape(w)}</li>'
                                       for w in warnings) + "</ul>")
@@ -428,5 +491,14 @@ def render_page(ctx, summary, bands, figures, warnings, findings=(), replay=""):
     if replay:
         parts += ['<h2 id="replay">3D replay</h2>', replay]
     parts += ['<h2 id="reproduction">Reproduction</h2>', repro_section(ctx)]
+    parts += ['<h2 id="recommendation">Recommendation per problem</h2>',
+              "<p>To reach an RMS position error E fastest, use pair P: per problem "
+              "and decade E, the work-precision point with err_pos_rms ≤ E and the "
+              "smallest median wall time over its repeats (T, with its interquartile "
+              "range). Pairs whose own fastest point ≤ E is slower by no more than "
+              "the larger IQR of the two are listed as indistinguishable. "
+              + escape(machine_text(ctx.meta)) + "</p>",
+              recommendation_table(sel.recommendation_tables(ctx.runs, ctx.references),
+                                   ctx.styles)]
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"

@@ -85,6 +85,29 @@ def timing(run):
     return wall, wall, wall
 
 
+def timing_quartiles(run):
+    """(median, q1, q3) wall time of a run over its repeats: the harness's
+    wall_s_q1 / wall_s_q3 where written, else the type-7 quartiles of
+    wall_s_all (numpy's default, the harness's definition), else no spread
+    (q1 = q3 = the point of `timing`)."""
+    point = timing(run)[0]
+    q1, q3 = run.get("wall_s_q1", math.nan), run.get("wall_s_q3", math.nan)
+    if is_finite(q1) and is_finite(q3):
+        return point, q1, q3
+    samples = [t for t in (run.get("timings") or []) if is_finite(t)]
+    if len(samples) >= 2:
+        q1, q3 = np.percentile(samples, [25, 75])
+        return point, float(q1), float(q3)
+    return point, point, point
+
+
+def timed_alone(run):
+    """True when the harness timed the run with nothing else running
+    (timing_exclusive = 1, group key `exclusive`)."""
+    value = run.get("timing_exclusive", math.nan)
+    return is_finite(value) and value >= 1
+
+
 # ------------------------------------------------------ work-precision data
 
 def scene_with_most_runs(runs):
@@ -140,10 +163,13 @@ def work_precision_series(runs, metric, rows=None):
         if not (is_finite(err) and is_finite(wall) and err > 0 and wall > 0):
             continue
         rungs.setdefault(line_key(run), {}).setdefault(
-            _ladder_key(run), []).append((err, wall, low, high, run))
+            _ladder_key(run), []).append((err, wall, low, high, run,
+                                          timing_quartiles(run)))
     series = OrderedDict()
     for line in sorted(rungs):
         points = []
+        # A tolerance ladder: its rungs differ in rtol, not (only) in Δt.
+        by_tol = len({k[1] for k in rungs[line]}) > len({k[0] for k in rungs[line]})
         for key in sorted(rungs[line], reverse=True):
             members = rungs[line][key]
             first = members[0][4]
@@ -153,6 +179,10 @@ def work_precision_series(runs, metric, rows=None):
                 "wall": float(np.median([m[1] for m in members])),
                 "wall_lo": float(min(m[2] for m in members)),
                 "wall_hi": float(max(m[3] for m in members)),
+                "wall_q1": float(min(m[5][1] for m in members)),
+                "wall_q3": float(max(m[5][2] for m in members)),
+                "exclusive": all(timed_alone(m[4]) for m in members),
+                "label": rung_label(key[0], key[1], by_tol),
                 "t_end": first.get("t_end", math.nan),
                 "t_reached": float(np.median([m[4]["t_reached"] for m in members])),
                 "n": len(members), "run": first, "method": first["method"],
@@ -160,6 +190,118 @@ def work_precision_series(runs, metric, rows=None):
                 "coupling": first["coupling"]})
         series[line] = points
     return series
+
+
+def rung_label(dt, tol, by_tol):
+    """A work-precision point's ladder parameter as a short label: its rtol
+    ('1e-6') on a line whose rungs differ in rtol (a tolerance ladder), else
+    its output interval Δt ('0.1')."""
+    if by_tol and is_finite(tol) and tol > 0:
+        return f"{tol:.0e}".replace("e-0", "e-").replace("e+0", "e")
+    return f"{dt:g}" if is_finite(dt) and dt > 0 else ""
+
+
+# Relative error difference below which two work-precision points count as
+# equally accurate (issue 21 item 7: "worse by more than 1 % in error").
+ERROR_TIE = 0.01
+
+
+def timing_spread(point):
+    """IQR of a work-precision point's wall time (0 for one repeat)."""
+    q1, q3 = point.get("wall_q1", math.nan), point.get("wall_q3", math.nan)
+    return q3 - q1 if is_finite(q1) and is_finite(q3) and q3 >= q1 else 0.0
+
+
+def dominates(b, a, error_tie=ERROR_TIE):
+    """True when point b dominates point a (dicts with err, wall, wall_q1,
+    wall_q3): a is slower than b by more than the timing spread, i.e. the
+    difference of the medians exceeds the larger of the two IQRs, AND a's
+    error exceeds b's by more than `error_tie` (1 %) relative. A point
+    within either tolerance of another is never dominated by it: ties in
+    error or time within the measurement's noise do not decide the front."""
+    spread = max(timing_spread(a), timing_spread(b))
+    return (a["wall"] - b["wall"] > spread
+            and a["err"] > b["err"] * (1.0 + error_tie))
+
+
+def non_dominated(points, error_tie=ERROR_TIE):
+    """The points no other point dominates (`dominates`), sorted by error
+    then wall time: the work-precision front of one problem."""
+    front = [a for a in points
+             if not any(dominates(b, a, error_tie) for b in points if b is not a)]
+    return sorted(front, key=lambda p: (p["err"], p["wall"]))
+
+
+def error_floor(series):
+    """The measured error floor of one problem's chart: each line's error at
+    its tightest rung (smallest Δt, else smallest rtol, i.e. the last point
+    of the series); the best methods are the lines whose tightest error is
+    within a factor 10 of the smallest one; returns (low, high, lines): the
+    spread of those errors and the lines, or (nan, nan, []) without data.
+    A target below `high` is where the best methods disagree by up to their
+    spread: below `low`, no method of these results reaches."""
+    tightest = {line: rungs[-1]["err"] for line, rungs in series.items()
+                if rungs and is_finite(rungs[-1]["err"]) and rungs[-1]["err"] > 0}
+    if not tightest:
+        return math.nan, math.nan, []
+    low = min(tightest.values())
+    best = sorted((line for line, e in tightest.items() if e <= 10 * low),
+                  key=lambda line: tightest[line])
+    return low, max(tightest[line] for line in best), best
+
+
+def recommendation_targets(points, floor_low):
+    """Target errors E for the recommendation table: every decade 10^k from
+    the largest error of the chart's points down to the first decade at or
+    below the measured floor's low end."""
+    errs = [p["err"] for p in points if is_finite(p["err"]) and p["err"] > 0]
+    if not errs:
+        return []
+    top = math.ceil(math.log10(max(errs)))
+    bottom = math.floor(math.log10(min(errs)))
+    if is_finite(floor_low) and floor_low > 0:
+        bottom = max(bottom, math.floor(math.log10(floor_low)))
+    return [10.0 ** k for k in range(top, bottom - 1, -1)]
+
+
+def recommendations(series, targets):
+    """[dict] one per target E: the fastest point (median wall time) whose
+    error is <= E, its timing spread, and the `ties`: the other methods whose
+    own fastest point <= E is not slower than the winner by more than the
+    larger IQR of the two (indistinguishable at this timing spread). A
+    target no point reaches has winner None."""
+    best_per_line = {}
+    out = []
+    for target in targets:
+        best_per_line = {}
+        for line, rungs in series.items():
+            ok = [p for p in rungs if p["err"] <= target]
+            if ok:
+                best_per_line[line] = min(ok, key=lambda p: (p["wall"], p["err"]))
+        if not best_per_line:
+            out.append({"target": target, "winner": None, "line": None, "ties": []})
+            continue
+        line, winner = min(best_per_line.items(),
+                           key=lambda kv: (kv[1]["wall"], kv[1]["err"], kv[0]))
+        ties = sorted(other for other, p in best_per_line.items() if other != line
+                      and p["wall"] - winner["wall"]
+                      <= max(timing_spread(p), timing_spread(winner)))
+        out.append({"target": target, "winner": winner, "line": line, "ties": ties,
+                    "iqr": timing_spread(winner), "candidates": len(best_per_line)})
+    return out
+
+
+def recommendation_tables(runs, references=None, metric="err_pos_rms"):
+    """Per work-precision problem: (problem, floor, [recommendation]) for
+    decade targets of `metric` (recommendation_targets, recommendations)."""
+    out = []
+    for problem in work_precision_problems(runs, references):
+        series = work_precision_series(None, metric, rows=problem["rows"])
+        points = [p for rungs in series.values() for p in rungs]
+        floor = error_floor(series)
+        out.append((problem, floor,
+                    recommendations(series, recommendation_targets(points, floor[0]))))
+    return out
 
 
 def pareto_front(points):

@@ -8,11 +8,15 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <sstream>
+#include <thread>
 
 #include "quasiroll/bench/harness/method_id.h"
 #include "quasiroll/bench/harness/suite.h"
@@ -102,6 +106,52 @@ std::string WithoutTiming(const fs::path& p) {
     out += "\n";
   }
   return out;
+}
+
+// Exclusive tasks (group key `exclusive`) never overlap another task, even
+// with --jobs 4; the shared ones do run concurrently (so the check can
+// fail); every task runs once. Each task sleeps 20 ms so that overlaps
+// would happen if the scheduler allowed them.
+TEST(ScheduleTasks, ExclusiveTasksRunAloneAfterTheSharedOnes) {
+  const int n = 12;
+  std::vector<int> classes(n, 0);
+  std::vector<bool> alone(n, false);
+  for (int k : {1, 4, 5, 9}) alone[k] = true;
+  std::atomic<int> active{0};
+  std::mutex mutex;
+  std::vector<int> order, active_at_start(n, -1);
+  int max_shared = 0;
+  ScheduleTasks(classes, alone, 4, [&](int k) {
+    const int now = ++active;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      order.push_back(k);
+      active_at_start[k] = now;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      // Still alone at the end: nothing started meanwhile.
+      if (alone[k]) {
+        EXPECT_EQ(active.load(), 1) << "task " << k;
+      }
+      max_shared = std::max(max_shared, active.load());
+    }
+    --active;
+  });
+  ASSERT_EQ(order.size(), static_cast<std::size_t>(n));
+  std::vector<int> sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  for (int k = 0; k < n; ++k) EXPECT_EQ(sorted[k], k);
+  for (int k = 0; k < n; ++k) {
+    if (alone[k]) {
+      EXPECT_EQ(active_at_start[k], 1) << "task " << k;
+    }
+  }
+  // The exclusive tasks come last, in order.
+  EXPECT_EQ(std::vector<int>(order.end() - 4, order.end()),
+            (std::vector<int>{1, 4, 5, 9}));
+  EXPECT_GT(max_shared, 1) << "shared tasks never overlapped";
 }
 
 class BenchHarness : public TinySuiteTest<BenchHarness> {

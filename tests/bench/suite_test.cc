@@ -487,6 +487,73 @@ TEST(BenchSuite, StabilitySuiteCoversEveryMethodOnEveryAxis) {
   }
 }
 
+TEST(BenchSuite, ExclusiveGroupsAreTimedAloneAndKeyed) {
+  const Suite s = Load(std::string(kBase) + R"(
+groups:
+  shared:
+    scenes: [paper]
+    repeats: 5
+  alone:
+    scenes: [paper]
+    repeats: 5
+    exclusive: true
+  explicit_false:
+    scenes: [paper]
+    repeats: 5
+    exclusive: false
+)");
+  ASSERT_EQ(s.runs.size(), 3u);
+  EXPECT_FALSE(s.runs[0].exclusive);
+  EXPECT_TRUE(s.runs[1].exclusive);
+  EXPECT_FALSE(s.runs[2].exclusive);
+  // Only an exclusive run's key says so: the keys (and run ids) of suites
+  // without the key stay what they were.
+  EXPECT_EQ(s.runs[0].key.find("exclusive"), std::string::npos);
+  EXPECT_NE(s.runs[1].key.find(";exclusive=1"), std::string::npos);
+  EXPECT_EQ(s.runs[2].key.find("exclusive"), std::string::npos);
+  ExpectRejected(std::string(kBase) + "groups:\n  g:\n    exclusive: 2\n",
+                 {"groups.g.exclusive", "2"});
+}
+
+// The main job's report shows every stability axis for every method: the
+// default suite carries the stability suite's groups verbatim (same runs,
+// same keys, on scenes of the same definition).
+TEST(BenchSuite, DefaultSuiteCarriesTheStabilitySuitesGroups) {
+  const std::string dir = std::string(QUASIROLL_SOURCE_DIR) + "/bench/suites/";
+  const Suite d = LoadSuite(dir + "default.yaml");
+  const Suite st = LoadSuite(dir + "stability.yaml");
+  auto runs_of = [](const Suite& s) {
+    std::vector<std::string> keys;
+    for (const RunSpec& r : s.runs) {
+      if (r.group.rfind("stability_", 0) != 0) continue;
+      const SuiteScene& sc = s.scenes[r.scene_index];
+      keys.push_back(r.key + "|" +
+                     SceneCanonicalText(RunScene(s, r),
+                                        SweptTerrain(sc, r.seed, r.roughness),
+                                        sc.heightmap_digest));
+    }
+    return keys;
+  };
+  const std::vector<std::string> in_default = runs_of(d);
+  EXPECT_EQ(in_default.size(), st.runs.size());
+  EXPECT_EQ(in_default, runs_of(st));
+}
+
+// Work-precision on four problems, every group timed alone with >= 5
+// repeats (issue 21 item 7).
+TEST(BenchSuite, DefaultWorkPrecisionGroupsAreTimedAlone) {
+  const Suite d = LoadSuite(std::string(QUASIROLL_SOURCE_DIR) +
+                            "/bench/suites/default.yaml");
+  std::set<std::string> problems;
+  for (const RunSpec& r : d.runs) {
+    if (r.group.rfind("work_precision", 0) != 0) continue;
+    EXPECT_TRUE(r.exclusive) << r.run_id;
+    EXPECT_GE(r.repeats, 5) << r.run_id;
+    problems.insert(r.scene + "/" + Num(r.roughness));
+  }
+  EXPECT_GE(problems.size(), 4u);
+}
+
 TEST(BenchSuite, ShippedSuitesLoad) {
   for (const char* name : {"smoke", "default", "analytic", "stability"}) {
     const std::string path =

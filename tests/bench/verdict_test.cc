@@ -33,6 +33,24 @@ TEST(TimingStats, MinMedianMaxOverRepeats) {
   EXPECT_TRUE(std::isnan(ComputeTimingStats({}).median));
 }
 
+// Quartiles by type-7 interpolation, values checked against
+// numpy.percentile([...], [25, 75]) (linear method, its default).
+TEST(TimingStats, QuartilesInterpolateBetweenOrderStatistics) {
+  // n = 5: positions 1 and 3 fall on order statistics: 0.2 and 0.4.
+  TimingStats t = ComputeTimingStats({0.5, 0.1, 0.4, 0.2, 0.3});
+  EXPECT_DOUBLE_EQ(t.q1, 0.2);
+  EXPECT_DOUBLE_EQ(t.q3, 0.4);
+  // n = 4: positions 0.75 and 2.25: 1 + 0.75 * (2 - 1) = 1.75, 3 + 0.25 * 7.
+  t = ComputeTimingStats({10.0, 1.0, 3.0, 2.0});
+  EXPECT_DOUBLE_EQ(t.q1, 1.75);
+  EXPECT_DOUBLE_EQ(t.q3, 4.75);
+  // One repeat: no spread.
+  t = ComputeTimingStats({0.7});
+  EXPECT_EQ(t.q1, 0.7);
+  EXPECT_EQ(t.q3, 0.7);
+  EXPECT_TRUE(std::isnan(ComputeTimingStats({}).q3));
+}
+
 // Oracle O2 (the constant-steer circle, paper mode): the COM moves on a
 // circle at constant speed v with yaw rate Omega, contact forces are the
 // static load (sum |F_i| = m g, no traction). The only inertial load is the
