@@ -147,17 +147,22 @@ AtlasCell CellAt(const AtlasSpec& spec, std::int64_t index) {
   return c;
 }
 
+Scene SceneAt(const AtlasSpec& spec, const AtlasCell& cell) {
+  Scene scene = spec.scene;
+  scene.mode = cell.mode;
+  scene.x0 = cell.x;
+  scene.y0 = cell.y;
+  scene.yaw0 = cell.heading;
+  return scene;
+}
+
 AtlasRow EvaluateAtlasCell(const AtlasSpec& spec, const AtlasCell& cell) {
   const auto start = std::chrono::steady_clock::now();
   AtlasRow row;
   row.cell = cell;
   row.mu_min = row.margin = row.min_normal_force = kNaN;
   row.z = row.roll = row.pitch = kNaN;
-  Scene scene = spec.scene;
-  scene.mode = cell.mode;
-  scene.x0 = cell.x;
-  scene.y0 = cell.y;
-  scene.yaw0 = cell.heading;
+  const Scene scene = SceneAt(spec, cell);
   const KinematicModel model(scene.geometry, scene.terrain);
   auto finish = [&](const char* status, std::string detail) {
     row.status = status;

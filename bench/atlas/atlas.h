@@ -61,6 +61,8 @@ struct AtlasCell {
   ActuationMode mode = ActuationMode::kPaper;
 };
 AtlasCell CellAt(const AtlasSpec& spec, std::int64_t index);
+// The spec's scene placed at the cell's pose, in the cell's mode.
+Scene SceneAt(const AtlasSpec& spec, const AtlasCell& cell);
 
 struct AtlasRow {
   AtlasCell cell;

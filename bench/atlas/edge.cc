@@ -56,11 +56,7 @@ std::vector<EdgeRow> RunEdgeStudy(const AtlasSpec& spec,
   std::vector<EdgeRow> rows;
   for (std::int64_t index : cells) {
     const AtlasCell cell = CellAt(spec, index);
-    Scene scene = spec.scene;
-    scene.mode = cell.mode;
-    scene.x0 = cell.x;
-    scene.y0 = cell.y;
-    scene.yaw0 = cell.heading;
+    const Scene scene = SceneAt(spec, cell);
     const KinematicModel model(scene.geometry, scene.terrain);
     const Configuration theta = SolveInitialConfiguration(model, scene);
     QuasiStaticProblem probe(model, QuasiStaticParameters::FromScene(scene));

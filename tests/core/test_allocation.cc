@@ -28,28 +28,42 @@ void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 namespace quasiroll {
 namespace {
 
-class WarmStep : public ::testing::TestWithParam<std::string> {};
+class WarmStep : public ::testing::TestWithParam<std::string> {
+ protected:
+  // The paper scene with newton and the parameter's integrator.
+  static SimulationOptions PaperOptions() {
+    RegisterBuiltinNlpSolvers();
+    RegisterBuiltinIntegrators();
+    SimulationOptions options;
+    options.nlp = "newton";
+    options.dae = GetParam();
+    return options;
+  }
+  // Heap allocations during 50 steps after 5 warm-up steps.
+  static long long AllocationsInWarmSteps(const SimulationOptions& options,
+                                          SimulationResult* result,
+                                          std::size_t* warm_checkpoints) {
+    const Scene scene = LoadScene(std::string(QUASIROLL_SOURCE_DIR) +
+                                  "/bench/scenes/paper.yaml");
+    Simulator sim(scene, options);
+    sim.Begin(sim.initial_configuration(), result);
+    for (int k = 0; k < 5; ++k)
+      EXPECT_TRUE(sim.Advance(result)) << result->stop_reason;
+    *warm_checkpoints = result->checkpoints.size();
+    const long long before = g_allocations.load();
+    for (int k = 0; k < 50; ++k)
+      EXPECT_TRUE(sim.Advance(result)) << result->stop_reason;
+    return g_allocations.load() - before;
+  }
+};
 
 TEST_P(WarmStep, AdvanceDoesNotAllocate) {
 #if defined(__SANITIZE_ADDRESS__)
   GTEST_SKIP() << "AddressSanitizer owns operator new";
 #endif
-  RegisterBuiltinNlpSolvers();
-  RegisterBuiltinIntegrators();
-  const Scene scene =
-      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
-  SimulationOptions options;
-  options.nlp = "newton";
-  options.dae = GetParam();
-  Simulator sim(scene, options);
   SimulationResult result;
-  sim.Begin(sim.initial_configuration(), &result);
-  for (int k = 0; k < 5; ++k)
-    ASSERT_TRUE(sim.Advance(&result)) << result.stop_reason;
-  const long long before = g_allocations.load();
-  for (int k = 0; k < 50; ++k)
-    ASSERT_TRUE(sim.Advance(&result)) << result.stop_reason;
-  EXPECT_EQ(g_allocations.load() - before, 0)
+  std::size_t warm = 0;
+  EXPECT_EQ(AllocationsInWarmSteps(PaperOptions(), &result, &warm), 0)
       << "allocations in 50 warmed-up steps";
 }
 
@@ -60,27 +74,14 @@ TEST_P(WarmStep, AdvanceWithCheckpointsDoesNotAllocate) {
 #if defined(__SANITIZE_ADDRESS__)
   GTEST_SKIP() << "AddressSanitizer owns operator new";
 #endif
-  RegisterBuiltinNlpSolvers();
-  RegisterBuiltinIntegrators();
-  const Scene scene =
-      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
-  SimulationOptions options;
-  options.nlp = "newton";
-  options.dae = GetParam();
+  SimulationOptions options = PaperOptions();
   for (int k = 1; k * 0.0375 < 3.0; ++k)
     options.checkpoints.push_back(k * 0.0375);
-  Simulator sim(scene, options);
   SimulationResult result;
-  sim.Begin(sim.initial_configuration(), &result);
-  for (int k = 0; k < 5; ++k)
-    ASSERT_TRUE(sim.Advance(&result)) << result.stop_reason;
-  const std::size_t recorded = result.checkpoints.size();
-  const long long before = g_allocations.load();
-  for (int k = 0; k < 50; ++k)
-    ASSERT_TRUE(sim.Advance(&result)) << result.stop_reason;
-  EXPECT_EQ(g_allocations.load() - before, 0)
+  std::size_t warm = 0;
+  EXPECT_EQ(AllocationsInWarmSteps(options, &result, &warm), 0)
       << "allocations in 50 warmed-up steps";
-  EXPECT_GE(result.checkpoints.size(), recorded + 60);  // 2.5 s / 0.0375 s
+  EXPECT_GE(result.checkpoints.size(), warm + 60);  // 2.5 s / 0.0375 s
 }
 
 INSTANTIATE_TEST_SUITE_P(RkBackends, WarmStep,
