@@ -42,6 +42,17 @@ def write_atlas(directory):
         w.writerows(rows)
     with open(os.path.join(directory, "meta.json"), "w") as f:
         json.dump({"kind": "atlas", "key": "atlas{test}", "commit": "abc"}, f)
+    with open(os.path.join(directory, "edge.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["cell", "mode", "backend", "offset", "mu", "verdict",
+                    "qs_status", "nlp_status", "iterations", "kkt_residual",
+                    "wall_s"])
+        w.writerow([0, "paper", "fake", 0.01, 0.101, "correct", "OK",
+                    "converged", 5, 1e-13, 0.002])
+        w.writerow([0, "paper", "fake", -0.01, 0.099, "wrong_claim", "OK",
+                    "converged", 7, 1e-13, 0.004])
+        w.writerow([0, "paper", "fake", -0.001, 0.0999, "correct",
+                    "INFEASIBLE_FRICTION", "infeasible", 9, "nan", 0.006])
     with open(os.path.join(directory, "terrain.json"), "w") as f:
         json.dump({"type": "gaussians", "bumps": [[0.05, 1.0, 0.5, 0.4]]}, f)
 
@@ -60,6 +71,19 @@ class AtlasReport(unittest.TestCase):
                 self.assertTrue(os.path.isfile(os.path.join(d, "report", f"{name}.svg")))
             self.assertIn("no_contact", page)
             self.assertIn("atlas{test}", page)
+            self.assertIn("Solver reliability at the edge", page)
+
+    def test_edge_summary_counts_wrong_claims(self):
+        with tempfile.TemporaryDirectory() as d:
+            write_atlas(d)
+            with open(os.path.join(d, "edge.csv"), newline="") as f:
+                rows = list(csv.DictReader(f))
+        above, below = sorted(atlas.edge_summary(rows), key=lambda s: s["side"])
+        self.assertEqual(above["counts"]["correct"], 1)
+        self.assertEqual(below["counts"]["wrong_claim"], 1)
+        self.assertEqual(below["counts"]["correct"], 1)
+        self.assertEqual(below["detected"], 1)
+        self.assertEqual(below["median_iterations"], 9)
 
     def test_grid_and_fraction(self):
         with tempfile.TemporaryDirectory() as d:

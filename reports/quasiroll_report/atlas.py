@@ -8,6 +8,7 @@ Figures (each PNG + SVG):
   atlas_pvc_gain   pvc - paper of the minimum over headings
   atlas_fraction   traversable fraction of the poses (x, y, heading) vs mu
   atlas_wheel      critical wheel per mode at the first heading
+and, when DIR/edge.csv exists, the edge-reliability table per NLP backend.
 """
 
 import csv
@@ -247,6 +248,57 @@ def _status_table(grid):
     return "\n".join(out)
 
 
+EDGE_VERDICTS = ("correct", "wrong_claim", "false_infeasibility", "failure")
+
+
+def edge_summary(rows):
+    """Per (backend, side): verdict counts, backend-detected infeasibility
+    below the edge, median iterations and wall time."""
+    groups = {}
+    for r in rows:
+        side = "above" if float(r["offset"]) > 0 else "below"
+        groups.setdefault((r["backend"], side), []).append(r)
+    out = []
+    for (backend, side), group in sorted(groups.items()):
+        counts = {v: sum(1 for r in group if r["verdict"] == v) for v in EDGE_VERDICTS}
+        detected = sum(1 for r in group if r["nlp_status"] == "infeasible")
+        iters = sorted(int(r["iterations"]) for r in group)
+        walls = sorted(float(r["wall_s"]) for r in group)
+        out.append({"backend": backend, "side": side, "solves": len(group),
+                    "counts": counts, "detected": detected,
+                    "median_iterations": iters[len(iters) // 2],
+                    "median_wall_s": walls[len(walls) // 2]})
+    return out
+
+
+def _edge_table(results_dir):
+    path = os.path.join(results_dir, "edge.csv")
+    if not os.path.isfile(path):
+        return ""
+    with open(path, newline="", encoding="utf-8") as handle:
+        rows = list(csv.DictReader(handle))
+    if not rows:
+        return ""
+    head = "".join(f"<th>{v}</th>" for v in EDGE_VERDICTS)
+    out = ["<h2>Solver reliability at the edge</h2>",
+           "<p>Every NLP backend at mu = mu_min (1 + d), d in {+1e-1, +1e-2, "
+           "+1e-3} (above: a solution exists) and {-1e-3, -1e-2} (below: "
+           "none exists); verdicts in docs/atlas.md. A wrong claim is a "
+           "converged solve below the edge.</p>", "<table>",
+           f"<tr><th>backend</th><th>side</th><th>solves</th>{head}"
+           "<th>said infeasible</th><th>median iterations</th>"
+           "<th>median time [ms]</th></tr>"]
+    for s in edge_summary(rows):
+        cells = "".join(f'<td class="num">{s["counts"][v]}</td>' for v in EDGE_VERDICTS)
+        out.append(f"<tr><td>{html.escape(s['backend'])}</td><td>{s['side']}</td>"
+                   f'<td class="num">{s["solves"]}</td>{cells}'
+                   f'<td class="num">{s["detected"]}</td>'
+                   f'<td class="num">{s["median_iterations"]}</td>'
+                   f'<td class="num">{1e3 * s["median_wall_s"]:.2f}</td></tr>')
+    out.append("</table>")
+    return "\n".join(out)
+
+
 def build_atlas_report(results_dir, out_dir):
     """Write the atlas page; return the absolute path of index.html."""
     apply_style()
@@ -277,7 +329,8 @@ def build_atlas_report(results_dir, out_dir):
             f"{html.escape(str(meta.get('commit', 'unknown')))}; "
             f"{html.escape(str(meta.get('cpu_model', '')))}. How to read the "
             "maps: docs/atlas.md.</p>"
-            + _status_table(grid) + "".join(blocks) + "</body></html>\n")
+            + _status_table(grid) + "".join(blocks) + _edge_table(results_dir)
+            + "</body></html>\n")
     index = os.path.join(out_dir, "index.html")
     with open(index, "w", encoding="utf-8") as handle:
         handle.write(page)
