@@ -65,6 +65,7 @@ install(TARGETS ${_quasiroll_install_targets}
 
 # Run-time data.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/bench/scenes ${PROJECT_SOURCE_DIR}/bench/suites
+                  ${PROJECT_SOURCE_DIR}/bench/atlases
         DESTINATION ${QUASIROLL_INSTALL_DATADIR}/bench COMPONENT runtime)
 # The runs.csv schema, read by the report (reports/quasiroll_report/data.py).
 install(FILES ${PROJECT_SOURCE_DIR}/bench/io/runs_columns.tsv

@@ -152,6 +152,16 @@ TEST(TraversabilityAtlas, PoseWithoutContactIsARowWithItsCause) {
   fs::remove_all(root);
 }
 
+// The shipped atlas specs load (scene path relative to the spec file).
+TEST(TraversabilityAtlas, ShippedSpecsLoad) {
+  const std::string dir = std::string(QUASIROLL_SOURCE_DIR) + "/bench/atlases/";
+  const AtlasSpec r1 = LoadAtlasSpec(dir + "r1.yaml");
+  EXPECT_EQ(r1.CellCount(), 64 * 64 * 16 * 2);
+  EXPECT_EQ(r1.edge_cells, 32);
+  EXPECT_EQ(r1.scene.name, LoadScene(kScenes + "paper.yaml").name);
+  EXPECT_EQ(LoadAtlasSpec(dir + "r1_small.yaml").CellCount(), 24 * 18 * 8 * 2);
+}
+
 TEST(TraversabilityAtlas, InvalidGridNamesTheKey) {
   AtlasSpec spec = InclineSpec(0);
   try {
