@@ -283,6 +283,7 @@ void WriteAtlasMeta(const AtlasSpec& spec, const fs::path& out,
   j.Key("wall_s").Value(s.wall_seconds);
   j.Key("host").Value(ThisMachine().hostname);
   j.Key("cpu_model").Value(ThisMachine().cpu);
+  j.Key("library_versions");
   WriteLibraryVersions(&j);
   j.EndObject();
   AtomicWriteFile((out / "meta.json").string(), j.str() + "\n");

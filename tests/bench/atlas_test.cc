@@ -13,6 +13,7 @@
 
 #include "quasiroll/bench/atlas/edge.h"
 #include "quasiroll/bench/io/csv.h"
+#include "quasiroll/bench/io/json_reader.h"
 #include "test_support.h"
 
 namespace quasiroll::bench {
@@ -100,6 +101,13 @@ TEST(TraversabilityAtlas, OutputDoesNotDependOnJobsOrInterruption) {
   const AtlasSummary s1 = RunAtlas(spec, one);
   RunAtlas(spec, two);
   EXPECT_EQ(s1.cells, 36);
+  // meta.json is JSON with the grid's key and the provenance.
+  const JsonValue meta = ParseJson(ReadAll(root / "one" / "meta.json"));
+  ASSERT_NE(meta.Find("key"), nullptr);
+  EXPECT_EQ(meta.Find("key")->str(), CanonicalAtlasKey(spec));
+  ASSERT_NE(meta.Find("library_versions"), nullptr);
+  EXPECT_TRUE(meta.Find("library_versions")->is_object());
+  EXPECT_EQ(meta.Find("cells")->number(), 36);
   EXPECT_EQ(WithoutWallTime(root / "one" / "atlas.csv"),
             WithoutWallTime(root / "two" / "atlas.csv"));
   // Keep the header and the first 10 rows, and tear the 11th mid-line.
