@@ -160,12 +160,19 @@ def figure_mu_min(grid, terrain, out_dir):
         _map(ax, grid, np.where(np.isinf(best), np.nan, best),
              grid.standing[m].any(axis=0), terrain, vmin, vmax)
         ax.set_title(f"{mode}, min over {len(grid.headings)} headings")
-    fig.colorbar(image, ax=axes, shrink=0.8, label="mu_min")
+    bar = fig.colorbar(image, ax=axes, shrink=0.8, label="mu_min")
+    if math.isfinite(grid.mu) and vmin <= grid.mu <= vmax:
+        bar.ax.axhline(grid.mu, color="#d62728", linewidth=2)
+        bar.ax.text(-0.2, grid.mu, "scene mu", color="#d62728", fontsize=7,
+                    va="center", ha="right",
+                    transform=bar.ax.get_yaxis_transform())
     caption = (
         "Smallest friction coefficient admitting the commanded quasi-static "
         "motion at each pose (grey: the robot cannot stand there; the cause "
-        "is in atlas.csv). Black lines: terrain height contours. The last "
-        "column is the easiest heading at each position.")
+        "is in atlas.csv), one colour scale for all panels; the red mark on "
+        "the scale is the scene's mu (above it the robot is stuck). Black "
+        "lines: terrain height contours. The last column is the easiest "
+        "heading at each position.")
     return save_figure(fig, out_dir, "atlas_mu_min", "mu_min maps", caption)
 
 
