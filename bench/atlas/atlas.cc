@@ -160,6 +160,7 @@ AtlasRow EvaluateAtlasCell(const AtlasSpec& spec, const AtlasCell& cell) {
   const auto start = std::chrono::steady_clock::now();
   AtlasRow row;
   row.cell = cell;
+  row.mu = spec.scene.mu;
   row.mu_min = row.margin = row.min_normal_force = kNaN;
   row.z = row.roll = row.pitch = kNaN;
   const Scene scene = SceneAt(spec, cell);
@@ -210,21 +211,13 @@ std::string AtlasCsvHeader() {
 }
 
 std::string AtlasCsvRow(const AtlasRow& row) {
-  // Full precision (%.17g) for the numbers a map is drawn from.
-  auto num = [](double v) {
-    if (std::isnan(v)) return std::string("nan");
-    char buf[32];
-    std::snprintf(buf, sizeof(buf), "%.17g", v);
-    return std::string(buf);
-  };
-  const double mu =
-      std::isnan(row.margin) ? kNaN : row.margin + row.mu_min;  // scene mu
+  // Num: the shortest text that reads back to the same double.
   return JoinCsvRow(
-      {std::to_string(row.cell.index), num(row.cell.x), num(row.cell.y),
-       num(row.cell.heading), ToString(row.cell.mode), row.status, row.detail,
-       num(row.mu_min), std::to_string(row.critical_wheel), num(mu),
-       num(row.margin), num(row.min_normal_force), num(row.z), num(row.roll),
-       num(row.pitch), num(row.wall_s)});
+      {std::to_string(row.cell.index), Num(row.cell.x), Num(row.cell.y),
+       Num(row.cell.heading), ToString(row.cell.mode), row.status, row.detail,
+       Num(row.mu_min), std::to_string(row.critical_wheel), Num(row.mu),
+       Num(row.margin), Num(row.min_normal_force), Num(row.z), Num(row.roll),
+       Num(row.pitch), Num(row.wall_s)});
 }
 
 namespace {
@@ -232,6 +225,8 @@ namespace {
 // Rows appended as cells finish, so that a killed atlas resumes from them;
 // removed once atlas.csv is complete.
 constexpr const char* kPartialName = "atlas.partial.csv";
+// atlas.csv's `status` column (AtlasCsvHeader).
+constexpr std::size_t kStatusColumn = 5;
 
 // Rows of an existing atlas.csv (cell index -> the row's text), when its
 // meta.json names the same grid; throws when it names another.
@@ -249,17 +244,25 @@ std::map<std::int64_t, std::string> ReadFinishedRows(const AtlasSpec& spec,
         "--resume: " + (out / "atlas.csv").string() +
         " belongs to another atlas grid (meta.json key differs from " +
         CanonicalAtlasKey(spec) + ")");
+  // Every row is written with its newline: a last line without one was torn
+  // by the interruption and is dropped.
+  auto whole_lines = [](std::string* t) {
+    const std::size_t end = t->rfind('\n');
+    t->erase(end == std::string::npos ? 0 : end + 1);
+  };
+  whole_lines(&text);
+  whole_lines(&partial);
   // atlas.csv has a header, the partial file (rows as they were finished)
   // none; a row is the same text in both.
   std::istringstream in(text + partial);
   std::string line;
   const std::int64_t n = spec.CellCount();
+  const std::size_t columns = SplitCsvLine(AtlasCsvHeader()).size();
   while (std::getline(in, line)) {
-    if (line.rfind("cell,", 0) == 0) continue;  // header
-    // A complete row ends with its wall time; a torn last line is dropped.
-    if (line.empty() || std::count(line.begin(), line.end(), ',') < 15)
-      continue;
-    const std::int64_t index = std::stoll(line.substr(0, line.find(',')));
+    if (line.empty() || line == AtlasCsvHeader()) continue;
+    const std::vector<std::string> fields = SplitCsvLine(line);
+    if (fields.size() != columns) continue;
+    const std::int64_t index = std::stoll(fields[0]);
     if (index >= 0 && index < n) rows[index] = line;
   }
   return rows;
@@ -357,7 +360,7 @@ AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options) {
   std::vector<std::int64_t> ok_cells;
   for (const auto& [index, line] : done) {
     csv += line + "\n";
-    if (line.find(",ok,") != std::string::npos) ok_cells.push_back(index);
+    if (SplitCsvLine(line)[kStatusColumn] == "ok") ok_cells.push_back(index);
   }
   s.ok = static_cast<std::int64_t>(ok_cells.size());
   AtomicWriteFile((out / "atlas.csv").string(), csv);

@@ -70,7 +70,8 @@ struct AtlasRow {
   std::string detail;             // why, for a cause ("" when ok)
   double mu_min = 0.0;            // NaN when undefined
   int critical_wheel = 0;         // 1-based, 0 when none
-  double margin = 0.0;            // scene mu - mu_min (NaN when undefined)
+  double mu = 0.0;                // the scene's mu
+  double margin = 0.0;            // mu - mu_min (NaN when undefined)
   double min_normal_force = 0.0;  // [N] at the minimiser, NaN if undefined
   double z = 0.0, roll = 0.0, pitch = 0.0;  // platform pose, NaN if no contact
   double wall_s = 0.0;

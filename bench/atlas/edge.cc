@@ -2,27 +2,16 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <memory>
 
 #include "quasiroll/bench/io/csv.h"
+#include "quasiroll/bench/io/format.h"
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/quasi_static.h"
 
 namespace quasiroll::bench {
-
-namespace {
-
-std::string Full(double v) {
-  if (std::isnan(v)) return "nan";
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.17g", v);
-  return buf;
-}
-
-}  // namespace
 
 const char* EdgeVerdict(double offset, QuasiStaticStatus status,
                         NlpStatus nlp_status) {
@@ -99,9 +88,9 @@ std::string EdgeCsvHeader() {
 
 std::string EdgeCsvRow(const EdgeRow& r) {
   return JoinCsvRow({std::to_string(r.cell), ToString(r.mode), r.backend,
-                     Full(r.offset), Full(r.mu), r.verdict, r.qs_status,
+                     Num(r.offset), Num(r.mu), r.verdict, r.qs_status,
                      r.nlp_status, std::to_string(r.iterations),
-                     Full(r.kkt_residual), Full(r.wall_s)});
+                     Num(r.kkt_residual), Num(r.wall_s)});
 }
 
 }  // namespace quasiroll::bench
