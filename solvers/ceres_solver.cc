@@ -11,8 +11,9 @@
 #include "quasiroll/core/nlp_polish.h"
 
 namespace quasiroll {
+namespace {
 
-struct CeresNlpSolver::Impl {
+struct CeresImpl {
   struct Settings {
     double rho_init = 10.0, rho_growth = 10.0, rho_max = 1e8;
     double rho_grow_unless = 0.25;
@@ -47,7 +48,7 @@ struct CeresNlpSolver::Impl {
   // ---- phase 1: feasibility least squares ----------------------------------
   class FeasibilityCost final : public ceres::CostFunction {
    public:
-    FeasibilityCost(Impl* s, int num_residuals, int n) : s_(s) {
+    FeasibilityCost(CeresImpl* s, int num_residuals, int n) : s_(s) {
       set_num_residuals(num_residuals);
       mutable_parameter_block_sizes()->push_back(n);
     }
@@ -58,7 +59,7 @@ struct CeresNlpSolver::Impl {
     }
 
    private:
-    Impl* s_;
+    CeresImpl* s_;
   };
 
   class StopWhenFeasible final : public ceres::IterationCallback {
@@ -114,7 +115,7 @@ struct CeresNlpSolver::Impl {
   // ---- phase 2: augmented Lagrangian ---------------------------------------
   class AlFunction final : public ceres::FirstOrderFunction {
    public:
-    AlFunction(Impl* s, int n) : s_(s), n_(n) {}
+    AlFunction(CeresImpl* s, int n) : s_(s), n_(n) {}
     bool Evaluate(const double* x, double* cost,
                   double* gradient) const override {
       return s_->EvalAl(x, cost, gradient);
@@ -122,7 +123,7 @@ struct CeresNlpSolver::Impl {
     int NumParameters() const override { return n_; }
 
    private:
-    Impl* s_;
+    CeresImpl* s_;
     int n_;
   };
 
@@ -270,70 +271,6 @@ struct CeresNlpSolver::Impl {
   void StoreMultipliers(NlpResult* result) const;
 };
 
-CeresNlpSolver::CeresNlpSolver() : impl_(std::make_unique<Impl>()) {}
-CeresNlpSolver::~CeresNlpSolver() = default;
-
-OptionTable CeresNlpSolver::option_table() const {
-  return {
-      OptionSpec::Double("rho_init", 10.0,
-                         "initial augmented-Lagrangian penalty rho")
-          .GreaterThan(0),
-      OptionSpec::Double("rho_growth", 10.0,
-                         "rho <- rho_growth * rho when V did not drop enough")
-          .GreaterThan(1),
-      OptionSpec::Double("rho_max", 1e8, "largest penalty rho").GreaterThan(0),
-      OptionSpec::Double("rho_grow_unless", 0.25,
-                         "rho grows unless V <= rho_grow_unless * V_previous")
-          .GreaterThan(0)
-          .LessThan(1),
-      OptionSpec::Double("polish_threshold", 1e-7,
-                         "V below which the AL loop hands over to the "
-                         "active-set Newton polish (or feasibility_tolerance "
-                         "if larger); also the polish's active-row tolerance")
-          .GreaterThan(0),
-      OptionSpec::Double("infeasible_threshold", 1e-6,
-                         "phase 1: violation at Ceres CONVERGENCE from which "
-                         "the problem counts as infeasible")
-          .GreaterThan(0),
-      OptionSpec::Int("polish_max_iterations", 20,
-                      "Gauss-Newton steps of the feasibility polish")
-          .AtLeast(0),
-      OptionSpec::Choice("trust_region_strategy", "levenberg_marquardt",
-                         {"levenberg_marquardt", "dogleg"},
-                         "phase 1 trust-region strategy "
-                         "(Solver::Options::trust_region_strategy_type)"),
-      OptionSpec::Choice("linear_solver", "dense_qr",
-                         {"dense_qr", "dense_normal_cholesky"},
-                         "phase 1 linear solver "
-                         "(Solver::Options::linear_solver_type)"),
-      OptionSpec::Choice("line_search_direction", "bfgs", {"bfgs", "lbfgs"},
-                         "phase 2 inner solves' direction "
-                         "(GradientProblemSolver line_search_direction_type)"),
-  };
-}
-
-void CeresNlpSolver::ApplyBackendOptions(const OptionValues& values) {
-  Impl::Settings& s = impl_->settings;
-  s.rho_init = values.GetDouble("rho_init");
-  s.rho_growth = values.GetDouble("rho_growth");
-  s.rho_max = values.GetDouble("rho_max");
-  s.rho_grow_unless = values.GetDouble("rho_grow_unless");
-  s.polish_threshold = values.GetDouble("polish_threshold");
-  s.infeasible_threshold = values.GetDouble("infeasible_threshold");
-  s.polish_max_iterations =
-      static_cast<int>(values.GetInt("polish_max_iterations"));
-  s.trust_region = values.GetString("trust_region_strategy") == "dogleg"
-                       ? ceres::DOGLEG
-                       : ceres::LEVENBERG_MARQUARDT;
-  s.linear_solver = values.GetString("linear_solver") == "dense_qr"
-                        ? ceres::DENSE_QR
-                        : ceres::DENSE_NORMAL_CHOLESKY;
-  s.direction = values.GetString("line_search_direction") == "lbfgs"
-                    ? ceres::LBFGS
-                    : ceres::BFGS;
-}
-
-namespace {
 const char* TerminationName(ceres::TerminationType t) {
   switch (t) {
     case ceres::CONVERGENCE:
@@ -349,9 +286,8 @@ const char* TerminationName(ceres::TerminationType t) {
   }
   return "UNKNOWN";
 }
-}  // namespace
 
-void CeresNlpSolver::Impl::Finish(NlpStatus status, NlpResult* result) const {
+void CeresImpl::Finish(NlpStatus status, NlpResult* result) const {
   result->status = status;
   result->iterations = accepted;
   result->native_iterations = iterations;
@@ -360,8 +296,8 @@ void CeresNlpSolver::Impl::Finish(NlpStatus status, NlpResult* result) const {
   result->jacobian_evaluations = j_evals;
 }
 
-PolishStats CeresNlpSolver::Impl::Polish(double active_tol, double feas_tol,
-                                         Eigen::VectorXd* x) {
+PolishStats CeresImpl::Polish(double active_tol, double feas_tol,
+                              Eigen::VectorXd* x) {
   const PolishStats ps = PolishActiveConstraints(
       *problem, b, active_tol, feas_tol, settings.polish_max_iterations, x);
   accepted += ps.accepted_steps;
@@ -371,7 +307,7 @@ PolishStats CeresNlpSolver::Impl::Polish(double active_tol, double feas_tol,
   return ps;
 }
 
-ceres::Solver::Options CeresNlpSolver::Impl::FeasibilityOptions(
+ceres::Solver::Options CeresImpl::FeasibilityOptions(
     const NlpOptions& options) {
   ceres::Solver::Options o;
   o.minimizer_type = ceres::TRUST_REGION;
@@ -392,8 +328,7 @@ ceres::Solver::Options CeresNlpSolver::Impl::FeasibilityOptions(
   return o;
 }
 
-bool CeresNlpSolver::Impl::FeasibilityPhase(const NlpOptions& options,
-                                            NlpResult* result) {
+bool CeresImpl::FeasibilityPhase(const NlpOptions& options, NlpResult* result) {
   const double feas_tol = options.feasibility_tolerance;
   const bool square = static_cast<int>(eq_rows.size()) == n;
   char msg[256];
@@ -464,8 +399,8 @@ bool CeresNlpSolver::Impl::FeasibilityPhase(const NlpOptions& options,
   return true;
 }
 
-void CeresNlpSolver::Impl::InitMultipliers(const NlpOptions& options,
-                                           const NlpResult& result) {
+void CeresImpl::InitMultipliers(const NlpOptions& options,
+                                const NlpResult& result) {
   const size_t n_eq = eq_rows.size(), n_side = side_rows.size();
   lam_eq.setZero(static_cast<Eigen::Index>(n_eq));
   mu_side.setZero(static_cast<Eigen::Index>(n_side));
@@ -496,7 +431,7 @@ void CeresNlpSolver::Impl::InitMultipliers(const NlpOptions& options,
   }
 }
 
-ceres::GradientProblemSolver::Options CeresNlpSolver::Impl::InnerOptions(
+ceres::GradientProblemSolver::Options CeresImpl::InnerOptions(
     const NlpOptions& options, double grad_scale) const {
   ceres::GradientProblemSolver::Options go;
   go.line_search_direction_type = settings.direction;
@@ -511,7 +446,7 @@ ceres::GradientProblemSolver::Options CeresNlpSolver::Impl::InnerOptions(
   return go;
 }
 
-double CeresNlpSolver::Impl::UpdateMultipliers(const Eigen::VectorXd& x) {
+double CeresImpl::UpdateMultipliers(const Eigen::VectorXd& x) {
   double v = 0.0;
   for (size_t k = 0; k < eq_rows.size(); ++k) {
     const double c = g(eq_rows[k]) - b.g_lb(eq_rows[k]);
@@ -536,7 +471,7 @@ double CeresNlpSolver::Impl::UpdateMultipliers(const Eigen::VectorXd& x) {
   return v;
 }
 
-bool CeresNlpSolver::Impl::AugmentedLagrangianLoop(
+bool CeresImpl::AugmentedLagrangianLoop(
     const ceres::GradientProblemSolver::Options& go, const NlpOptions& options,
     AlState* al, NlpResult* result) {
   const double feas_tol = options.feasibility_tolerance;
@@ -607,7 +542,7 @@ bool CeresNlpSolver::Impl::AugmentedLagrangianLoop(
   return true;
 }
 
-void CeresNlpSolver::Impl::StoreMultipliers(NlpResult* result) const {
+void CeresImpl::StoreMultipliers(NlpResult* result) const {
   // Ipopt's convention: lambda = mu_upper - mu_lower.
   if (result->multipliers.size() != m) result->multipliers.resize(m);
   result->multipliers.setZero();
@@ -618,8 +553,8 @@ void CeresNlpSolver::Impl::StoreMultipliers(NlpResult* result) const {
   result->has_multipliers = true;
 }
 
-void CeresNlpSolver::Impl::AugmentedLagrangianPhase(const NlpOptions& options,
-                                                    NlpResult* result) {
+void CeresImpl::AugmentedLagrangianPhase(const NlpOptions& options,
+                                         NlpResult* result) {
   const double feas_tol = options.feasibility_tolerance;
   Eigen::VectorXd& x = result->x;
   InitMultipliers(options, *result);
@@ -665,17 +600,94 @@ void CeresNlpSolver::Impl::AugmentedLagrangianPhase(const NlpOptions& options,
   Finish(status, result);
 }
 
-void CeresNlpSolver::DoSolve(const NlpProblem& problem,
-                             const Eigen::Ref<const Eigen::VectorXd>& x0,
-                             const NlpOptions& options, NlpResult* result) {
-  Impl& s = *impl_;
-  s.Classify(problem);
-  for (int j = 0; j < s.n; ++j)
-    result->x(j) = std::clamp(x0(j), s.b.x_lb(j), s.b.x_ub(j));
-  s.iterations = s.accepted = 0;
-  // Phase 1 settles square systems (and failures); phase 2 the others.
-  if (s.NumResiduals() > 0 && s.FeasibilityPhase(options, result)) return;
-  s.AugmentedLagrangianPhase(options, result);
+// Ceres keeps all solver state in its Problem/Solver objects: instances may
+// run concurrently.
+class CeresNlpSolver final : public NlpSolver {
+ public:
+  std::string name() const override { return "ceres"; }
+  bool SupportsConcurrentInstances() const override { return true; }
+  OptionTable option_table() const override {
+    return {
+        OptionSpec::Double("rho_init", 10.0,
+                           "initial augmented-Lagrangian penalty rho")
+            .GreaterThan(0),
+        OptionSpec::Double("rho_growth", 10.0,
+                           "rho <- rho_growth * rho when V did not drop enough")
+            .GreaterThan(1),
+        OptionSpec::Double("rho_max", 1e8, "largest penalty rho")
+            .GreaterThan(0),
+        OptionSpec::Double("rho_grow_unless", 0.25,
+                           "rho grows unless V <= rho_grow_unless * V_previous")
+            .GreaterThan(0)
+            .LessThan(1),
+        OptionSpec::Double("polish_threshold", 1e-7,
+                           "V below which the AL loop hands over to the "
+                           "active-set Newton polish (or feasibility_tolerance "
+                           "if larger); also the polish's active-row tolerance")
+            .GreaterThan(0),
+        OptionSpec::Double("infeasible_threshold", 1e-6,
+                           "phase 1: violation at Ceres CONVERGENCE from which "
+                           "the problem counts as infeasible")
+            .GreaterThan(0),
+        OptionSpec::Int("polish_max_iterations", 20,
+                        "Gauss-Newton steps of the feasibility polish")
+            .AtLeast(0),
+        OptionSpec::Choice("trust_region_strategy", "levenberg_marquardt",
+                           {"levenberg_marquardt", "dogleg"},
+                           "phase 1 trust-region strategy "
+                           "(Solver::Options::trust_region_strategy_type)"),
+        OptionSpec::Choice("linear_solver", "dense_qr",
+                           {"dense_qr", "dense_normal_cholesky"},
+                           "phase 1 linear solver "
+                           "(Solver::Options::linear_solver_type)"),
+        OptionSpec::Choice(
+            "line_search_direction", "bfgs", {"bfgs", "lbfgs"},
+            "phase 2 inner solves' direction "
+            "(GradientProblemSolver line_search_direction_type)"),
+    };
+  }
+
+ private:
+  void ApplyBackendOptions(const OptionValues& values) override {
+    CeresImpl::Settings& s = impl_.settings;
+    s.rho_init = values.GetDouble("rho_init");
+    s.rho_growth = values.GetDouble("rho_growth");
+    s.rho_max = values.GetDouble("rho_max");
+    s.rho_grow_unless = values.GetDouble("rho_grow_unless");
+    s.polish_threshold = values.GetDouble("polish_threshold");
+    s.infeasible_threshold = values.GetDouble("infeasible_threshold");
+    s.polish_max_iterations =
+        static_cast<int>(values.GetInt("polish_max_iterations"));
+    s.trust_region = values.GetString("trust_region_strategy") == "dogleg"
+                         ? ceres::DOGLEG
+                         : ceres::LEVENBERG_MARQUARDT;
+    s.linear_solver = values.GetString("linear_solver") == "dense_qr"
+                          ? ceres::DENSE_QR
+                          : ceres::DENSE_NORMAL_CHOLESKY;
+    s.direction = values.GetString("line_search_direction") == "lbfgs"
+                      ? ceres::LBFGS
+                      : ceres::BFGS;
+  }
+  void DoSolve(const NlpProblem& problem,
+               const Eigen::Ref<const Eigen::VectorXd>& x0,
+               const NlpOptions& options, NlpResult* result) override {
+    CeresImpl& s = impl_;
+    s.Classify(problem);
+    for (int j = 0; j < s.n; ++j)
+      result->x(j) = std::clamp(x0(j), s.b.x_lb(j), s.b.x_ub(j));
+    s.iterations = s.accepted = 0;
+    // Phase 1 settles square systems (and failures); phase 2 the others.
+    if (s.NumResiduals() > 0 && s.FeasibilityPhase(options, result)) return;
+    s.AugmentedLagrangianPhase(options, result);
+  }
+
+  CeresImpl impl_;
+};
+
+}  // namespace
+
+std::unique_ptr<NlpSolver> MakeCeresNlpSolver() {
+  return std::make_unique<CeresNlpSolver>();
 }
 
 }  // namespace quasiroll

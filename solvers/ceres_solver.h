@@ -63,29 +63,12 @@
 #pragma once
 
 #include <memory>
-#include <string>
 
 #include "quasiroll/core/nlp.h"
 
 namespace quasiroll {
 
-class CeresNlpSolver final : public NlpSolver {
- public:
-  CeresNlpSolver();
-  ~CeresNlpSolver() override;
-  std::string name() const override { return "ceres"; }
-  // Ceres keeps all solver state in its Problem/Solver objects.
-  bool SupportsConcurrentInstances() const override { return true; }
-  OptionTable option_table() const override;
-
- private:
-  void ApplyBackendOptions(const OptionValues& values) override;
-  void DoSolve(const NlpProblem& problem,
-               const Eigen::Ref<const Eigen::VectorXd>& x0,
-               const NlpOptions& options, NlpResult* result) override;
-
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-};
+// The "ceres" backend (registered by solvers/registry.cc).
+std::unique_ptr<NlpSolver> MakeCeresNlpSolver();
 
 }  // namespace quasiroll

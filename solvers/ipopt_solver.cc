@@ -267,6 +267,26 @@ bool AlgorithmUsable(Ipopt::ApplicationReturnStatus s) {
   return s >= Ipopt::Maximum_CpuTime_Exceeded;  // -4 .. 6: algorithm was built
 }
 
+class IpoptSolver final : public NlpSolver {
+ public:
+  explicit IpoptSolver(IpoptLinearSolver linear_solver);
+  ~IpoptSolver() override;
+  std::string name() const override;
+  // True for the dense LDL^T (no global state; Ipopt's tags are
+  // thread-local), false for MUMPS.
+  bool SupportsConcurrentInstances() const override;
+  OptionTable option_table() const override;
+
+ private:
+  void ApplyBackendOptions(const OptionValues& values) override;
+  void DoSolve(const NlpProblem& problem,
+               const Eigen::Ref<const Eigen::VectorXd>& x0,
+               const NlpOptions& options, NlpResult* result) override;
+
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
 }  // namespace
 
 struct IpoptSolver::Impl {
@@ -481,6 +501,10 @@ void IpoptSolver::DoSolve(const NlpProblem& problem,
   result->backend_status = ReturnStatusName(st);
   result->iterations = a.max_iter_seen;  // last iteration index reported
   if (!a.finalized) result->x = x0;  // Ipopt stopped before finalize_solution
+}
+
+std::unique_ptr<NlpSolver> MakeIpoptSolver(IpoptLinearSolver linear_solver) {
+  return std::make_unique<IpoptSolver>(linear_solver);
 }
 
 }  // namespace quasiroll

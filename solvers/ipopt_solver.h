@@ -44,7 +44,6 @@
 #pragma once
 
 #include <memory>
-#include <string>
 
 #include "quasiroll/core/nlp.h"
 
@@ -55,25 +54,9 @@ enum class IpoptLinearSolver {
   kMumps,      // "ipopt-mumps"
 };
 
-class IpoptSolver final : public NlpSolver {
- public:
-  explicit IpoptSolver(
-      IpoptLinearSolver linear_solver = IpoptLinearSolver::kDenseLdlt);
-  ~IpoptSolver() override;
-  std::string name() const override;
-  // True for the dense LDL^T (no global state; Ipopt's tags are
-  // thread-local), false for MUMPS.
-  bool SupportsConcurrentInstances() const override;
-  OptionTable option_table() const override;
-
- private:
-  void ApplyBackendOptions(const OptionValues& values) override;
-  void DoSolve(const NlpProblem& problem,
-               const Eigen::Ref<const Eigen::VectorXd>& x0,
-               const NlpOptions& options, NlpResult* result) override;
-
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-};
+// The "ipopt" (dense LDL^T) and "ipopt-mumps" backends (registered by
+// solvers/registry.cc).
+std::unique_ptr<NlpSolver> MakeIpoptSolver(
+    IpoptLinearSolver linear_solver = IpoptLinearSolver::kDenseLdlt);
 
 }  // namespace quasiroll

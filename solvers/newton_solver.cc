@@ -5,13 +5,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <vector>
 
 #include "quasiroll/core/nlp_polish.h"
 
 namespace quasiroll {
+namespace {
 
-struct NewtonSolver::Workspace {
+struct Workspace {
   NlpBounds bounds;  // loaded per solve
   Eigen::VectorXd g, g_trial, r, r_trial, dx, dx_bar, x_trial;
   Eigen::MatrixXd jac, jac_eq, jtj, jtj_damped;
@@ -42,44 +44,79 @@ struct NewtonSolver::Workspace {
   }
 };
 
-NewtonSolver::NewtonSolver() : ws_(std::make_unique<Workspace>()) {}
-NewtonSolver::~NewtonSolver() = default;
+class NewtonSolver final : public NlpSolver {
+ public:
+  std::string name() const override { return "newton"; }
+  bool RequiresSquareSystem() const override { return true; }
+  bool SupportsConcurrentInstances() const override { return true; }
+  OptionTable option_table() const override {
+    return {
+        OptionSpec::Double(
+            "armijo", 2e-4,
+            "sufficient decrease: |r(x + a dx)|^2 <= (1 - armijo "
+            "a) |r(x)|^2")
+            .GreaterThan(0)
+            .LessThan(1),
+        OptionSpec::Double("min_damping", 1e-10,
+                           "smallest step fraction a before the "
+                           "Levenberg-Marquardt fallback")
+            .GreaterThan(0)
+            .LessThan(1),
+        OptionSpec::Double("rank_pivot_ratio", 1e-13,
+                           "LU pivot ratio min/max below which the Jacobian "
+                           "counts as rank deficient")
+            .GreaterThan(0)
+            .LessThan(1),
+        OptionSpec::Double("lm_lambda_init", 1e-3,
+                           "initial Levenberg-Marquardt damping of the "
+                           "fallback step (per solve)")
+            .GreaterThan(0),
+        OptionSpec::Double("polish_floor", 1e-14,
+                           "tightest residual target of the polish before "
+                           "bounds are judged")
+            .GreaterThan(0),
+    };
+  }
 
-OptionTable NewtonSolver::option_table() const {
-  return {
-      OptionSpec::Double("armijo", 2e-4,
-                         "sufficient decrease: |r(x + a dx)|^2 <= (1 - armijo "
-                         "a) |r(x)|^2")
-          .GreaterThan(0)
-          .LessThan(1),
-      OptionSpec::Double("min_damping", 1e-10,
-                         "smallest step fraction a before the "
-                         "Levenberg-Marquardt fallback")
-          .GreaterThan(0)
-          .LessThan(1),
-      OptionSpec::Double("rank_pivot_ratio", 1e-13,
-                         "LU pivot ratio min/max below which the Jacobian "
-                         "counts as rank deficient")
-          .GreaterThan(0)
-          .LessThan(1),
-      OptionSpec::Double("lm_lambda_init", 1e-3,
-                         "initial Levenberg-Marquardt damping of the "
-                         "fallback step (per solve)")
-          .GreaterThan(0),
-      OptionSpec::Double("polish_floor", 1e-14,
-                         "tightest residual target of the polish before "
-                         "bounds are judged")
-          .GreaterThan(0),
-  };
-}
+ private:
+  void ApplyBackendOptions(const OptionValues& values) override {
+    settings_.armijo = values.GetDouble("armijo");
+    settings_.min_damping = values.GetDouble("min_damping");
+    settings_.rank_pivot_ratio = values.GetDouble("rank_pivot_ratio");
+    settings_.lm_lambda_init = values.GetDouble("lm_lambda_init");
+    settings_.polish_floor = values.GetDouble("polish_floor");
+  }
+  void DoSolve(const NlpProblem& problem,
+               const Eigen::Ref<const Eigen::VectorXd>& x0,
+               const NlpOptions& options, NlpResult* result) override;
 
-void NewtonSolver::ApplyBackendOptions(const OptionValues& values) {
-  settings_.armijo = values.GetDouble("armijo");
-  settings_.min_damping = values.GetDouble("min_damping");
-  settings_.rank_pivot_ratio = values.GetDouble("rank_pivot_ratio");
-  settings_.lm_lambda_init = values.GetDouble("lm_lambda_init");
-  settings_.polish_floor = values.GetDouble("polish_floor");
-}
+  // Newton iterations until the equality residual meets its target (the
+  // polish_floor tightening included); false when a failure status was set.
+  // *iter = steps.
+  bool Iterate(const NlpProblem& problem, const NlpOptions& options, int* iter,
+               NlpResult* result);
+  // LU of the equality Jacobian at result->x into the workspace; false if it
+  // is non-finite or rank deficient (a failure status is set unless
+  // `polishing`, which then just stops).
+  bool FactorJacobian(const NlpProblem& problem, bool polishing, int iter,
+                      NlpResult* result);
+  // Backtracking along the workspace's dx; true with x_trial, g_trial,
+  // r_trial holding the accepted point.
+  bool DampedStep(const NlpProblem& problem, double phi, double target,
+                  NlpResult* result);
+  bool LevenbergMarquardtStep(const NlpProblem& problem, Workspace* w,
+                              double phi, NlpResult* result);
+
+  Workspace ws_;
+  double lm_lambda_ = 1e-3;  // Levenberg-Marquardt damping, reset per solve
+  struct Settings {
+    double armijo = 2e-4;
+    double min_damping = 1e-10;
+    double rank_pivot_ratio = 1e-13;
+    double lm_lambda_init = 1e-3;
+    double polish_floor = 1e-14;
+  } settings_;
+};
 
 // Levenberg-Marquardt fallback (Marquardt's scaling D = diag(J^T J)):
 //   (J^T J + lambda D) dx = -J^T r,  lambda = lambda_k, 10 lambda_k, ...
@@ -123,7 +160,7 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
                            const Eigen::Ref<const Eigen::VectorXd>& x0,
                            const NlpOptions& options, NlpResult* result) {
   const int n = problem.num_variables(), m = problem.num_constraints();
-  Workspace& w = *ws_;
+  Workspace& w = ws_;
   w.Resize(n, m);
   w.bounds.Load(problem);
   EqualityRows(w.bounds, &w.eq_rows);  // n rows (validated)
@@ -143,7 +180,7 @@ void NewtonSolver::DoSolve(const NlpProblem& problem,
 
 bool NewtonSolver::Iterate(const NlpProblem& problem, const NlpOptions& options,
                            int* iter_out, NlpResult* result) {
-  Workspace& w = *ws_;
+  Workspace& w = ws_;
   const double tol = options.feasibility_tolerance;
   char msg[160];
   Eigen::VectorXd& x = result->x;
@@ -203,7 +240,7 @@ bool NewtonSolver::Iterate(const NlpProblem& problem, const NlpOptions& options,
 
 bool NewtonSolver::FactorJacobian(const NlpProblem& problem, bool polishing,
                                   int iter, NlpResult* result) {
-  Workspace& w = *ws_;
+  Workspace& w = ws_;
   const int n = static_cast<int>(w.eq_rows.size());
   problem.ConstraintJacobian(result->x, w.jac);
   ++result->jacobian_evaluations;
@@ -245,7 +282,7 @@ bool NewtonSolver::FactorJacobian(const NlpProblem& problem, bool polishing,
 // moving much closer to the root, and a residual-only test stalls.
 bool NewtonSolver::DampedStep(const NlpProblem& problem, double phi,
                               double target, NlpResult* result) {
-  Workspace& w = *ws_;
+  Workspace& w = ws_;
   const double dx_norm = w.dx.norm();
   double alpha = 1.0;
   while (alpha >= settings_.min_damping) {
@@ -264,6 +301,12 @@ bool NewtonSolver::DampedStep(const NlpProblem& problem, double phi,
     alpha *= 0.5;
   }
   return false;
+}
+
+}  // namespace
+
+std::unique_ptr<NlpSolver> MakeNewtonSolver() {
+  return std::make_unique<NewtonSolver>();
 }
 
 }  // namespace quasiroll

@@ -24,54 +24,12 @@
 #pragma once
 
 #include <memory>
-#include <string>
 
 #include "quasiroll/core/nlp.h"
 
 namespace quasiroll {
 
-class NewtonSolver final : public NlpSolver {
- public:
-  NewtonSolver();
-  ~NewtonSolver() override;
-  std::string name() const override { return "newton"; }
-  bool RequiresSquareSystem() const override { return true; }
-  bool SupportsConcurrentInstances() const override { return true; }
-  OptionTable option_table() const override;
-
- private:
-  void ApplyBackendOptions(const OptionValues& values) override;
-  void DoSolve(const NlpProblem& problem,
-               const Eigen::Ref<const Eigen::VectorXd>& x0,
-               const NlpOptions& options, NlpResult* result) override;
-
-  struct Workspace;
-  // Newton iterations until the equality residual meets its target (the
-  // polish_floor tightening included); false when a failure status was set.
-  // *iter = steps.
-  bool Iterate(const NlpProblem& problem, const NlpOptions& options, int* iter,
-               NlpResult* result);
-  // LU of the equality Jacobian at result->x into the workspace; false if it
-  // is non-finite or rank deficient (a failure status is set unless
-  // `polishing`, which then just stops).
-  bool FactorJacobian(const NlpProblem& problem, bool polishing, int iter,
-                      NlpResult* result);
-  // Backtracking along the workspace's dx; true with x_trial, g_trial,
-  // r_trial holding the accepted point.
-  bool DampedStep(const NlpProblem& problem, double phi, double target,
-                  NlpResult* result);
-  bool LevenbergMarquardtStep(const NlpProblem& problem, Workspace* w,
-                              double phi, NlpResult* result);
-
-  std::unique_ptr<Workspace> ws_;
-  double lm_lambda_ = 1e-3;  // Levenberg-Marquardt damping, reset per solve
-  struct Settings {
-    double armijo = 2e-4;
-    double min_damping = 1e-10;
-    double rank_pivot_ratio = 1e-13;
-    double lm_lambda_init = 1e-3;
-    double polish_floor = 1e-14;
-  } settings_;
-};
+// The "newton" backend (registered by solvers/registry.cc).
+std::unique_ptr<NlpSolver> MakeNewtonSolver();
 
 }  // namespace quasiroll

@@ -36,22 +36,21 @@ void RegisterBuiltinNlpSolvers() {
         Info("damped Newton with dense LU on square equality systems", "Newton",
              "", "", 1.0);
     newton.roles = {BackendRole::kDefault, BackendRole::kReference};
-    NlpSolverRegistry::Register("newton", std::move(newton), [] {
-      return std::make_unique<NewtonSolver>();
-    });
+    NlpSolverRegistry::Register("newton", std::move(newton),
+                                [] { return MakeNewtonSolver(); });
 #ifdef QUASIROLL_HAVE_IPOPT
     NlpSolverRegistry::Register(
         "ipopt",
         Info("Ipopt interior point (exact or L-BFGS Hessian), dense LDL^T KKT "
              "solves",
              "interior point", "Ipopt", QUASIROLL_IPOPT_VERSION, 12.25),
-        [] { return std::make_unique<IpoptSolver>(); });
+        [] { return MakeIpoptSolver(); });
     BackendInfo mumps =
         Info("Ipopt interior point with its stock MUMPS linear solver (serial)",
              "interior point", "Ipopt", QUASIROLL_IPOPT_VERSION, 88.1);
     mumps.thread_safe = false;  // sequential MUMPS keeps global state
     NlpSolverRegistry::Register("ipopt-mumps", std::move(mumps), [] {
-      return std::make_unique<IpoptSolver>(IpoptLinearSolver::kMumps);
+      return MakeIpoptSolver(IpoptLinearSolver::kMumps);
     });
 #endif
 #ifdef QUASIROLL_HAVE_NLOPT
@@ -59,14 +58,14 @@ void RegisterBuiltinNlpSolvers() {
         "slsqp",
         Info("NLopt SLSQP with an active-set Newton feasibility polish", "SQP",
              "NLopt", QUASIROLL_NLOPT_VERSION, 2.13),
-        [] { return std::make_unique<SlsqpSolver>(); });
+        [] { return MakeSlsqpSolver(); });
 #endif
 #ifdef QUASIROLL_HAVE_CERES
     NlpSolverRegistry::Register(
         "ceres",
         Info("Ceres: least-squares feasibility + augmented Lagrangian",
              "least squares", "Ceres", QUASIROLL_CERES_VERSION, 3.63),
-        [] { return std::make_unique<CeresNlpSolver>(); });
+        [] { return MakeCeresNlpSolver(); });
 #endif
   });
 }

@@ -12,8 +12,9 @@
 #include "quasiroll/core/nlp_polish.h"
 
 namespace quasiroll {
+namespace {
 
-struct SlsqpSolver::Impl {
+struct SlsqpImpl {
   struct Settings {
     double ftol_rel = 0.0, xtol_rel = 0.0, ftol_abs = 0.0;
     int maxeval_per_iteration = 3;
@@ -105,7 +106,7 @@ struct SlsqpSolver::Impl {
 
   static double ObjectiveCb(unsigned n, const double* xp, double* grad,
                             void* data) {
-    auto* s = static_cast<Impl*>(data);
+    auto* s = static_cast<SlsqpImpl*>(data);
     Eigen::Map<const Eigen::VectorXd> xm(xp, n);
     s->TrackPoint(xp, grad != nullptr);
     const double f = s->problem->Objective(xm);
@@ -121,7 +122,7 @@ struct SlsqpSolver::Impl {
   }
   static void EqualityCb(unsigned m, double* res, unsigned n, const double* xp,
                          double* grad, void* data) {
-    auto* s = static_cast<Impl*>(data);
+    auto* s = static_cast<SlsqpImpl*>(data);
     s->EnsureG(xp);
     for (unsigned k = 0; k < m; ++k) {
       const int i = s->eq_rows[k];
@@ -136,7 +137,7 @@ struct SlsqpSolver::Impl {
   }
   static void InequalityCb(unsigned m, double* res, unsigned n,
                            const double* xp, double* grad, void* data) {
-    auto* s = static_cast<Impl*>(data);
+    auto* s = static_cast<SlsqpImpl*>(data);
     s->EnsureG(xp);
     for (unsigned k = 0; k < m; ++k) {
       const int i = s->ineq_rows[k];
@@ -154,13 +155,13 @@ struct SlsqpSolver::Impl {
   void Build(int nv, double tol) {
     opt = std::make_unique<nlopt::opt>(nlopt::LD_SLSQP,
                                        static_cast<unsigned>(nv));
-    opt->set_min_objective(&Impl::ObjectiveCb, this);
+    opt->set_min_objective(&SlsqpImpl::ObjectiveCb, this);
     tol_eq.assign(eq_rows.size(), tol);
     tol_ineq.assign(ineq_rows.size(), tol);
     if (!eq_rows.empty())
-      opt->add_equality_mconstraint(&Impl::EqualityCb, this, tol_eq);
+      opt->add_equality_mconstraint(&SlsqpImpl::EqualityCb, this, tol_eq);
     if (!ineq_rows.empty())
-      opt->add_inequality_mconstraint(&Impl::InequalityCb, this, tol_ineq);
+      opt->add_inequality_mconstraint(&SlsqpImpl::InequalityCb, this, tol_ineq);
     n = nv;
     n_eq = static_cast<int>(eq_rows.size());
     n_ineq = static_cast<int>(ineq_rows.size());
@@ -176,49 +177,6 @@ struct SlsqpSolver::Impl {
                          NlpResult* result);
 };
 
-SlsqpSolver::SlsqpSolver() : impl_(std::make_unique<Impl>()) {}
-SlsqpSolver::~SlsqpSolver() = default;
-
-OptionTable SlsqpSolver::option_table() const {
-  return {
-      OptionSpec::Double("ftol_rel", 0.0,
-                         "NLopt relative objective tolerance (0 = NlpOptions "
-                         "optimality_tolerance)")
-          .AtLeast(0),
-      OptionSpec::Double("xtol_rel", 0.0,
-                         "NLopt relative step tolerance (0 = NlpOptions "
-                         "optimality_tolerance)")
-          .AtLeast(0),
-      OptionSpec::Double("ftol_abs", 0.0,
-                         "NLopt absolute objective tolerance (0 = off)")
-          .AtLeast(0),
-      OptionSpec::Int("maxeval_per_iteration", 3,
-                      "NLopt maxeval = this * max_iterations (NLopt counts "
-                      "evaluations, not SLSQP iterations)")
-          .AtLeast(1),
-      OptionSpec::Double("polish_active_tol", 1e-7,
-                         "rows within this of their bound join the "
-                         "active-set Newton polish")
-          .AtLeast(0),
-      OptionSpec::Int("polish_max_iterations", 20,
-                      "Gauss-Newton steps of the feasibility polish")
-          .AtLeast(0),
-  };
-}
-
-void SlsqpSolver::ApplyBackendOptions(const OptionValues& values) {
-  Impl::Settings& s = impl_->settings;
-  s.ftol_rel = values.GetDouble("ftol_rel");
-  s.xtol_rel = values.GetDouble("xtol_rel");
-  s.ftol_abs = values.GetDouble("ftol_abs");
-  s.maxeval_per_iteration =
-      static_cast<int>(values.GetInt("maxeval_per_iteration"));
-  s.polish_active_tol = values.GetDouble("polish_active_tol");
-  s.polish_max_iterations =
-      static_cast<int>(values.GetInt("polish_max_iterations"));
-}
-
-namespace {
 const char* NloptResultName(nlopt::result r) {
   switch (r) {
     case nlopt::SUCCESS:
@@ -247,13 +205,12 @@ const char* NloptResultName(nlopt::result r) {
       return "UNKNOWN";
   }
 }
-}  // namespace
 
 // Rows by kind, the NLopt object (rebuilt when the structure changed), the
 // per-solve counters and the box-clamped start.
-void SlsqpSolver::Impl::Prepare(const NlpProblem& p,
-                                const Eigen::Ref<const Eigen::VectorXd>& x0,
-                                const NlpOptions& options) {
+void SlsqpImpl::Prepare(const NlpProblem& p,
+                        const Eigen::Ref<const Eigen::VectorXd>& x0,
+                        const NlpOptions& options) {
   const int nv = p.num_variables(), m = p.num_constraints();
   problem = &p;
   bounds.Load(p);
@@ -296,7 +253,7 @@ void SlsqpSolver::Impl::Prepare(const NlpProblem& p,
 
 // NLopt's run, its result code / exception mapped to an Outcome; x and the
 // counters copied into `result`.
-SlsqpSolver::Impl::Outcome SlsqpSolver::Impl::Optimize(NlpResult* result) {
+SlsqpImpl::Outcome SlsqpImpl::Optimize(NlpResult* result) {
   Outcome outcome = Outcome::kFailure;
   double f_opt = 0.0;
   try {
@@ -333,8 +290,8 @@ SlsqpSolver::Impl::Outcome SlsqpSolver::Impl::Optimize(NlpResult* result) {
 
 // Independent feasibility check (+ active-set Newton polish if needed) of a
 // finished run, and its status.
-void SlsqpSolver::Impl::PolishAndClassify(const NlpOptions& options,
-                                          Outcome outcome, NlpResult* result) {
+void SlsqpImpl::PolishAndClassify(const NlpOptions& options, Outcome outcome,
+                                  NlpResult* result) {
   const PolishStats ps =
       PolishActiveConstraints(*problem, bounds, settings.polish_active_tol,
                               options.feasibility_tolerance,
@@ -367,22 +324,77 @@ void SlsqpSolver::Impl::PolishAndClassify(const NlpOptions& options,
   }
 }
 
-void SlsqpSolver::DoSolve(const NlpProblem& problem,
-                          const Eigen::Ref<const Eigen::VectorXd>& x0,
-                          const NlpOptions& options, NlpResult* result) {
-  Impl& s = *impl_;
-  s.Prepare(problem, x0, options);
-  const Impl::Outcome outcome = s.Optimize(result);
-  if (outcome == Impl::Outcome::kNonFinite || !result->x.allFinite()) {
-    result->status = NlpStatus::kNumericalFailure;
-    result->backend_status += " (non-finite function value)";
-    return;
+// NLopt's SLSQP keeps its iteration state in a per-call struct
+// (slsqpb_state) and each object owns its nlopt_opt: instances may run
+// concurrently.
+class SlsqpSolver final : public NlpSolver {
+ public:
+  std::string name() const override { return "slsqp"; }
+  bool SupportsConcurrentInstances() const override { return true; }
+  OptionTable option_table() const override {
+    return {
+        OptionSpec::Double("ftol_rel", 0.0,
+                           "NLopt relative objective tolerance (0 = NlpOptions "
+                           "optimality_tolerance)")
+            .AtLeast(0),
+        OptionSpec::Double("xtol_rel", 0.0,
+                           "NLopt relative step tolerance (0 = NlpOptions "
+                           "optimality_tolerance)")
+            .AtLeast(0),
+        OptionSpec::Double("ftol_abs", 0.0,
+                           "NLopt absolute objective tolerance (0 = off)")
+            .AtLeast(0),
+        OptionSpec::Int("maxeval_per_iteration", 3,
+                        "NLopt maxeval = this * max_iterations (NLopt counts "
+                        "evaluations, not SLSQP iterations)")
+            .AtLeast(1),
+        OptionSpec::Double("polish_active_tol", 1e-7,
+                           "rows within this of their bound join the "
+                           "active-set Newton polish")
+            .AtLeast(0),
+        OptionSpec::Int("polish_max_iterations", 20,
+                        "Gauss-Newton steps of the feasibility polish")
+            .AtLeast(0),
+    };
   }
-  if (outcome == Impl::Outcome::kMaxEval) {
-    result->status = NlpStatus::kIterationLimit;
-    return;
+
+ private:
+  void ApplyBackendOptions(const OptionValues& values) override {
+    SlsqpImpl::Settings& s = impl_.settings;
+    s.ftol_rel = values.GetDouble("ftol_rel");
+    s.xtol_rel = values.GetDouble("xtol_rel");
+    s.ftol_abs = values.GetDouble("ftol_abs");
+    s.maxeval_per_iteration =
+        static_cast<int>(values.GetInt("maxeval_per_iteration"));
+    s.polish_active_tol = values.GetDouble("polish_active_tol");
+    s.polish_max_iterations =
+        static_cast<int>(values.GetInt("polish_max_iterations"));
   }
-  s.PolishAndClassify(options, outcome, result);
+  void DoSolve(const NlpProblem& problem,
+               const Eigen::Ref<const Eigen::VectorXd>& x0,
+               const NlpOptions& options, NlpResult* result) override {
+    SlsqpImpl& s = impl_;
+    s.Prepare(problem, x0, options);
+    const SlsqpImpl::Outcome outcome = s.Optimize(result);
+    if (outcome == SlsqpImpl::Outcome::kNonFinite || !result->x.allFinite()) {
+      result->status = NlpStatus::kNumericalFailure;
+      result->backend_status += " (non-finite function value)";
+      return;
+    }
+    if (outcome == SlsqpImpl::Outcome::kMaxEval) {
+      result->status = NlpStatus::kIterationLimit;
+      return;
+    }
+    s.PolishAndClassify(options, outcome, result);
+  }
+
+  SlsqpImpl impl_;
+};
+
+}  // namespace
+
+std::unique_ptr<NlpSolver> MakeSlsqpSolver() {
+  return std::make_unique<SlsqpSolver>();
 }
 
 }  // namespace quasiroll

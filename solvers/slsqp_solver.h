@@ -37,30 +37,12 @@
 #pragma once
 
 #include <memory>
-#include <string>
 
 #include "quasiroll/core/nlp.h"
 
 namespace quasiroll {
 
-class SlsqpSolver final : public NlpSolver {
- public:
-  SlsqpSolver();
-  ~SlsqpSolver() override;
-  std::string name() const override { return "slsqp"; }
-  // NLopt's SLSQP keeps its iteration state in a per-call struct
-  // (slsqpb_state) and each object owns its nlopt_opt.
-  bool SupportsConcurrentInstances() const override { return true; }
-  OptionTable option_table() const override;
-
- private:
-  void ApplyBackendOptions(const OptionValues& values) override;
-  void DoSolve(const NlpProblem& problem,
-               const Eigen::Ref<const Eigen::VectorXd>& x0,
-               const NlpOptions& options, NlpResult* result) override;
-
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-};
+// The "slsqp" backend (registered by solvers/registry.cc).
+std::unique_ptr<NlpSolver> MakeSlsqpSolver();
 
 }  // namespace quasiroll
