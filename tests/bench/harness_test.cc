@@ -415,11 +415,7 @@ TEST(BenchVerdicts, BlowUpIsNumericalFrictionStopIsPhysical) {
          "    repeats: 3\n"
          "    bounds: {drift: 1.0e-12}\n";
   const Suite suite = LoadSuite(suite_path);
-  HarnessOptions o;
-  o.out_dir = (root / "out").string();
-  o.jobs = 2;
-  o.progress = 0;
-  RunSuite(suite, o);
+  RunSuite(suite, QuietHarnessOptions(root / "out", 2));
   const Table t = ReadTable(root / "out" / "runs.csv");
   ASSERT_EQ(t.rows.size(), 3u);
   const auto& blowup = t.rows[0];

@@ -316,11 +316,7 @@ TEST_F(ReferenceRetry, RunRowsCarryTheReferenceStop) {
                                "    scenes: [paper]\n"
                                "    coupling: [zoh]\n";
   const Suite suite = LoadSuite(suite_path);
-  HarnessOptions o;
-  o.out_dir = (root / "out").string();
-  o.jobs = 1;
-  o.progress = 0;
-  RunSuite(suite, o);
+  RunSuite(suite, QuietHarnessOptions(root / "out", 1));
   std::stringstream in(ReadAll(root / "out" / "runs.csv"));
   std::string line;
   ASSERT_TRUE(std::getline(in, line));

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <string>
 
+#include "quasiroll/bench/harness/harness.h"
 #include "quasiroll/bench/io/run_output.h"
 
 namespace quasiroll::bench {
@@ -22,6 +23,16 @@ inline std::string ReadAll(const std::filesystem::path& p) {
   std::string text;
   ReadTextFile(p.string(), &text);
   return text;
+}
+
+// Harness options writing to `out_dir` with `jobs` threads, no progress bar.
+inline HarnessOptions QuietHarnessOptions(const std::filesystem::path& out_dir,
+                                          int jobs) {
+  HarnessOptions o;
+  o.out_dir = out_dir.string();
+  o.jobs = jobs;
+  o.progress = 0;
+  return o;
 }
 
 // An empty directory under the temporary directory, named `prefix` and this

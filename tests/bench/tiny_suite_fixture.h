@@ -29,11 +29,7 @@ class TinySuiteTest : public ::testing::Test {
 
   // Harness options writing to ROOT/sub with `jobs` workers, no progress.
   static HarnessOptions Options(const std::string& sub, int jobs) {
-    HarnessOptions o;
-    o.out_dir = (root_ / sub).string();
-    o.jobs = jobs;
-    o.progress = 0;
-    return o;
+    return QuietHarnessOptions(root_ / sub, jobs);
   }
 
   static inline std::filesystem::path root_;

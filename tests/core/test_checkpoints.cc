@@ -10,6 +10,7 @@
 
 #include "quasiroll/core/checkpoints.h"
 #include "quasiroll/core/simulator.h"
+#include "simulation_support.h"
 
 namespace quasiroll {
 namespace {
@@ -24,15 +25,9 @@ Scene LoadWithEnd(const std::string& name, double t_end) {
 SimulationResult Simulate(const Scene& scene, const std::string& dae,
                           Coupling coupling, double dt,
                           const std::vector<double>& checkpoints) {
-  RegisterBuiltinNlpSolvers();
-  RegisterBuiltinIntegrators();
-  SimulationOptions options;
-  options.dae = dae;
-  options.coupling = coupling;
-  options.dt = dt;
+  SimulationOptions options = BuiltinOptions(dae, coupling, dt);
   options.checkpoints = checkpoints;
-  Simulator sim(scene, options);
-  return sim.Run();
+  return Simulator(scene, options).Run();
 }
 
 // Every 0.3125 s up to t_end (none of them a multiple of 0.4 or 0.2).

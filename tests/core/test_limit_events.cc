@@ -10,6 +10,7 @@
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/limit_events.h"
 #include "quasiroll/core/simulator.h"
+#include "simulation_support.h"
 
 namespace quasiroll {
 namespace {
@@ -36,13 +37,8 @@ Scene DipScene() {
 SimulationResult Simulate(const Scene& scene, double dt, bool locate,
                           const std::string& dae = "rk-projection",
                           Coupling coupling = Coupling::kZoh) {
-  RegisterBuiltinNlpSolvers();
-  RegisterBuiltinIntegrators();
-  SimulationOptions o;
-  o.dt = dt;
+  SimulationOptions o = BuiltinOptions(dae, coupling, dt);
   o.locate_events = locate;
-  o.dae = dae;
-  o.coupling = coupling;
   return Simulator(scene, o).Run();
 }
 
