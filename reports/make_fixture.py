@@ -353,6 +353,20 @@ def write_inputs(out_dir):
     return suite
 
 
+# Two located stick/slide switches per run, at these fractions of t_end
+# (switches/<run_id>.csv, docs/formats.md); legacy outputs have no such file.
+SWITCH_FRACTIONS = ((0.3, 1, "stick", "slide"), (0.6, 3, "slide", "stick"))
+
+
+def write_switches(path, t_end):
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "w") as handle:
+        handle.write("t,wheel,from,to,located,t_lower,t_upper\n")
+        for fraction, wheel, before, after in SWITCH_FRACTIONS:
+            t = fraction * t_end
+            handle.write(f"{t!r},{wheel},{before},{after},true,{t - 1e-9!r},{t!r}\n")
+
+
 def build_fixture(out_dir, seed=7, legacy=False):
     """Write the fixture into out_dir (created); return out_dir. legacy=True
     writes runs.csv without the issue-#14 columns (older harness output)."""
@@ -377,6 +391,9 @@ def build_fixture(out_dir, seed=7, legacy=False):
                                     PVC_SLIP_FACTOR if run["scene"] == "paper_pvc" else 1.0)
             write_trajectory(os.path.join(out_dir, "trajectories",
                                           f"{run['run_id']}.csv"), cols)
+            if not legacy:
+                write_switches(os.path.join(out_dir, "switches",
+                                            f"{run['run_id']}.csv"), run["t_end"])
         else:
             run.update(failure_fields(*outcome))
         run.update(trust_fields(run, rng))

@@ -219,6 +219,21 @@ class GoodReportTest(unittest.TestCase):
         self.assertIn("all runs failed", summary)
         self.assertIn("SOLVER_FAILURE", summary)
 
+    def test_force_figures_mark_the_located_switches(self):
+        manifest = self.manifest()
+        for name in ("fig09_normal_forces", "fig10_longitudinal_traction",
+                     "fig11_lateral_traction"):
+            caption = manifest[name]["caption"]
+            self.assertIn("the 2 stick/slide switches of this run (2 located", caption)
+            self.assertIn("(wheel 1 stick→slide)", caption)
+            self.assertIn("(wheel 3 slide→stick)", caption)
+
+    def test_force_figures_say_when_switch_times_are_missing(self):
+        with open(os.path.join(Fixture.legacy, "report", "figures.json")) as handle:
+            manifest = {entry["name"]: entry for entry in json.load(handle)}
+        self.assertIn("switch times are not in the results",
+                      manifest["fig09_normal_forces"]["caption"])
+
     def test_failed_only_method_noted_in_accuracy_caption(self):
         html = self.html()
         block = html.split('id="fig_work_precision"')[1].split("</figure>")[0]

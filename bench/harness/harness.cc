@@ -774,6 +774,8 @@ RunOutcome ExecuteRun(const Suite& suite, const RunSpec& run,
                   TrajectoryCsv(result));
   AtomicWriteFile(dir + "/checkpoints/" + run.run_id + ".csv",
                   TrajectoryCsv(result.checkpoints));
+  AtomicWriteFile(dir + "/switches/" + run.run_id + ".csv",
+                  SwitchesCsv(result.switches));
   AtomicWriteFile(dir + "/runs/" + run.run_id + ".csv",
                   Header() + "\n" + outcome.row + "\n");
   return outcome;

@@ -16,6 +16,8 @@
 #include <thread>
 #include <variant>
 
+#include "quasiroll/bench/io/csv.h"
+#include "quasiroll/bench/io/format.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/plugin_loader.h"
@@ -360,6 +362,17 @@ void WriteSwitches(const std::vector<SwitchEvent>& switches, JsonWriter* json) {
     j.EndObject();
   }
   j.EndArray();
+}
+
+std::string SwitchesCsv(const std::vector<SwitchEvent>& switches) {
+  std::string out = "t,wheel,from,to,located,t_lower,t_upper\n";
+  for (const SwitchEvent& e : switches)
+    out += JoinCsvRow({bench::Num(e.t), std::to_string(e.wheel),
+                       RegimeName(e.from_sliding), RegimeName(e.to_sliding),
+                       e.located ? "true" : "false", bench::Num(e.t_lower),
+                       bench::Num(e.t_upper)}) +
+           "\n";
+  return out;
 }
 
 std::string RunJson(const Scene& scene, const SimulationOptions& options,

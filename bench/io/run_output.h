@@ -26,6 +26,10 @@ std::string TrajectoryCsv(const SimulationResult& result);
 // The same format for any samples (e.g. SimulationResult::checkpoints).
 std::string TrajectoryCsv(const std::vector<TrajectorySample>& samples);
 
+// switches/<run_id>.csv: the located stick/slide switches, a row each
+// (t, wheel, from, to, located, t_lower, t_upper; docs/formats.md).
+std::string SwitchesCsv(const std::vector<SwitchEvent>& switches);
+
 // Short commit hash the binary was built from ("unknown" when built outside
 // a git checkout), with "-dirty" when the tree had uncommitted changes to
 // tracked files at build time (cmake/QuasirollGitCommit.cmake).

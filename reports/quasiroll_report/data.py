@@ -387,6 +387,27 @@ def read_trajectory(path):
     return table
 
 
+def read_switches(path):
+    """switches/<run_id>.csv (docs/formats.md) as a list of dicts with t,
+    wheel, from, to, located; None if the file does not exist (a run from
+    before the file was written, or from a merge that did not copy it)."""
+    if not os.path.isfile(path):
+        return None
+    label = "switches/" + os.path.basename(path)
+    header, body = _read_csv_rows(path, label)
+    _check_columns(header, ("t", "wheel", "from", "to", "located"), label)
+    rows = []
+    for fields in body:
+        row = dict(zip(header, fields))
+        try:
+            rows.append({"t": parse_number(row["t"]), "wheel": int(row["wheel"]),
+                         "from": row["from"], "to": row["to"],
+                         "located": row["located"] == "true"})
+        except ValueError:
+            raise ReportError(f"{label}: a row has a non-number") from None
+    return rows
+
+
 class TrajectoryStore:
     """Loads trajectories on demand and remembers them."""
 
@@ -403,6 +424,11 @@ class TrajectoryStore:
             table = read_trajectory(trajectory_path(self.results_dir, run))
             self._cache[key] = table if len(table["t"]) else None
         return self._cache[key]
+
+    def switches(self, run):
+        """The run's located stick/slide switches (read_switches)."""
+        return read_switches(os.path.join(self.results_dir, "switches",
+                                          f"{run['run_id']}.csv"))
 
 
 def read_meta(results_dir):

@@ -340,9 +340,40 @@ _WHEEL_FORCE_FIGURES = {
 }
 
 
+def _mark_switches(ctx, run, ax):
+    """Vertical lines at the run's located stick/slide switches, in the
+    switching wheel's colour; the caption's sentence about them."""
+    switches = ctx.trajectories.switches(run)
+    if switches is None:
+        return (" The run's switch times are not in the results "
+                "(no switches/ file), so none are marked.")
+    if not switches:
+        return (" No wheel changed between sticking and sliding in this run "
+                "(switch location on)." if run.get("locate_switches") != "false"
+                else " Switch location was off for this run.")
+    colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
+    for e in switches:
+        ax.axvline(e["t"], color=colours.get(e["wheel"], "grey"),
+                   linestyle=(0, (1, 2)), linewidth=0.9, alpha=0.8)
+    handles, labels = ax.get_legend_handles_labels()
+    handles.append(Line2D([], [], color="grey", linestyle=(0, (1, 2))))
+    labels.append("stick/slide switch")
+    ax.legend(handles, labels, loc="best")
+    located = sum(1 for e in switches if e["located"])
+    listed = ", ".join(
+        f"{fmt(e['t'])} s (wheel {e['wheel']} {e['from']}→{e['to']})"
+        for e in switches[:8])
+    more = f" and {len(switches) - 8} more" if len(switches) > 8 else ""
+    return (f" Dotted verticals, in the wheel's colour: the {len(switches)} "
+            f"stick/slide switches of this run ({located} located to the "
+            f"switch tolerance, docs/model.md §8.6): {listed}{more}.")
+
+
 def _wheel_force_figure(ctx, name):
     stem, title, column, ylabel, paper_text, total = _WHEEL_FORCE_FIGURES[name]
     fig, caption = _wheel_figure(ctx, column, ylabel, paper_text, total=total)
+    run, _ = _primary(ctx)
+    caption += _mark_switches(ctx, run, fig.axes[0])
     return save_figure(fig, ctx.out_dir, stem, title, caption)
 
 
