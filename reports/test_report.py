@@ -1021,6 +1021,22 @@ def _point(err, wall, iqr=0.0, label="", method="m"):
 
 
 class WorkPrecisionRulesTest(unittest.TestCase):
+    def test_step_cap_plateau_is_named(self):
+        """An rtol ladder flat because one step is taken per output interval
+        is named as such; a ladder whose error falls is not."""
+        from quasiroll_report import figures_methods
+
+        def rung(method, tol, err, steps):
+            return {"method": method, "tol": tol, "err_pos_rms": err, "steps": steps,
+                    "dt": 0.1, "t_reached": 20.0, "t_end": 20.0, "substeps": 1}
+        rows = [rung("capped", 1e-3, 6.6e-8, 244), rung("capped", 1e-4, 6.6e-8, 244),
+                rung("capped", 1e-5, 6.59e-8, 245), rung("capped", 1e-8, 3e-9, 656),
+                rung("falls", 1e-3, 5e-5, 211), rung("falls", 1e-4, 2e-5, 585)]
+        text = figures_methods._step_cap_text(rows)
+        self.assertIn("capped (rtol 0.001 to 1.00e-05 at Δt = 0.1 s)", text)
+        self.assertNotIn("falls", text)
+        self.assertEqual(figures_methods._step_cap_text(rows[4:]), "")
+
     """The dominance rule and the recommendation table (issue 21 item 7), on
     hand-made points whose verdicts follow from the rule's two thresholds."""
 

@@ -221,7 +221,7 @@ def figure_work_precision(ctx):
         "point of the problem is faster by more than the timing spread (the "
         "larger IQR of the two) and more accurate by more than 1 %. "
         + timing_text + " The right axis is the same time per simulated second. "
-        + _checkpoint_text(rows) +
+        + _checkpoint_text(rows) + _step_cap_text(rows) +
         "Errors are against the problem's reference; a zoh method holds the "
         "quasi-static twist over each Δt, so its error falls only as O(Δt) "
         "(hold error) however accurate its integrator, while the coupled "
@@ -235,6 +235,39 @@ def figure_work_precision(ctx):
                          "1. Work-precision", caption)
     record.data = {"panels": panels, "timing": "median" if spread else "min"}
     return record
+
+
+def _step_cap_text(rows):
+    """Where an rtol ladder is flat because the output interval, not rtol,
+    limits the step: consecutive rungs whose err_pos_rms differs by < 5 %
+    while the step count stays within 25 % of one step per output interval
+    (t_reached / Δt x substeps)."""
+    ladders = {}
+    for r in rows:
+        if all(isinstance(r.get(k), (int, float)) and math.isfinite(r[k])
+               for k in ("tol", "steps", "dt", "t_reached", "err_pos_rms")) \
+                and r["dt"] > 0:
+            ladders.setdefault((r["method"], r["dt"], r["t_end"]), []).append(r)
+    notes = []
+    for (method, dt, _), rungs in sorted(ladders.items(), key=lambda kv: str(kv[0])):
+        rungs.sort(key=lambda r: -r["tol"])
+        per_interval = [r["steps"] / max(1.0, r["t_reached"] / dt *
+                                         (r.get("substeps") or 1)) for r in rungs]
+        last = 0  # the plateau from the loosest rung down to rungs[last]
+        while (last + 1 < len(rungs) and per_interval[last + 1] <= 1.25
+               and abs(rungs[last + 1]["err_pos_rms"] - rungs[last]["err_pos_rms"])
+               <= 0.05 * rungs[last]["err_pos_rms"]):
+            last += 1
+        if last > 0:
+            notes.append(f"{method} (rtol {fmt(rungs[0]['tol'])} to "
+                         f"{fmt(rungs[last]['tol'])} at Δt = {fmt(dt)} s)")
+    if not notes:
+        return ""
+    return ("Plateaus: where an rtol ladder gives one error level, the step is "
+            "limited by the output interval Δt, not by rtol (the run takes about "
+            "one step per output interval, runs.csv steps): "
+            + "; ".join(notes[:8]) + (f" and {len(notes) - 8} more" if len(notes) > 8
+                                      else "") + ". ")
 
 
 def _checkpoint_text(rows):
