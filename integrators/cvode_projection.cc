@@ -4,6 +4,7 @@
 #include <cvode/cvode_ls.h>
 #include <cvode/cvode_proj.h>
 
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -11,6 +12,28 @@
 #include "quasiroll/integrators/sundials_support_internal.h"
 
 namespace quasiroll {
+
+namespace {
+
+class CvodeProjectionIntegrator final : public Integrator {
+ public:
+  CvodeProjectionIntegrator();
+  ~CvodeProjectionIntegrator() override;
+  std::string name() const override { return "cvode-projection"; }
+  OptionTable option_table() const override;
+
+ private:
+  void ApplyBackendOptions(const OptionValues& values) override;
+  void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
+                   Eigen::Ref<Eigen::VectorXd> y,
+                   const IntegratorOptions& options,
+                   IntegratorResult* result) override;
+
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace
 
 using Eigen::Map;
 using Eigen::MatrixXd;
@@ -355,6 +378,10 @@ void CvodeProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
     return fail(IntegratorStatus::kInvalidInput,
                 "cvode setup: " + FlagName(flag) + " " + s.errors.last_error);
   s.Solve(t0, t1, y);
+}
+
+std::unique_ptr<Integrator> MakeCvodeProjectionIntegrator() {
+  return std::make_unique<CvodeProjectionIntegrator>();
 }
 
 }  // namespace quasiroll

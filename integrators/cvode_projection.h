@@ -46,28 +46,12 @@
 #pragma once
 
 #include <memory>
-#include <string>
 
 #include "quasiroll/core/dae.h"
 
 namespace quasiroll {
 
-class CvodeProjectionIntegrator final : public Integrator {
- public:
-  CvodeProjectionIntegrator();
-  ~CvodeProjectionIntegrator() override;
-  std::string name() const override { return "cvode-projection"; }
-  OptionTable option_table() const override;
-
- private:
-  void ApplyBackendOptions(const OptionValues& values) override;
-  void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
-                   Eigen::Ref<Eigen::VectorXd> y,
-                   const IntegratorOptions& options,
-                   IntegratorResult* result) override;
-
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-};
+// The "cvode-projection" integrator (registered by integrators/registry.cc).
+std::unique_ptr<Integrator> MakeCvodeProjectionIntegrator();
 
 }  // namespace quasiroll

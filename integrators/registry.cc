@@ -54,18 +54,16 @@ void RegisterBuiltinIntegrators() {
                  ? "baumgarte_instability"
                  : "";
     };
-    IntegratorRegistry::Register("rk-baumgarte", std::move(baumgarte), [] {
-      return std::make_unique<RkBaumgarteIntegrator>();
-    });
+    IntegratorRegistry::Register("rk-baumgarte", std::move(baumgarte),
+                                 [] { return MakeRkBaumgarteIntegrator(); });
     BackendInfo projection = Info(
         "explicit Runge-Kutta step + Newton projection onto H = 0 (model.md "
         "§8.4)",
         "explicit Runge-Kutta", "", "", 0.000111, 0.000204);
     projection.adaptive = AdaptiveRk;
     projection.roles = {BackendRole::kDefault, BackendRole::kReference};
-    IntegratorRegistry::Register("rk-projection", std::move(projection), [] {
-      return std::make_unique<RkProjectionIntegrator>();
-    });
+    IntegratorRegistry::Register("rk-projection", std::move(projection),
+                                 [] { return MakeRkProjectionIntegrator(); });
 #ifdef QUASIROLL_HAVE_SUNDIALS
     BackendInfo ida = Info(
         "SUNDIALS IDA on the index-2 GGL / index-1 Baumgarte DAE (model.md "
@@ -83,7 +81,7 @@ void RegisterBuiltinIntegrators() {
         0.00088, 0.00228);
     cvode.adaptive = [](const OptionValues&) { return true; };
     IntegratorRegistry::Register("cvode-projection", std::move(cvode), [] {
-      return std::make_unique<CvodeProjectionIntegrator>();
+      return MakeCvodeProjectionIntegrator();
     });
 #endif
   });

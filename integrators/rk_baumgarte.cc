@@ -1,6 +1,45 @@
 #include "quasiroll/integrators/rk_baumgarte.h"
 
+#include <memory>
+
+#include "quasiroll/core/weighted_projection.h"
+#include "quasiroll/integrators/runge_kutta.h"
+
 namespace quasiroll {
+
+namespace {
+
+class RkBaumgarteIntegrator final : public Integrator {
+ public:
+  RkBaumgarteIntegrator() = default;
+  std::string name() const override { return "rk-baumgarte"; }
+  OptionTable option_table() const override;
+
+ private:
+  void ApplyBackendOptions(const OptionValues& values) override;
+  class CorrectedField final : public integrators_internal::RkSystem {
+   public:
+    IntegratorStatus Field(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                           Eigen::Ref<Eigen::VectorXd> f,
+                           IntegratorResult* result) override;
+    ConstrainedOde* ode = nullptr;
+    double sigma = 0.0;
+    WeightedProjection correction;
+    Eigen::VectorXd delta;
+  };
+
+  void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
+                   Eigen::Ref<Eigen::VectorXd> y,
+                   const IntegratorOptions& options,
+                   IntegratorResult* result) override;
+
+  CorrectedField field_;
+  integrators_internal::RkSettings settings_;
+  double sigma_ = 5.0;
+  integrators_internal::RungeKuttaDriver driver_;
+};
+
+}  // namespace
 
 IntegratorStatus RkBaumgarteIntegrator::CorrectedField::Field(
     double t, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -46,6 +85,10 @@ void RkBaumgarteIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
   field_.correction.Begin(ode);
   if (field_.delta.size() != y.size()) field_.delta.resize(y.size());
   driver_.Run(field_, ode, t0, t1, y, options, settings_, result);
+}
+
+std::unique_ptr<Integrator> MakeRkBaumgarteIntegrator() {
+  return std::make_unique<RkBaumgarteIntegrator>();
 }
 
 }  // namespace quasiroll

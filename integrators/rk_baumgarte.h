@@ -11,42 +11,13 @@
 // safety, max_growth, max_shrink, stage_failure_shrink).
 #pragma once
 
-#include <string>
+#include <memory>
 
 #include "quasiroll/core/dae.h"
-#include "quasiroll/core/weighted_projection.h"
-#include "quasiroll/integrators/runge_kutta.h"
 
 namespace quasiroll {
 
-class RkBaumgarteIntegrator final : public Integrator {
- public:
-  RkBaumgarteIntegrator() = default;
-  std::string name() const override { return "rk-baumgarte"; }
-  OptionTable option_table() const override;
-
- private:
-  void ApplyBackendOptions(const OptionValues& values) override;
-  class CorrectedField final : public integrators_internal::RkSystem {
-   public:
-    IntegratorStatus Field(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
-                           Eigen::Ref<Eigen::VectorXd> f,
-                           IntegratorResult* result) override;
-    ConstrainedOde* ode = nullptr;
-    double sigma = 0.0;
-    WeightedProjection correction;
-    Eigen::VectorXd delta;
-  };
-
-  void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
-                   Eigen::Ref<Eigen::VectorXd> y,
-                   const IntegratorOptions& options,
-                   IntegratorResult* result) override;
-
-  CorrectedField field_;
-  integrators_internal::RkSettings settings_;
-  double sigma_ = 5.0;
-  integrators_internal::RungeKuttaDriver driver_;
-};
+// The "rk-baumgarte" integrator (registered by integrators/registry.cc).
+std::unique_ptr<Integrator> MakeRkBaumgarteIntegrator();
 
 }  // namespace quasiroll

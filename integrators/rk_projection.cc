@@ -1,6 +1,46 @@
 #include "quasiroll/integrators/rk_projection.h"
 
+#include <memory>
+
+#include "quasiroll/core/weighted_projection.h"
+#include "quasiroll/integrators/runge_kutta.h"
+
 namespace quasiroll {
+
+namespace {
+
+class RkProjectionIntegrator final : public Integrator {
+ public:
+  RkProjectionIntegrator() = default;
+  std::string name() const override { return "rk-projection"; }
+  OptionTable option_table() const override;
+
+ private:
+  void ApplyBackendOptions(const OptionValues& values) override;
+  class System final : public integrators_internal::RkSystem {
+   public:
+    IntegratorStatus Field(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                           Eigen::Ref<Eigen::VectorXd> f,
+                           IntegratorResult* result) override;
+    IntegratorStatus PostStep(double t, Eigen::Ref<Eigen::VectorXd> y,
+                              IntegratorResult* result, bool* moved) override;
+    ConstrainedOde* ode = nullptr;
+    ProjectionSettings projection;
+    WeightedProjection correction;
+  };
+
+  void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
+                   Eigen::Ref<Eigen::VectorXd> y,
+                   const IntegratorOptions& options,
+                   IntegratorResult* result) override;
+
+  System system_;
+  integrators_internal::RkSettings settings_;
+  ProjectionSettings projection_;
+  integrators_internal::RungeKuttaDriver driver_;
+};
+
+}  // namespace
 
 IntegratorStatus RkProjectionIntegrator::System::Field(
     double t, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -46,6 +86,10 @@ void RkProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
     return;
   }
   driver_.Run(system_, ode, t0, t1, y, options, settings_, result);
+}
+
+std::unique_ptr<Integrator> MakeRkProjectionIntegrator() {
+  return std::make_unique<RkProjectionIntegrator>();
 }
 
 }  // namespace quasiroll

@@ -17,43 +17,13 @@
 // J F != 0: error 7e-3 at h = 0.05, decreasing only linearly with h).
 #pragma once
 
-#include <string>
+#include <memory>
 
 #include "quasiroll/core/dae.h"
-#include "quasiroll/core/weighted_projection.h"
-#include "quasiroll/integrators/runge_kutta.h"
 
 namespace quasiroll {
 
-class RkProjectionIntegrator final : public Integrator {
- public:
-  RkProjectionIntegrator() = default;
-  std::string name() const override { return "rk-projection"; }
-  OptionTable option_table() const override;
-
- private:
-  void ApplyBackendOptions(const OptionValues& values) override;
-  class System final : public integrators_internal::RkSystem {
-   public:
-    IntegratorStatus Field(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
-                           Eigen::Ref<Eigen::VectorXd> f,
-                           IntegratorResult* result) override;
-    IntegratorStatus PostStep(double t, Eigen::Ref<Eigen::VectorXd> y,
-                              IntegratorResult* result, bool* moved) override;
-    ConstrainedOde* ode = nullptr;
-    ProjectionSettings projection;
-    WeightedProjection correction;
-  };
-
-  void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
-                   Eigen::Ref<Eigen::VectorXd> y,
-                   const IntegratorOptions& options,
-                   IntegratorResult* result) override;
-
-  System system_;
-  integrators_internal::RkSettings settings_;
-  ProjectionSettings projection_;
-  integrators_internal::RungeKuttaDriver driver_;
-};
+// The "rk-projection" integrator (registered by integrators/registry.cc).
+std::unique_ptr<Integrator> MakeRkProjectionIntegrator();
 
 }  // namespace quasiroll
