@@ -395,31 +395,30 @@ TEST_F(BenchHarness, VerdictColumns) {
 // drift_exceeded.
 TEST(BenchVerdicts, BlowUpIsNumericalFrictionStopIsPhysical) {
   const fs::path root = FreshTempDir("quasiroll_verdict_test_");
-  const std::string suite_path = (root / "verdicts.yaml").string();
-  std::ofstream(suite_path)
-      << "scenes:\n"
-         "  - {name: paper, file: "
-      << kScenes
-      << "paper.yaml, overrides: {time: {t_end: 6.4}}}\n"
-         "  - {name: paper_pvc, file: "
-      << kScenes
-      << "paper.yaml, overrides: {mode: pvc, mu: 0.3, time: {t_end: 15}}}\n"
-         "groups:\n"
-         "  blowup:\n"
-         "    scenes: [paper]\n"
-         "    dae: rk-baumgarte\n"
-         "    dt: 3.2\n"
-         "  friction:\n"
-         "    scenes: [paper_pvc]\n"
-         "  tight:\n"
-         "    scenes: [paper]\n"
-         "    dae: rk-baumgarte\n"
-         "    dt: 0.2\n"
-         "    t_end: 1\n"
-         "    repeats: 3\n"
-         "    bounds: {drift: 1.0e-12}\n";
-  const Suite suite = LoadSuite(suite_path);
-  RunSuite(suite, QuietHarnessOptions(root / "out", 2));
+  RunSuiteText(
+      root,
+      std::string("scenes:\n"
+                  "  - {name: paper, file: ") +
+          kScenes +
+          "paper.yaml, overrides: {time: {t_end: 6.4}}}\n"
+          "  - {name: paper_pvc, file: " +
+          kScenes +
+          "paper.yaml, overrides: {mode: pvc, mu: 0.3, time: {t_end: 15}}}\n"
+          "groups:\n"
+          "  blowup:\n"
+          "    scenes: [paper]\n"
+          "    dae: rk-baumgarte\n"
+          "    dt: 3.2\n"
+          "  friction:\n"
+          "    scenes: [paper_pvc]\n"
+          "  tight:\n"
+          "    scenes: [paper]\n"
+          "    dae: rk-baumgarte\n"
+          "    dt: 0.2\n"
+          "    t_end: 1\n"
+          "    repeats: 3\n"
+          "    bounds: {drift: 1.0e-12}\n",
+      2);
   const Table t = ReadTable(root / "out" / "runs.csv");
   ASSERT_EQ(t.rows.size(), 3u);
   const auto& blowup = t.rows[0];

@@ -305,18 +305,17 @@ TEST_F(ReferenceRetry, PersistentFailureIsAReferenceFailure) {
 TEST_F(ReferenceRetry, RunRowsCarryTheReferenceStop) {
   g_window.fail_b = true;
   const std::filesystem::path root = FreshTempDir("quasiroll_refretry_rows_");
-  const std::string suite_path = (root / "s.yaml").string();
-  std::ofstream(suite_path) << "reference: {nlp: test-window-a}\n"
-                               "scenes:\n"
-                               "  - {name: paper, file: "
-                            << kScenes
-                            << "paper.yaml, overrides: {time: {t_end: 2}}}\n"
-                               "groups:\n"
-                               "  g:\n"
-                               "    scenes: [paper]\n"
-                               "    coupling: [zoh]\n";
-  const Suite suite = LoadSuite(suite_path);
-  RunSuite(suite, QuietHarnessOptions(root / "out", 1));
+  RunSuiteText(root,
+               "reference: {nlp: test-window-a}\n"
+               "scenes:\n"
+               "  - {name: paper, file: " +
+                   kScenes +
+                   "paper.yaml, overrides: {time: {t_end: 2}}}\n"
+                   "groups:\n"
+                   "  g:\n"
+                   "    scenes: [paper]\n"
+                   "    coupling: [zoh]\n",
+               1);
   std::stringstream in(ReadAll(root / "out" / "runs.csv"));
   std::string line;
   ASSERT_TRUE(std::getline(in, line));

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "quasiroll/bench/harness/harness.h"
+#include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/bench/io/run_output.h"
 
 namespace quasiroll::bench {
@@ -43,6 +44,16 @@ inline std::filesystem::path FreshTempDir(const std::string& prefix) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+// Writes `text` to DIR/suite.yaml and runs that suite into DIR/out with
+// `jobs` threads and no progress bar; returns DIR/out.
+inline std::filesystem::path RunSuiteText(const std::filesystem::path& dir,
+                                          const std::string& text, int jobs) {
+  const std::string path = (dir / "suite.yaml").string();
+  std::ofstream(path) << text;
+  RunSuite(LoadSuite(path), QuietHarnessOptions(dir / "out", jobs));
+  return dir / "out";
 }
 
 // Writes DIR/tiny.yaml, a suite named "tiny" of the paper and flat scenes
