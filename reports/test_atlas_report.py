@@ -66,12 +66,14 @@ class AtlasReport(unittest.TestCase):
             index = out.stdout.strip().splitlines()[-1]
             page = open(index, encoding="utf-8").read()
             for name in ("atlas_mu_min", "atlas_pvc_gain", "atlas_fraction",
-                         "atlas_wheel"):
+                         "atlas_wheel", "atlas_edge"):
                 self.assertIn(f"{name}.png", page)
                 self.assertTrue(os.path.isfile(os.path.join(d, "report", f"{name}.svg")))
             self.assertIn("no_contact", page)
             self.assertIn("atlas{test}", page)
             self.assertIn("Solver reliability at the edge", page)
+            # The edge chart counts the wrong claim in its caption.
+            self.assertIn("converged below the edge: 1 in total", page)
 
     def test_edge_summary_counts_wrong_claims(self):
         with tempfile.TemporaryDirectory() as d:

@@ -8,6 +8,8 @@ Figures (each PNG + SVG):
   atlas_pvc_gain   pvc - paper of the minimum over headings
   atlas_fraction   traversable fraction of the poses (x, y, heading) vs mu
   atlas_wheel      critical wheel per mode at the first heading
+  atlas_edge       (with DIR/edge.csv) verdicts and median iterations per NLP
+                   backend and offset d from the edge
 and, when DIR/edge.csv exists, the edge-reliability table per NLP backend.
 """
 
@@ -19,6 +21,7 @@ import os
 
 import numpy as np
 from matplotlib.colors import ListedColormap
+from matplotlib.patches import Patch
 
 from .data import ReportError
 from .plotting import apply_style, new_figure, save_figure
@@ -278,12 +281,77 @@ def edge_summary(rows):
     return out
 
 
-def _edge_table(results_dir):
+EDGE_COLOURS = {"correct": "#2ca02c", "wrong_claim": "#d62728",
+                "false_infeasibility": "#ff7f0e", "failure": "#7f7f7f"}
+
+
+def _read_edge(results_dir):
+    """DIR/edge.csv's rows ([] when there is no edge study)."""
     path = os.path.join(results_dir, "edge.csv")
     if not os.path.isfile(path):
-        return ""
+        return []
     with open(path, newline="", encoding="utf-8") as handle:
-        rows = list(csv.DictReader(handle))
+        return list(csv.DictReader(handle))
+
+
+def figure_edge(rows, out_dir):
+    """Left: per backend and offset d, the verdicts stacked (counts of cells x
+    modes); right: median iterations vs d. None without an edge study."""
+    if not rows:
+        return None
+    backends = sorted({r["backend"] for r in rows})
+    offsets = sorted({float(r["offset"]) for r in rows}, reverse=True)
+    fig = new_figure(12, 4.2)
+    ax, ax_it = fig.subplots(1, 2, gridspec_kw={"width_ratios": [2.2, 1]})
+    width = 0.8 / len(offsets)
+    for b, backend in enumerate(backends):
+        mine = [r for r in rows if r["backend"] == backend]
+        iterations = []
+        for k, d in enumerate(offsets):
+            cell = [r for r in mine if float(r["offset"]) == d]
+            x = b + (k - (len(offsets) - 1) / 2) * width
+            bottom = 0
+            for verdict in EDGE_VERDICTS:
+                n = sum(1 for r in cell if r["verdict"] == verdict)
+                if n:
+                    ax.bar(x, n, width * 0.9, bottom=bottom,
+                           color=EDGE_COLOURS[verdict])
+                    bottom += n
+            ax.text(x, bottom, f"{d:+g}", rotation=90, ha="center", va="bottom",
+                    fontsize=6)
+            its = sorted(int(r["iterations"]) for r in cell)
+            iterations.append(its[len(its) // 2] if its else math.nan)
+        ax_it.plot(range(len(offsets)), iterations, marker="o", label=backend)
+    ax.set_xticks(range(len(backends)))
+    ax.set_xticklabels(backends)
+    ax.set_ylabel("solves (cells x modes)")
+    ax.set_title("verdict per offset d (bar label), mu = mu_min (1 + d)")
+    top = max(len([r for r in rows if r["backend"] == b and float(r["offset"]) == d])
+              for b in backends for d in offsets)
+    ax.set_ylim(0, 1.25 * top)
+    ax.legend(handles=[Patch(color=EDGE_COLOURS[v], label=v) for v in EDGE_VERDICTS],
+              loc="upper right", fontsize=7, ncol=4)
+    ax_it.set_xticks(range(len(offsets)))
+    ax_it.set_xticklabels([f"{d:+g}" for d in offsets])
+    ax_it.axvline(sum(1 for d in offsets if d > 0) - 0.5, color="k",
+                  linestyle=":", linewidth=0.8)
+    ax_it.set_xlabel("d (left of the dotted line: above the edge)")
+    ax_it.set_ylabel("median iterations")
+    ax_it.set_yscale("log")
+    ax_it.legend(fontsize=7)
+    wrong = sum(1 for r in rows if r["verdict"] == "wrong_claim")
+    caption = (f"Solver reliability at the edge: {len(rows)} solves of "
+               f"{len({(r['cell'], r['mode']) for r in rows})} (cell, mode) pairs "
+               f"by {len(backends)} NLP backends at mu = mu_min (1 + d). Green: "
+               "correct (converged above the edge, classified infeasible below "
+               "it); red: wrong claim (converged below the edge: "
+               f"{wrong} in total); orange: false infeasibility above the edge; "
+               "grey: failure. Right: median iterations per offset, showing how "
+               "the solves slow down as the problem degenerates at the edge.")
+    return save_figure(fig, out_dir, "atlas_edge", "edge reliability", caption)
+
+
+def _edge_table(rows):
     if not rows:
         return ""
     head = "".join(f"<th>{v}</th>" for v in EDGE_VERDICTS)
@@ -314,10 +382,12 @@ def build_atlas_report(results_dir, out_dir):
     meta = _read_json(os.path.join(results_dir, "meta.json")) or {}
     terrain = _read_json(os.path.join(results_dir, "terrain.json"))
     os.makedirs(out_dir, exist_ok=True)
+    edge_rows = _read_edge(results_dir)
     records = [figure_mu_min(grid, terrain, out_dir),
                figure_pvc_gain(grid, terrain, out_dir),
                figure_fraction(grid, out_dir),
-               figure_wheel(grid, terrain, out_dir)]
+               figure_wheel(grid, terrain, out_dir),
+               figure_edge(edge_rows, out_dir)]
     blocks = []
     for r in records:
         if r is None:
@@ -336,7 +406,7 @@ def build_atlas_report(results_dir, out_dir):
             f"{html.escape(str(meta.get('commit', 'unknown')))}; "
             f"{html.escape(str(meta.get('cpu_model', '')))}. How to read the "
             "maps: docs/atlas.md.</p>"
-            + _status_table(grid) + "".join(blocks) + _edge_table(results_dir)
+            + _status_table(grid) + "".join(blocks) + _edge_table(edge_rows)
             + "</body></html>\n")
     index = os.path.join(out_dir, "index.html")
     with open(index, "w", encoding="utf-8") as handle:
