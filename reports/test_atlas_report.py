@@ -5,6 +5,7 @@ synthetic atlas.csv: /usr/bin/python3 reports/test_atlas_report.py"""
 import csv
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -13,7 +14,7 @@ import unittest
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
-from quasiroll_report import atlas  # noqa: E402
+from quasiroll_report import atlas, atlas_view  # noqa: E402
 
 HEADER = ["cell", "x", "y", "heading", "mode", "status", "detail", "mu_min",
           "critical_wheel", "mu", "margin", "min_normal_force", "z", "roll",
@@ -105,3 +106,44 @@ class AtlasReport(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+class AtlasView(unittest.TestCase):
+    def test_view_data_has_every_heading_and_the_minimum(self):
+        with tempfile.TemporaryDirectory() as d:
+            write_atlas(d)
+            grid = atlas.Grid(atlas._read_atlas(d))
+        data = atlas_view.atlas_view_data(grid, {"type": "gaussians",
+                                                 "bumps": [[0.05, 1.0, 0.5, 0.4]]})
+        self.assertEqual(sorted(data["maps"]), ["paper", "pvc", "pvc - paper"])
+        nh = len(grid.headings)
+        self.assertEqual(len(data["maps"]["paper"]), nh + 1)
+        self.assertEqual(len(data["heights"]), len(grid.ys))
+        self.assertEqual(len(data["heights"][0]), len(grid.xs))
+        # The pose where pvc cannot stand (x = 2, y = 1, heading 0) is None.
+        ix, iy = grid.xs.index(2.0), grid.ys.index(1.0)
+        self.assertIsNone(data["maps"]["pvc"][0][iy][ix])
+        # The last layer is the minimum over the headings.
+        paper = data["maps"]["paper"]
+        for j in range(len(grid.ys)):
+            for i in range(len(grid.xs)):
+                values = [paper[h][j][i] for h in range(nh) if paper[h][j][i] is not None]
+                self.assertAlmostEqual(paper[nh][j][i], min(values))
+        self.assertGreaterEqual(data["vmax"], 1.2 * 0.5)
+
+    @unittest.skipUnless(shutil.which("chromium") and atlas_view.find_three(),
+                         "needs chromium and libjs-three")
+    def test_page_renders_in_headless_chromium(self):
+        with tempfile.TemporaryDirectory() as d:
+            write_atlas(d)
+            subprocess.run([sys.executable, os.path.join(HERE, "make_report.py"), d],
+                           capture_output=True, text=True, check=True)
+            page = os.path.join(d, "report", "atlas3d", "index.html")
+            dom = subprocess.run(
+                ["chromium", "--headless", "--no-sandbox", "--use-angle=swiftshader",
+                 "--enable-unsafe-swiftshader", "--no-first-run",
+                 f"--user-data-dir={d}/profile", "--virtual-time-budget=10000",
+                 "--dump-dom", f"file://{page}?mode=pvc&heading=1"],
+                capture_output=True, text=True, timeout=120).stdout
+        self.assertIn('<body data-ready="1"', dom)
+        self.assertIn("modes: paper, pvc, pvc - paper", dom)
+

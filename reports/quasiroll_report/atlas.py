@@ -23,6 +23,7 @@ import numpy as np
 from matplotlib.colors import ListedColormap
 from matplotlib.patches import Patch
 
+from .atlas_view import write_atlas_view
 from .data import ReportError
 from .plotting import apply_style, new_figure, save_figure
 from .terrain import terrain_height
@@ -394,6 +395,7 @@ def build_atlas_report(results_dir, out_dir):
             continue
         blocks.append(f'<figure><img src="{r.png}" alt="{html.escape(r.title)}">'
                       f"<figcaption>{html.escape(r.caption)}</figcaption></figure>")
+    view, view_notes = write_atlas_view(grid, terrain, out_dir)
     key = html.escape(str(meta.get("key", "unknown grid")))
     page = ("<!DOCTYPE html><html><head><meta charset=\"utf-8\">"
             "<title>quasiroll traversability atlas</title>"
@@ -406,7 +408,9 @@ def build_atlas_report(results_dir, out_dir):
             f"{html.escape(str(meta.get('commit', 'unknown')))}; "
             f"{html.escape(str(meta.get('cpu_model', '')))}. How to read the "
             "maps: docs/atlas.md.</p>"
-            + _status_table(grid) + "".join(blocks) + _edge_table(edge_rows)
+            + _status_table(grid) + "".join(blocks) + view
+            + "".join(f"<p><em>{html.escape(n)}</em></p>" for n in view_notes)
+            + _edge_table(edge_rows)
             + "</body></html>\n")
     index = os.path.join(out_dir, "index.html")
     with open(index, "w", encoding="utf-8") as handle:
