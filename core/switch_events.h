@@ -134,7 +134,7 @@ inline constexpr double kSwitchMinStep = 1e-7;
 // its transition, inside the interval it is located in.
 inline constexpr double kSwitchResolveWindow = 0.05;
 
-// The creep band [s]: a sticking wheel whose creep |s| lies in
+// The creep band: a sticking wheel whose creep |s| lies in
 // [kSwitchBandSlipOverEpsilon eps, kSwitchSlipOverEpsilon eps) is close to
 // its cone. There the regularised law makes the right-hand side steep but
 // smooth: with the margin 1 - u falling (rising) at a rate r, the creep is
@@ -146,7 +146,7 @@ inline constexpr double kSwitchResolveWindow = 0.05;
 // zero (kappa_b = 10: 0.43 s on the paper scene, r = 0.0116/s), so
 // integrating every interval with a wheel in the band resolved keeps the
 // fixed steps at D >= 0.43 s, where the precursor's error is at the smooth
-// level (model.md §8.6, "Resolution").
+// level (model.md §8.6, "The creep band").
 inline constexpr double kSwitchBandSlipOverEpsilon = 10.0;
 
 // Whether a wheel with slip speed |s| creeps inside the band (NaN: false).
