@@ -282,8 +282,8 @@ int IdaIntegrator::Impl::RootFunction(double t, N_Vector yy, N_Vector /*yp*/,
 // changes the held twist, F jumps (there 40-120) and the call restarts
 // (IDAReInit), as does every call from another state (re-integration at
 // switches and stops). Continuing keeps IDA's order and step (model.md
-// §8.5); its history is that of its own unprojected iterates, the returned
-// y is projected as before.
+// §8.6, "IDA"); its history is that of its own unprojected iterates, the
+// returned y is projected as before.
 bool IdaIntegrator::Impl::ContinuesLastCall(ConstrainedOde& ode_now, double t0,
                                             const Eigen::Ref<const VectorXd>& y,
                                             const IntegratorOptions& options) {
