@@ -341,6 +341,8 @@ struct Simulator::Session {
   double resolve_until = -std::numeric_limits<double>::infinity();
   // The last interval was integrated resolved (step doubling).
   bool resolved_last = false;
+  // SwitchStepTolerance(), set by Begin() (looking it up allocates).
+  double switch_tolerance = std::numeric_limits<double>::infinity();
   // The slip vectors of the last sample (reversals).
   std::array<Eigen::Vector2d, 3> slip_prev;
 };
@@ -394,6 +396,7 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   s.done_located = false;
   s.resolve_until = -std::numeric_limits<double>::infinity();
   s.resolved_last = false;
+  s.switch_tolerance = SwitchStepTolerance();
   s.done = false;
   s.checkpoint_seconds_seen = 0;
   *result = SimulationResult{};
@@ -852,7 +855,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     band = band || InSwitchBand(slip1[i].norm(), eps);
   }
   const bool coupled = options_.coupling == Coupling::kCoupled;
-  const double tolerance = SwitchStepTolerance();
+  const double tolerance = s.switch_tolerance;
   // An interval integrated plain whose end lies in the creep band is
   // integrated again, resolved (core/switch_events.h).
   const bool redo =
@@ -941,7 +944,7 @@ SegmentAdvance Simulator::Advance() {
 IntegratorStatus Simulator::IntegrateInterval(double t, double t_next) {
   Session& s = *session_;
   s.y = s.theta;
-  const double tolerance = SwitchStepTolerance();
+  const double tolerance = s.switch_tolerance;
   // Fixed-step, coupled, locating: a wheel in the creep band at t makes
   // the interval resolved.
   const bool watch = options_.locate_switches &&
