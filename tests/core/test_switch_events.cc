@@ -294,6 +294,32 @@ double FittedOrder(const std::vector<double>& dt, const std::vector<double>& e,
   return sxy / sxx;
 }
 
+// Coupled dp54 on the 20 s paper scene at rtol (atol 1e-15, 1e-16 below
+// rtol 1e-12) and output interval dt; the rtol 1e-12, dt 0.003125 run is
+// the ladders' reference (computed once).
+const SimulationResult& PaperReference(double rtol, double dt) {
+  static SimulationResult cached;
+  static bool have = false;
+  const bool main_reference = rtol == 1e-12 && dt == 0.003125;
+  if (main_reference && have) return cached;
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  const Scene scene =
+      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
+  SimulationOptions ro;
+  ro.coupling = Coupling::kCoupled;
+  ro.dt = dt;
+  ro.t_end = 20;
+  ro.dae_options["rk_method"] = "dp54";
+  ro.integrator.rtol = rtol;
+  ro.integrator.atol = rtol >= 1e-12 ? 1e-15 : 1e-16;
+  static SimulationResult other;
+  SimulationResult& out = main_reference ? cached : other;
+  out = Simulator(scene, ro).Run();
+  have = have || main_reference;
+  return out;
+}
+
 // The coupled RK4 dt ladder of the whole 20 s paper scene (issue #21).
 // Without switch location it is not monotone (the error at 0.2 s exceeds
 // the one at 0.4 s: 1.75e-6 vs 1.25e-6 m). With it (located class changes
@@ -309,22 +335,8 @@ double FittedOrder(const std::vector<double>& dt, const std::vector<double>& e,
 // those rungs (at least 4) fit a slope >= 3.3 and the three coarsest >= 3.5;
 // the rungs below stay within 3x the floor.
 TEST(SwitchEvents, PaperSceneCoupledRk4LadderHasOrderFourAboveTheFloor) {
-  RegisterBuiltinNlpSolvers();
-  RegisterBuiltinIntegrators();
-  const Scene scene =
-      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
-  auto reference = [&](double rtol, double dt) {
-    SimulationOptions ro;
-    ro.coupling = Coupling::kCoupled;
-    ro.dt = dt;
-    ro.t_end = 20;
-    ro.dae_options["rk_method"] = "dp54";
-    ro.integrator.rtol = rtol;
-    ro.integrator.atol = rtol == 1e-12 ? 1e-15 : 1e-16;
-    return Simulator(scene, ro).Run();
-  };
-  const SimulationResult ref = reference(1e-12, 0.003125);
-  const SimulationResult check = reference(1e-13, 0.05);
+  const SimulationResult& ref = PaperReference(1e-12, 0.003125);
+  const SimulationResult check = PaperReference(1e-13, 0.05);
   ASSERT_TRUE(ref.success()) << ref.stop_reason;
   ASSERT_TRUE(check.success()) << check.stop_reason;
   const double floor = LadderError(check, ref);
@@ -352,6 +364,37 @@ TEST(SwitchEvents, PaperSceneCoupledRk4LadderHasOrderFourAboveTheFloor) {
       LadderError(RunPaper(0.2, Coupling::kCoupled, false, 20.0), ref);
   EXPECT_GT(off_02, off_04);
   EXPECT_LT(100 * on[2], off_04);
+}
+
+// IDA keeps its history across the output times in coupled mode (model.md
+// §8.6, "IDA"): on the paper scene (rtol 1e-8, dt 0.05) it rejects 4.5 %
+// of its steps (27.7 % when it was re-initialised at every output time,
+// issue #21: at least halved is the goal, asserted < 10 %) and is more
+// accurate against the dp54 reference (1.3e-8 m; 8.3e-8 m before: asserted
+// < 3e-8 m). zoh re-initialises at every hold interval (the held twist
+// jumps): its rejections stay (28.2 %, asserted > 20 %).
+TEST(SwitchEvents, PaperSceneIdaKeepsItsHistoryInCoupledMode) {
+  RegisterBuiltinIntegrators();
+  if (!IntegratorRegistry::Has("ida")) GTEST_SKIP() << "built without SUNDIALS";
+  const Scene scene =
+      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
+  const SimulationResult& ref = PaperReference(1e-12, 0.003125);
+  ASSERT_TRUE(ref.success()) << ref.stop_reason;
+  for (Coupling coupling : {Coupling::kCoupled, Coupling::kZoh}) {
+    SimulationOptions o;
+    o.dae = "ida";
+    o.coupling = coupling;
+    const SimulationResult r = Simulator(scene, o).Run();
+    ASSERT_TRUE(r.success()) << r.stop_reason;
+    ASSERT_GT(r.steps, 0);
+    const double rejected = static_cast<double>(r.rejected_steps) / r.steps;
+    if (coupling == Coupling::kCoupled) {
+      EXPECT_LT(rejected, 0.10);
+      EXPECT_LT(LadderError(r, ref), 3e-8);
+    } else {
+      EXPECT_GT(rejected, 0.20);
+    }
+  }
 }
 
 }  // namespace
