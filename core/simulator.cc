@@ -339,6 +339,12 @@ struct Simulator::Session {
   std::unique_ptr<QuasiStaticSolver> probe_solver;
   // Intervals starting before this time are integrated resolved.
   double resolve_until = -std::numeric_limits<double>::infinity();
+  // The last interval was integrated resolved (step doubling).
+  bool resolved_last = false;
+  // SwitchStepTolerance(), set by Begin() (looking it up allocates).
+  double switch_tolerance = std::numeric_limits<double>::infinity();
+  // The slip vectors of the last sample (reversals).
+  std::array<Eigen::Vector2d, 3> slip_prev;
 };
 
 // A bisection bracket: the limit is not met at a, met at b (or the state at
@@ -389,6 +395,8 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   s.curvature_before.fill(kNaN);
   s.done_located = false;
   s.resolve_until = -std::numeric_limits<double>::infinity();
+  s.resolved_last = false;
+  s.switch_tolerance = SwitchStepTolerance();
   s.done = false;
   s.checkpoint_seconds_seen = 0;
   *result = SimulationResult{};
@@ -449,6 +457,7 @@ bool Simulator::Interval(SimulationResult* result) {
   if (options_.locate_switches && !pending && s.have_prev &&
       sol.status == QuasiStaticStatus::kOk)
     RestartAtSwitches(t, result);
+  for (int i = 0; i < 3; ++i) s.slip_prev[i] = sol.contacts[i].slip;
   const bool check_contact =
       options_.second_contact_check_every > 0 &&
       (k % options_.second_contact_check_every == 0 || pending);
@@ -832,17 +841,26 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
 void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   Session& s = *session_;
   if (result->samples.empty() || !(t > s.t_prev)) return;
-  std::array<double, 3> slip0, slip1;
-  bool change = false;
+  const std::array<Eigen::Vector2d, 3> slip0 = s.slip_prev;
+  std::array<Eigen::Vector2d, 3> slip1;
+  bool change = false, band = false;
+  const double eps = scene_.epsilon;
   for (int i = 0; i < 3; ++i) {
-    slip0[i] = result->samples.back().contacts[i].slip;
-    slip1[i] = s.sol.contacts[i].slip.norm();
-    const double g0 = SwitchIndicator(slip0[i], scene_.epsilon);
-    const double g1 = SwitchIndicator(slip1[i], scene_.epsilon);
+    slip1[i] = s.sol.contacts[i].slip;
+    const double g0 = SwitchIndicator(slip0[i].norm(), eps);
+    const double g1 = SwitchIndicator(slip1[i].norm(), eps);
     change = change || (g0 >= 0) != (g1 >= 0);  // false for a NaN
+    // A sliding wheel whose slip reverses (LocateSwitchesAndReversals).
+    change = change || (g0 >= 0 && g1 >= 0 && slip0[i].dot(slip1[i]) < 0);
+    band = band || InSwitchBand(slip1[i].norm(), eps);
   }
-  if (!change) return;
   const bool coupled = options_.coupling == Coupling::kCoupled;
+  const double tolerance = s.switch_tolerance;
+  // An interval integrated plain whose end lies in the creep band is
+  // integrated again, resolved (core/switch_events.h).
+  const bool redo =
+      coupled && band && !s.resolved_last && std::isfinite(tolerance);
+  if (!change && !redo) return;
   const Configuration th0 = s.theta_prev, th1 = s.theta;
   const double h = t - s.t_prev;
   const Vec12 w1 =
@@ -850,14 +868,14 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   Configuration f0, f1;
   const bool dense =
       model_->Rhs(th0, s.w_held, &f0) && model_->Rhs(th1, w1, &f1);
-  if (!s.probe_solver) {
+  if (change && !s.probe_solver) {
     OptionValues unused;
     s.probe_solver = std::make_unique<QuasiStaticSolver>(
         *model_, QuasiStaticParameters::FromScene(scene_),
         CreateNlp(options_, &unused), options_.quasi_static);
   }
   QuasiStaticSolution& probe = s.sol_event;
-  auto evaluate = [&](double tm, std::array<double, 3>* slip) {
+  auto evaluate = [&](double tm, std::array<Eigen::Vector2d, 3>* slip) {
     const double frac = (tm - s.t_prev) / h;
     const Configuration q = dense
                                 ? HermiteState(th0, f0, th1, f1, h, frac)
@@ -867,14 +885,15 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     result->nlp_iterations += probe.nlp_iterations;
     result->nlp_iterations_native += probe.nlp_iterations_native;
     if (probe.status != QuasiStaticStatus::kOk) return false;
-    for (int i = 0; i < 3; ++i) (*slip)[i] = probe.contacts[i].slip.norm();
+    for (int i = 0; i < 3; ++i) (*slip)[i] = probe.contacts[i].slip;
     return true;
   };
   const std::size_t first = result->switches.size();
-  LocateSwitches(s.t_prev, t, slip0, slip1, scene_.epsilon,
-                 options_.event_tolerance, evaluate, &result->switches);
+  if (change)
+    LocateSwitchesAndReversals(s.t_prev, t, slip0, slip1, eps,
+                               options_.event_tolerance, evaluate,
+                               &result->switches);
   if (!coupled) return;
-  const double tolerance = SwitchStepTolerance();
   Eigen::VectorXd& y = s.y_event;
   y = th0;
   double ta = s.t_prev;
@@ -925,10 +944,22 @@ SegmentAdvance Simulator::Advance() {
 IntegratorStatus Simulator::IntegrateInterval(double t, double t_next) {
   Session& s = *session_;
   s.y = s.theta;
-  if (t < s.resolve_until) {
-    if (IntegrateResolved(t, t_next, SwitchStepTolerance(), kSwitchMinStep,
-                          Advance(), &s.y))
+  const double tolerance = s.switch_tolerance;
+  // Fixed-step, coupled, locating: a wheel in the creep band at t makes
+  // the interval resolved.
+  const bool watch = options_.locate_switches &&
+                     options_.coupling == Coupling::kCoupled &&
+                     std::isfinite(tolerance);
+  bool band = false;
+  for (int i = 0; watch && i < 3; ++i)
+    band = band || InSwitchBand(s.sol.contacts[i].slip.norm(), scene_.epsilon);
+  s.resolved_last = false;
+  if (t < s.resolve_until || band) {
+    if (IntegrateResolved(t, t_next, tolerance, kSwitchMinStep, Advance(),
+                          &s.y)) {
+      s.resolved_last = std::isfinite(tolerance);
       return IntegratorStatus::kSuccess;
+    }
     s.y = s.theta;
   }
   return s.integrator->Integrate(s.ode, t, t_next, s.y, s.iopts, &s.ires);

@@ -67,10 +67,15 @@ struct SimulationOptions {
   // located by bisection (to event_tolerance) on quasi-static solves at
   // states of the interval's cubic Hermite dense output and recorded in
   // SimulationResult::switches; in coupled mode the interval is then
-  // integrated again as [t_k, t_s1], [t_s1, t_s2], ..., [t_sn, t_k+1]. zoh
-  // records only (its held-twist right-hand side has no kink inside an
-  // interval). Off: nothing is located or recorded and no interval is
-  // restarted. Runs without a switch are the same either way.
+  // integrated again as [t_k, t_s1], [t_s1, t_s2], ..., [t_sn, t_k+1]. A
+  // sliding wheel whose slip vector reverses within an interval is split
+  // there and both its class changes located (LocateSwitchesAndReversals).
+  // Coupled fixed-step methods also integrate resolved every interval with
+  // a wheel in the creep band (InSwitchBand) at its start, and again one
+  // whose end has one. zoh records only (its held-twist right-hand side has
+  // no kink inside an interval). Off: nothing is located or recorded and no
+  // interval is restarted or resolved. Runs without a switch, a reversal or
+  // a wheel in the band are the same either way.
   bool locate_switches = true;
   // Coupled mode, fixed-step integrators: those segments, and every
   // interval starting within kSwitchResolveWindow after a located switch,

@@ -66,6 +66,56 @@ int LocateSwitches(double t0, double t1, const std::array<double, 3>& slip0,
   return static_cast<int>(out->size() - first);
 }
 
+namespace {
+std::array<double, 3> Norms(const std::array<Eigen::Vector2d, 3>& s) {
+  return {s[0].norm(), s[1].norm(), s[2].norm()};
+}
+}  // namespace
+
+int LocateSwitchesAndReversals(double t0, double t1,
+                               const std::array<Eigen::Vector2d, 3>& slip0,
+                               const std::array<Eigen::Vector2d, 3>& slip1,
+                               double epsilon, double tolerance,
+                               const SlipVectorEvaluator& evaluate,
+                               std::vector<SwitchEvent>* out, bool* reversed) {
+  if (reversed) *reversed = false;
+  SlipEvaluator norms = [&](double t, std::array<double, 3>* s) {
+    std::array<Eigen::Vector2d, 3> v;
+    if (!evaluate(t, &v)) return false;
+    *s = Norms(v);
+    return true;
+  };
+  if (!(t1 > t0) || !(tolerance > 0) || !(epsilon > 0))
+    return LocateSwitches(t0, t1, Norms(slip0), Norms(slip1), epsilon,
+                          tolerance, norms, out);  // throws
+  // The first reversing wheel splits the interval; the pieces recurse.
+  for (int i = 0; i < 3; ++i) {
+    if (!IsSliding(slip0[i].norm(), epsilon) ||
+        !IsSliding(slip1[i].norm(), epsilon) || !(slip0[i].dot(slip1[i]) < 0))
+      continue;
+    double a = t0, b = t1;
+    std::array<Eigen::Vector2d, 3> at_b = slip1, v;
+    while (b - a > tolerance) {
+      const double m = 0.5 * (a + b);
+      if (!(m > a && m < b) || !evaluate(m, &v)) break;
+      if (v[i].dot(slip0[i]) > 0) {
+        a = m;
+      } else {
+        b = m;
+        at_b = v;
+      }
+    }
+    if (!(b < t1)) break;  // not narrowed: no split
+    if (reversed) *reversed = true;
+    const int n = LocateSwitchesAndReversals(t0, b, slip0, at_b, epsilon,
+                                             tolerance, evaluate, out);
+    return n + LocateSwitchesAndReversals(b, t1, at_b, slip1, epsilon,
+                                          tolerance, evaluate, out);
+  }
+  return LocateSwitches(t0, t1, Norms(slip0), Norms(slip1), epsilon, tolerance,
+                        norms, out);
+}
+
 bool IntegrateResolved(double a, double b, double tolerance, double min_step,
                        const SegmentAdvance& advance, Eigen::VectorXd* y) {
   if (!(b > a)) throw std::invalid_argument("IntegrateResolved: b must be > a");

@@ -97,6 +97,31 @@ int LocateSwitches(double t0, double t1, const std::array<double, 3>& slip0,
                    double tolerance, const SlipEvaluator& evaluate,
                    std::vector<SwitchEvent>* out);
 
+// Slip vectors s_i (contact frame) of the three wheels at time t; false if
+// they cannot be evaluated there.
+using SlipVectorEvaluator =
+    std::function<bool(double t, std::array<Eigen::Vector2d, 3>*)>;
+
+// Reversals: a wheel that slides at both ends of [t0, t1] with its slip
+// vector reversed (s(t0) . s(t1) < 0) has passed through s = 0: for
+// |s| < kappa eps it sticks (two class changes ~ 2 kappa eps / |s'| apart,
+// 1.5 ms on the paper scene at 15.5 s, both inside one interval at
+// Delta t >= 0.2 s and so invisible to the class test), and its traction
+// -mu f_n s / sqrt(|s|^2 + eps^2) flips within ~ eps / |s'|: a jump of the
+// right-hand side as eps -> 0. Such an interval is split at the reversal,
+// located by bisection of the sign of s(t) . s(t0) to `tolerance`, and the
+// class changes of every piece are located as by LocateSwitches (slips at
+// the split from `evaluate`). Without a reversal this is LocateSwitches.
+// Returns the number of events appended (in time order); *reversed (if not
+// null) receives whether a reversal was found. Throws as LocateSwitches.
+int LocateSwitchesAndReversals(double t0, double t1,
+                               const std::array<Eigen::Vector2d, 3>& slip0,
+                               const std::array<Eigen::Vector2d, 3>& slip1,
+                               double epsilon, double tolerance,
+                               const SlipVectorEvaluator& evaluate,
+                               std::vector<SwitchEvent>* out,
+                               bool* reversed = nullptr);
+
 // The shortest piece IntegrateResolved refines to in the simulator [s].
 inline constexpr double kSwitchMinStep = 1e-7;
 // How long after a located switch the simulator keeps integrating
@@ -108,6 +133,27 @@ inline constexpr double kSwitchMinStep = 1e-7;
 // 2.9072 s); 0.05 s covers r >= 0.001/s. A switch out of sliding lies after
 // its transition, inside the interval it is located in.
 inline constexpr double kSwitchResolveWindow = 0.05;
+
+// The creep band: a sticking wheel whose creep |s| lies in
+// [kSwitchBandSlipOverEpsilon eps, kSwitchSlipOverEpsilon eps) is close to
+// its cone. There the regularised law makes the right-hand side steep but
+// smooth: with the margin 1 - u falling (rising) at a rate r, the creep is
+// |s| = eps / sqrt(2 r D), D the time to (since) the margin's zero, a
+// D^(-1/2) precursor (aftermath) of the slip's jump whose derivatives grow
+// like D^(-k - 1/2). A fixed step h that ends at D ~ h from the zero errs
+// by ~ (eps / sqrt(r)) h^(1/2) instead of O(h^5): the order is lost however
+// small h is. The band's lower edge is D = 1 / (2 r kappa_b^2) from the
+// zero (kappa_b = 10: 0.43 s on the paper scene, r = 0.0116/s), so
+// integrating every interval with a wheel in the band resolved keeps the
+// fixed steps at D >= 0.43 s, where the precursor's error is at the smooth
+// level (model.md §8.6, "The creep band").
+inline constexpr double kSwitchBandSlipOverEpsilon = 10.0;
+
+// Whether a wheel with slip speed |s| creeps inside the band (NaN: false).
+inline bool InSwitchBand(double slip_speed, double epsilon) {
+  return slip_speed >= kSwitchBandSlipOverEpsilon * epsilon &&
+         slip_speed < kSwitchSlipOverEpsilon * epsilon;
+}
 
 // One call of the run's integrator from a to b on *y (false: it failed).
 using SegmentAdvance =

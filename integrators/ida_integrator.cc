@@ -31,11 +31,18 @@ struct IdaIntegrator::Impl {
   void Free() {
     if (mem != nullptr) IDAFree(&mem);
     dense.Free();
-    for (N_Vector* v : {&yy, &yp, &id, &atol})
+    for (N_Vector* v : {&yy, &yp, &id, &atol, &ewt})
       sundials_internal::DestroyVector(v);
     n = m = -1;
     roots.registered = 0;
+    last.valid = false;
   }
+
+  // Whether this call continues the last one (see ContinuesLastCall in the
+  // .cc's DoIntegrate); evaluates F at IDA's current point.
+  bool ContinuesLastCall(ConstrainedOde& ode, double t0,
+                         const Eigen::Ref<const VectorXd>& y,
+                         const IntegratorOptions& options);
 
   // Creates (or re-initialises, when the sizes are unchanged) the IDA memory
   // for initial values already stored in yy / yp. Returns an IDA flag.
@@ -61,9 +68,24 @@ struct IdaIntegrator::Impl {
   sundials_internal::Context context;
   void* mem = nullptr;
   N_Vector yy = nullptr, yp = nullptr, id = nullptr, atol = nullptr;
+  N_Vector ewt = nullptr;  // error weights (continuation test)
   sundials_internal::DenseLinearSolver dense;
   int n = -1, m = -1;
   sundials_internal::RootSlots roots;
+  // IDA's cumulative counters at the start of this call (they count from the
+  // last IDAInit / IDAReInit).
+  long steps_seen = 0, fails_seen = 0;
+  // The last successful call of the GGL form: where it ended and the state it
+  // returned, for the continuation test.
+  struct LastCall {
+    bool valid = false;
+    const ConstrainedOde* ode = nullptr;
+    double t = 0.0;
+    VectorXd y;
+    IntegratorOptions options;
+  } last;
+  bool continuing = false;  // this call continues the last one
+  bool f_at_t0 = false;     // f = F(t0, y) for this call's y
 
   // Backend options (option_table()).
   struct Settings {
@@ -92,6 +114,7 @@ struct IdaIntegrator::Impl {
 };
 
 int IdaIntegrator::Impl::Prepare(int n_new, int m_new, double t0) {
+  steps_seen = fails_seen = 0;
   if (mem != nullptr && n_new == n && m_new == m)
     return IDAReInit(mem, t0, yy, yp);
   // Sizes changed (or first call): the vectors, matrix and linear solver
@@ -246,6 +269,60 @@ int IdaIntegrator::Impl::RootFunction(double t, N_Vector yy, N_Vector /*yp*/,
   return 0;
 }
 
+// A call continues the last one when it starts where that one ended (same
+// problem object, t0 = its end time, y = the state it returned, bit for
+// bit, same options) and the problem's right-hand side there is the one IDA
+// has been integrating: the GGL residual r = x' - F(t0, y) - D J^T nu with
+// IDA's current (x', nu) and F evaluated now at y (IDA's x up to the final
+// projection; a restart from y reuses it), passes
+//   || h r ||_wrms <= 1,
+// h the step IDA would try next and the weights those of its error test:
+// the change of the problem moves the next step's solution by ~ h r, less
+// than the local error the error test accepts. Coupled mode (F = F(x))
+// passes with r at the level of the corrector's convergence (paper scene,
+// rtol 1e-8: up to 1.09, 3 of 407 calls above 1); a zoh hold interval
+// changes the held twist, F jumps (there 26-1955) and the call restarts
+// (IDAReInit), as does every call from another state (re-integration at
+// switches and stops). Continuing keeps IDA's order and step (model.md
+// §8.6, "IDA"); its history is that of its own unprojected iterates, the
+// returned y is projected as before.
+bool IdaIntegrator::Impl::ContinuesLastCall(ConstrainedOde& ode_now, double t0,
+                                            const Eigen::Ref<const VectorXd>& y,
+                                            const IntegratorOptions& options) {
+  constexpr double kContinueTolerance = 1.0;
+  if (!last.valid || mem == nullptr || &ode_now != last.ode || t0 != last.t ||
+      ode_now.state_size() != n || ode_now.num_constraints() != m ||
+      y.size() != last.y.size() || y != last.y)
+    return false;
+  const IntegratorOptions& o = last.options;
+  if (o.rtol != options.rtol || o.atol != options.atol ||
+      o.min_step != options.min_step || o.max_steps != options.max_steps)
+    return false;
+  last.valid = false;
+  // F at the given y (IDA's point up to the final projection), reused by a
+  // restart from the same y.
+  if (!CallRhs(t0, y, f)) return false;
+  f_at_t0 = true;
+  Map<const VectorXd> x(NV_DATA_S(yy), n + m), xp(NV_DATA_S(yp), n + m);
+  VectorXd& r = f_pert;  // workspace
+  r = xp.head(n) - f;
+  if (m > 0) {
+    ode_now.ConstraintJacobian(x.head(n), jac);
+    ++result->jacobian_evaluations;
+    jt_nu.noalias() = jac.transpose() * x.tail(m);
+    r -= correction.weights().cwiseProduct(jt_nu);
+  }
+  if (ewt == nullptr) ewt = N_VClone(yy);
+  double h = 0.0;
+  if (ewt == nullptr || IDAGetCurrentStep(mem, &h) != IDA_SUCCESS ||
+      IDAGetErrWeights(mem, ewt) != IDA_SUCCESS)
+    return false;
+  Map<const VectorXd> w(NV_DATA_S(ewt), n + m);
+  const double norm =
+      std::abs(h) * std::sqrt(r.cwiseProduct(w.head(n)).squaredNorm() / n);
+  return norm <= kContinueTolerance;
+}
+
 IdaIntegrator::IdaIntegrator() : impl_(std::make_unique<Impl>()) {}
 
 OptionTable IdaIntegrator::option_table() const {
@@ -300,7 +377,7 @@ std::string FlagName(int flag) {
 // outcome; shared by the GGL form and the user residual form.
 void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
                            Eigen::Ref<Eigen::VectorXd> y,
-                           const IntegratorOptions& /*options*/,
+                           const IntegratorOptions& options,
                            IntegratorResult* result) {
   const int n = s.n, m = s.m;
   bool moved = false;
@@ -312,8 +389,11 @@ void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
   long steps = 0, error_test_failures = 0;
   IDAGetNumSteps(s.mem, &steps);
   IDAGetNumErrTestFails(s.mem, &error_test_failures);
-  result->steps += static_cast<int>(steps);
-  result->rejected_steps += static_cast<int>(error_test_failures);
+  result->steps += static_cast<int>(steps - s.steps_seen);
+  result->rejected_steps +=
+      static_cast<int>(error_test_failures - s.fails_seen);
+  s.steps_seen = steps;
+  s.fails_seen = error_test_failures;
   y = yy_now.head(n);
   result->t_reached = t_ret;
 
@@ -366,6 +446,13 @@ void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
     }
   }
   result->status = status;
+  s.last.valid = status == IntegratorStatus::kSuccess && !s.residual_form;
+  if (s.last.valid) {
+    s.last.ode = &ode;
+    s.last.t = t_ret;
+    s.last.y = y;
+    s.last.options = options;
+  }
 }
 
 // The residual form F(t, y, y') = 0 of the problem itself: y' from
@@ -440,8 +527,15 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
     result->message = message;
   };
 
-  if (s.residual_form)
+  if (s.residual_form) {
+    s.last.valid = s.continuing = false;
     return IntegrateResidualForm(s, ode, t0, t1, y, options, result);
+  }
+  // --- continuation: no re-initialisation (see ContinuesLastCall) ---
+  s.f_at_t0 = false;
+  s.continuing = s.ContinuesLastCall(ode, t0, y, options);
+  if (s.continuing)
+    return ConfigureAndSolve(s, ode, IDA_SUCCESS, t0, t1, y, options, result);
 
   // --- consistent initial values (x, nu, x') ---
   bool moved = false;
@@ -451,7 +545,7 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
     if (status != IntegratorStatus::kSuccess)
       return fail(status, "initial state: " + s.correction.message());
   }
-  if (!s.CallRhs(t0, y, s.f)) {
+  if (!(s.f_at_t0 && !moved) && !s.CallRhs(t0, y, s.f)) {
     std::ostringstream os;
     os << "Rhs returned false at t = " << t0;
     return fail(IntegratorStatus::kRhsFailure, os.str());
@@ -509,7 +603,11 @@ void IdaIntegrator::ConfigureAndSolve(Impl& s, ConstrainedOde& ode, int flag,
                                       Eigen::Ref<Eigen::VectorXd> y,
                                       const IntegratorOptions& options,
                                       IntegratorResult* result) {
-  if (flag == IDA_SUCCESS) flag = IDASVtolerances(s.mem, options.rtol, s.atol);
+  // Continuing: the tolerances are unchanged, and IDASVtolerances between
+  // two solves without a (re)initialisation would leave IDA's error-weight
+  // function without its data (set only in IDA's initial setup).
+  if (flag == IDA_SUCCESS && !s.continuing)
+    flag = IDASVtolerances(s.mem, options.rtol, s.atol);
   static constexpr sundials_internal::StepControlSetters kSetters = {
       &IDASetMaxNumSteps,  &IDASetMinStep,        &IDASetInitStep,
       &IDASetStopTime,     &IDASetMaxOrd,         &IDASetMaxNonlinIters,

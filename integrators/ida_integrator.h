@@ -39,8 +39,11 @@
 //
 // The IDA memory, vectors, dense matrix / linear solver and the SUNContext
 // live as long as this object and are reused via IDAReInit while
-// (state_size, num_constraints) are unchanged. SUNDIALS headers are confined
-// to ida_integrator.cc.
+// (state_size, num_constraints) are unchanged. A call that continues the
+// last one (same problem, t0 = its end, y = the state it returned, and no
+// jump of the residual there; ContinuesLastCall in the .cc) skips the
+// re-initialisation and keeps IDA's order and step (model.md §8.6). SUNDIALS
+// headers are confined to ida_integrator.cc.
 #pragma once
 
 #include <memory>
