@@ -220,7 +220,10 @@ SensitivityStatus SensitivityAnalyzer::Compute(
   jac_eq_ = jac_.topRows(ne);
   lu_.compute(jac_eq_);
   lu_t_.compute(jac_eq_.transpose());  // Eigen 3.3 has no transposed solve
-  out->rcond = lu_.rcond();
+  // Eigen's 1-norm estimate, capped by the pivot ratio of U (the estimate
+  // misses an exactly zero pivot, e.g. at z = 0 where dC/ds = 0).
+  const auto pivots = lu_.matrixLU().diagonal().cwiseAbs();
+  out->rcond = std::min(lu_.rcond(), pivots.minCoeff() / pivots.maxCoeff());
   if (!(out->rcond > options_.singular_rcond))
     return out->status = SensitivityStatus::kSingular;
   // Multipliers: J_E^T l_E = -grad f; inactive inequalities have l = 0.

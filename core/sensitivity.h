@@ -42,8 +42,8 @@
 // returned are those of the branch on which it stays inactive (a one-sided
 // derivative): `one_sided` is set and the constraint named, never a silently
 // two-sided value. An inequality with slack > activity_tolerance has zero
-// multiplier (inactive). A singular J_E (reciprocal condition estimate below
-// singular_rcond) gives status kSingular.
+// multiplier (inactive). A singular J_E (reciprocal condition estimate at or
+// below singular_rcond) gives status kSingular.
 #pragma once
 
 #include <Eigen/Core>
@@ -86,7 +86,8 @@ struct SensitivityOptions {
   // active or about to become active (one-sided): 100 x the solve's
   // residual tolerance (1e-12), i.e. a slack the solve itself resolves.
   double activity_tolerance = 1e-10;
-  // J_E counts as singular below this reciprocal condition estimate.
+  // J_E counts as singular at or below this reciprocal condition estimate
+  // (min of Eigen's 1-norm estimate and the smallest / largest LU pivot).
   double singular_rcond = 1e-14;
   bool IsValid(std::string* why) const;
 };

@@ -7,8 +7,6 @@
 
 #include <Eigen/Dense>
 #include <cmath>
-#include <cstdlib>
-#include <iostream>
 #include <memory>
 #include <string>
 
@@ -280,6 +278,77 @@ TEST_P(Sensitivity, AgreesWithReSolveCentralDifferences) {
     std::printf("%s %s: outputs %.2e multipliers %.2e\n", GetParam().c_str(),
                 c.name.c_str(), ey, el);
   }
+}
+
+// At an active-set change the derivative is one-sided and flagged. pvc on
+// the 10 degree incline is statically determinate (model.md §7.5): as mu
+// falls to mu_min the critical wheel's cone slack mu^2 f_n^2 - |f_t|^2 =
+// f_n^2 (mu^2 - mu_min^2) goes to 0, where I2 becomes active. At mu =
+// mu_min (1 + 1e-9) the scaled slack is ~1e-11 < activity_tolerance 1e-10;
+// at mu_min (1 + 1e-2) it is ~1e-4 and the derivative is two-sided.
+TEST_P(Sensitivity, OneSidedAtFrictionConeLimit) {
+  const Scene scene = SceneFile("incline10");
+  const KinematicModel model(scene.geometry, scene.terrain);
+  const Configuration theta = SolveInitialConfiguration(model, scene);
+  QuasiStaticParameters params = QuasiStaticParameters::FromScene(scene);
+  QuasiStaticProblem probe(model, params);
+  probe.SetConfiguration(theta);
+  int critical = -1;
+  const double mu_min = probe.MinimumFriction(&critical, nullptr);
+  ASSERT_GT(mu_min, 0.3);  // 0.318914 or 0.394378 (model.md §7.7)
+  for (double margin : {1e-9, 1e-2}) {
+    params.mu = mu_min * (1 + margin);
+    QuasiStaticSolver solver(model, params,
+                             NlpSolverRegistry::Create(GetParam()));
+    QuasiStaticSolution sol;
+    ASSERT_EQ(solver.Solve(theta, &sol), QuasiStaticStatus::kOk)
+        << "margin " << margin << ": " << sol.message;
+    SensitivityAnalyzer analyzer;
+    QuasiStaticSensitivities sens;
+    ASSERT_EQ(analyzer.Compute(solver.problem(), sol.z, &sens),
+              SensitivityStatus::kOk);
+    if (margin > 1e-3) {
+      EXPECT_FALSE(sens.one_sided) << "slack " << sens.min_inequality_slack;
+      continue;
+    }
+    ASSERT_TRUE(sens.one_sided) << "slack " << sens.min_inequality_slack;
+    // Every item named is a friction cone, one of them the critical wheel's
+    // (both rear wheels on the incline may share it by symmetry).
+    const int m = solver.problem().num_constraints();
+    bool has_critical = false;
+    for (int a = 0; a < sens.num_one_sided; ++a) {
+      const int item = sens.one_sided_items[a];
+      EXPECT_GE(item, m - 3);
+      EXPECT_LT(item, m);
+      has_critical |= item == m - 3 + critical;
+      EXPECT_EQ(OneSidedName(solver.problem(), item).rfind("I2 wheel ", 0), 0u)
+          << OneSidedName(solver.problem(), item);
+    }
+    EXPECT_TRUE(has_critical) << "critical wheel " << critical + 1;
+  }
+}
+
+// Misuse throws; a singular J_E is a status. At z = 0 every force is zero,
+// so the friction rows lose their motion columns (dC/ds = f_t s^T / sigma +
+// mu f_n I = 0) and only the 3 E1 rows constrain the 6 motion unknowns.
+TEST_P(Sensitivity, MisuseThrowsAndSingularIsAStatus) {
+  const Scene scene = SceneFile("paper");
+  const KinematicModel model(scene.geometry, scene.terrain);
+  QuasiStaticProblem problem(model, QuasiStaticParameters::FromScene(scene));
+  problem.SetConfiguration(SolveInitialConfiguration(model, scene));
+  SensitivityAnalyzer analyzer;
+  QuasiStaticSensitivities sens;
+  EXPECT_THROW(analyzer.Compute(problem, Eigen::VectorXd::Zero(3), &sens),
+               std::invalid_argument);
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(problem.num_variables());
+  z(0) = std::nan("");
+  EXPECT_THROW(analyzer.Compute(problem, z, &sens), std::invalid_argument);
+  z.setZero();
+  EXPECT_EQ(analyzer.Compute(problem, z, &sens), SensitivityStatus::kSingular)
+      << "rcond " << sens.rcond;
+  SensitivityOptions bad;
+  bad.activity_tolerance = -1;
+  EXPECT_THROW(SensitivityAnalyzer{bad}, std::invalid_argument);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllBackends, Sensitivity, ::testing::ValuesIn([] {
