@@ -54,17 +54,43 @@ bool SensitivityOptions::IsValid(std::string* why) const {
          check(singular_rcond, "singular_rcond");
 }
 
-std::string OneSidedName(const QuasiStaticProblem& problem, int item) {
-  const int m = problem.num_constraints();
+std::string OneSidedName(const QuasiStaticSensitivities& sens, int item) {
+  const int m = sens.num_constraints;
   std::ostringstream os;
   if (item < m) {
     const int wheel = item - (m - 3) + 1;  // I2 are the last three rows
     os << "I2 wheel " << wheel << " (friction cone, row " << item << ")";
   } else {
-    const int wheel = (item - m - problem.num_motion()) / 3 + 1;
+    const int wheel = (item - m - sens.num_motion) / 3 + 1;
     os << "I1 wheel " << wheel << " (f_n >= 0, variable " << item - m << ")";
   }
   return os.str();
+}
+
+std::vector<SensitivityEntry> SensitivityEntries(
+    const QuasiStaticSensitivities& sens) {
+  using P = SensitivityParameter;
+  const Eigen::MatrixXd outputs[4] = {sens.twist, sens.joint_rates, sens.forces,
+                                      sens.multipliers};
+  const char* output_names[4] = {"twist", "joint_rates", "forces",
+                                 "multipliers"};
+  struct Input {
+    const char* name;
+    int first, count;
+  };
+  const Input inputs[4] = {{"state", P::kState, P::kNumState},
+                           {"mu", P::kMu, 1},
+                           {"eps", P::kEpsilon, 1},
+                           {"rates", P::kRates, 6}};
+  std::vector<SensitivityEntry> entries;
+  for (int o = 0; o < 4; ++o) {
+    for (const Input& in : inputs) {
+      entries.push_back({std::string("d") + output_names[o] + "_d" + in.name,
+                         outputs[o].middleCols(in.first, in.count),
+                         in.count == 1});
+    }
+  }
+  return entries;
 }
 
 SensitivityAnalyzer::SensitivityAnalyzer(const SensitivityOptions& options)
@@ -200,6 +226,8 @@ SensitivityStatus SensitivityAnalyzer::Compute(
   work_.emplace(problem);  // fixed-capacity members: no heap allocation
   jac_.resize(m, n);
   dg_dvel_.resize(m, 9);
+  out->num_constraints = m;
+  out->num_motion = problem.num_motion();
   nominal_ = problem.parameters();
   theta_ = problem.configuration();
   z_ = z;

@@ -51,6 +51,7 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "quasiroll/core/quasi_static.h"
 
@@ -114,13 +115,26 @@ struct QuasiStaticSensitivities {
   bool one_sided = false;
   std::array<int, QuasiStaticProblem::kMaxRows> one_sided_items{};
   int num_one_sided = 0;
+  int num_constraints = 0, num_motion = 0;  // of the problem (for names)
   double min_inequality_slack = 0.0;  // smallest scaled slack (inf if none)
   double rcond = 0.0;                 // reciprocal condition estimate of J_E
 };
 
 // Human-readable name of a one-sided item (QuasiStaticSensitivities), e.g.
 // "I2 wheel 2 (friction cone)" or "I1 wheel 1 (f_n >= 0)".
-std::string OneSidedName(const QuasiStaticProblem& problem, int item);
+std::string OneSidedName(const QuasiStaticSensitivities& sens, int item);
+
+// The front ends' view (docs/cli.md, `solve --sensitivities`): entries
+// d<output>_d<input>, outputs twist (6), joint_rates (6), forces (9: F_1,
+// F_2, F_3 world x y z), multipliers (rows of g); inputs state (21 columns,
+// StateNames()), mu and eps (vectors), rates (6 columns, JointNames()).
+struct SensitivityEntry {
+  std::string name;
+  Eigen::MatrixXd value;  // rows: output, columns: input
+  bool vector = false;    // a single input: one column, shown as a vector
+};
+std::vector<SensitivityEntry> SensitivityEntries(
+    const QuasiStaticSensitivities& sens);
 
 // Computes sensitivities with preallocated workspaces: after the first call
 // for a given mode, Compute() does not allocate (one_sided names aside).

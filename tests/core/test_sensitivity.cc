@@ -321,8 +321,8 @@ TEST_P(Sensitivity, OneSidedAtFrictionConeLimit) {
       EXPECT_GE(item, m - 3);
       EXPECT_LT(item, m);
       has_critical |= item == m - 3 + critical;
-      EXPECT_EQ(OneSidedName(solver.problem(), item).rfind("I2 wheel ", 0), 0u)
-          << OneSidedName(solver.problem(), item);
+      EXPECT_EQ(OneSidedName(sens, item).rfind("I2 wheel ", 0), 0u)
+          << OneSidedName(sens, item);
     }
     EXPECT_TRUE(has_critical) << "critical wheel " << critical + 1;
   }
