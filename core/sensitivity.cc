@@ -126,6 +126,12 @@ void SensitivityAnalyzer::SetParameter(int k, double delta) {
   }
 }
 
+void SensitivityAnalyzer::Restore(int k) {
+  // Theta: every perturbation starts from theta_, so the configuration is
+  // restored once, after the last state column (Compute), not per column.
+  if (k >= SensitivityParameter::kMu) SetParameter(k, 0.0);
+}
+
 SensitivityAnalyzer::Outputs SensitivityAnalyzer::OutputsAt(
     const Eigen::Ref<const Eigen::VectorXd>& z) const {
   const QuasiStaticProblem& p = *work_;
@@ -150,20 +156,19 @@ void SensitivityAnalyzer::LagrangianGradient(
 
 void SensitivityAnalyzer::ParameterDerivatives(int k, Vec* dc, Outputs* dy) {
   const double h = std::cbrt(kEpsMach) * Scale(k);
-  const Eigen::Matrix<double, 9, 1> vel0 = work_->ContactLinearVelocities(z_);
   const int m = work_->num_constraints();
   SetParameter(k, h);
   const Eigen::Matrix<double, 9, 1> vel_plus =
       work_->ContactLinearVelocities(z_);
-  work_->ConstraintsAtVelocities(z_, vel0, g_);
+  work_->ConstraintsAtVelocities(z_, vel0_, g_);
   Vec g_plus = g_;
   const Outputs y_plus = OutputsAt(z_);
   SetParameter(k, -h);
   const Eigen::Matrix<double, 9, 1> vel_minus =
       work_->ContactLinearVelocities(z_);
-  work_->ConstraintsAtVelocities(z_, vel0, g_);
+  work_->ConstraintsAtVelocities(z_, vel0_, g_);
   const Outputs y_minus = OutputsAt(z_);
-  SetParameter(k, 0.0);
+  Restore(k);
   const Eigen::Matrix<double, 9, 1> dvel = (vel_plus - vel_minus) / (2 * h);
   dc->resize(m);
   *dc = (g_plus - g_) / (2 * h);
@@ -209,7 +214,7 @@ void SensitivityAnalyzer::TangentDifference(int k, const Vec& dz, double t,
   SetParameter(k, -t);
   zt_ = z_ - t * dz;
   LagrangianGradient(zt_, grad_);
-  SetParameter(k, 0.0);
+  Restore(k);
   *d = (*d - grad_) / (2 * t);
 }
 
@@ -260,6 +265,7 @@ SensitivityStatus SensitivityAnalyzer::Compute(
   lambda_.head(ne) = -lu_t_.solve(grad_);
   out->multiplier_values = lambda_;
   work_->ConstraintVelocityJacobian(z_, dg_dvel_);
+  vel0_ = work_->ContactLinearVelocities(z_);
   // dy/dz: y is affine in z at fixed p, so columns y(e_j) - y(0) are exact.
   zt_.setZero();
   const Outputs y0 = OutputsAt(zt_);
@@ -273,6 +279,7 @@ SensitivityStatus SensitivityAnalyzer::Compute(
   Vec dc, dz, grad_plus, grad_half;
   Outputs dy;
   for (int k = 0; k < SensitivityParameter::kCount; ++k) {
+    if (k == SensitivityParameter::kMu) work_->SetConfiguration(theta_);
     ParameterDerivatives(k, &dc, &dy);
     dz = -lu_.solve(dc.head(ne));
     dy.noalias() += dy_dz_ * dz;

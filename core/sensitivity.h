@@ -159,8 +159,10 @@ class SensitivityAnalyzer {
 
   bool FindActiveSet(const QuasiStaticProblem& problem,
                      QuasiStaticSensitivities* out);
-  // Sets parameter k of work_ to its nominal value + delta.
+  // Sets parameter k of work_ to its nominal value + delta (the others
+  // nominal, except Theta between state columns: Restore()).
   void SetParameter(int k, double delta);
+  void Restore(int k);
   double Scale(int k) const;
   // dc/dp_k at fixed z (both channels, header) and dy/dp_k|_z.
   void ParameterDerivatives(int k, Vec* dc, Outputs* dy);
@@ -177,6 +179,7 @@ class SensitivityAnalyzer {
   Configuration theta_ = Configuration::Zero();
   Eigen::VectorXd z_, zt_, g_, grad_, lambda_, x_lb_, x_ub_, g_lb_, g_ub_;
   Eigen::MatrixXd jac_, dg_dvel_;
+  Eigen::Matrix<double, 9, 1> vel0_;    // contact velocities at the solution
   Eigen::PartialPivLU<Mat> lu_, lu_t_;  // J_E and J_E^T
   Mat jac_eq_;
   Eigen::Matrix<double, 21, Eigen::Dynamic, 0, 21, QuasiStaticProblem::kMaxRows>

@@ -6,8 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <memory>
+#include <new>
 #include <string>
 
 #include "quasiroll/core/initial_configuration.h"
@@ -15,6 +18,22 @@
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/sensitivity.h"
 #include "tests/test_names.h"
+
+// Counts heap allocations (the analyzer is meant for the integrators' inner
+// loop: no allocation after warm-up, core/sensitivity.h).
+namespace {
+std::atomic<long long> g_heap_allocations{0};
+}  // namespace
+void* operator new(std::size_t size) {
+  ++g_heap_allocations;
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace quasiroll {
 namespace {
@@ -349,6 +368,29 @@ TEST_P(Sensitivity, MisuseThrowsAndSingularIsAStatus) {
   SensitivityOptions bad;
   bad.activity_tolerance = -1;
   EXPECT_THROW(SensitivityAnalyzer{bad}, std::invalid_argument);
+}
+
+// After a first call, Compute() neither allocates nor depends on the
+// previous call (the same bits twice).
+TEST(SensitivityWorkspace, NoAllocationAfterWarmUpAndRepeatable) {
+  RegisterBuiltinNlpSolvers();
+  const Scene scene = SceneFile("paper");
+  const KinematicModel model(scene.geometry, scene.terrain);
+  QuasiStaticSolver solver(model, QuasiStaticParameters::FromScene(scene),
+                           NlpSolverRegistry::Create("newton"));
+  QuasiStaticSolution sol;
+  ASSERT_EQ(solver.Solve(SolveInitialConfiguration(model, scene), &sol),
+            QuasiStaticStatus::kOk);
+  SensitivityAnalyzer analyzer;
+  QuasiStaticSensitivities first, second;
+  ASSERT_EQ(analyzer.Compute(solver.problem(), sol.z, &first),
+            SensitivityStatus::kOk);
+  const long long before = g_heap_allocations.load();
+  analyzer.Compute(solver.problem(), sol.z, &second);
+  EXPECT_EQ(g_heap_allocations.load() - before, 0);
+  EXPECT_EQ(first.twist, second.twist);
+  EXPECT_EQ(first.forces, second.forces);
+  EXPECT_EQ(first.multipliers, second.multipliers);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllBackends, Sensitivity, ::testing::ValuesIn([] {
