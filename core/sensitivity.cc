@@ -286,6 +286,9 @@ SensitivityStatus SensitivityAnalyzer::Compute(
     out->twist.col(k) = dy.head<6>();
     out->joint_rates.col(k) = dy.segment<6>(6);
     out->forces.col(k) = dy.tail<9>();
+    out->multipliers.col(k).setConstant(
+        std::numeric_limits<double>::quiet_NaN());
+    if (!options_.multipliers) continue;
     // Multipliers: J_E^T dl_E = -D_t grad_z L along the tangent, Richardson
     // extrapolated from t and t/2 (header).
     const double t = std::cbrt(kEpsMach) * Scale(k);

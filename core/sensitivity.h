@@ -90,6 +90,9 @@ struct SensitivityOptions {
   // J_E counts as singular at or below this reciprocal condition estimate
   // (min of Eigen's 1-norm estimate and the smallest / largest LU pivot).
   double singular_rcond = 1e-14;
+  // Also the multipliers' derivatives (4 more evaluations of the Lagrangian
+  // gradient per parameter); off: `multipliers` is NaN, the rest unchanged.
+  bool multipliers = true;
   bool IsValid(std::string* why) const;
 };
 

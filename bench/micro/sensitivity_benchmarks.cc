@@ -4,6 +4,9 @@
 //       parameters: Theta, mu, eps, the six rates) at the solution the
 //       backend returned at the paper scene's initial configuration; the
 //       solve itself is outside the timed loop.
+//   BM_Sensitivity/<nlp>/<mode>/primal  the same without the multipliers'
+//       derivatives (SensitivityOptions::multipliers = false), what an
+//       integrator's Jacobian needs.
 #include <benchmark/benchmark.h>
 
 #include <string>
@@ -16,7 +19,7 @@ namespace quasiroll {
 namespace {
 
 void BM_Sensitivity(benchmark::State& state, std::string nlp,
-                    ActuationMode mode) {
+                    ActuationMode mode, bool multipliers) {
   Scene scene =
       LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
   scene.mode = mode;
@@ -29,7 +32,9 @@ void BM_Sensitivity(benchmark::State& state, std::string nlp,
     state.SkipWithError(("solve failed: " + sol.message).c_str());
     return;
   }
-  SensitivityAnalyzer analyzer;
+  SensitivityOptions options;
+  options.multipliers = multipliers;
+  SensitivityAnalyzer analyzer(options);
   QuasiStaticSensitivities sens;
   for (auto _ : state) {
     analyzer.Compute(solver.problem(), sol.z, &sens);
@@ -43,10 +48,14 @@ int RegisterAll() {
   RegisterBuiltinNlpSolvers();
   for (const std::string& nlp : NlpSolverRegistry::Names()) {
     for (ActuationMode mode : {ActuationMode::kPaper, ActuationMode::kPvc}) {
-      const std::string name =
-          "BM_Sensitivity/" + nlp + "/" + std::string(ToString(mode));
-      benchmark::RegisterBenchmark(name.c_str(), BM_Sensitivity, nlp, mode)
-          ->Unit(benchmark::kMicrosecond);
+      for (bool multipliers : {true, false}) {
+        const std::string name = "BM_Sensitivity/" + nlp + "/" +
+                                 ToString(mode) +
+                                 (multipliers ? "" : "/primal");
+        benchmark::RegisterBenchmark(name.c_str(), BM_Sensitivity, nlp, mode,
+                                     multipliers)
+            ->Unit(benchmark::kMicrosecond);
+      }
     }
   }
   return 0;

@@ -391,6 +391,14 @@ TEST(SensitivityWorkspace, NoAllocationAfterWarmUpAndRepeatable) {
   EXPECT_EQ(first.twist, second.twist);
   EXPECT_EQ(first.forces, second.forces);
   EXPECT_EQ(first.multipliers, second.multipliers);
+  // Without the multipliers' derivatives: the same outputs, NaN multipliers.
+  SensitivityOptions primal_only;
+  primal_only.multipliers = false;
+  QuasiStaticSensitivities primal;
+  SensitivityAnalyzer(primal_only).Compute(solver.problem(), sol.z, &primal);
+  EXPECT_EQ(primal.twist, first.twist);
+  EXPECT_EQ(primal.forces, first.forces);
+  EXPECT_TRUE(primal.multipliers.array().isNaN().all());
 }
 
 INSTANTIATE_TEST_SUITE_P(AllBackends, Sensitivity, ::testing::ValuesIn([] {
