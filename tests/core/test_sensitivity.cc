@@ -6,34 +6,16 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
-#include <atomic>
 #include <cmath>
-#include <cstdlib>
 #include <memory>
-#include <new>
 #include <string>
 
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/sensitivity.h"
+#include "tests/heap_counter.h"
 #include "tests/test_names.h"
-
-// Counts heap allocations (the analyzer is meant for the integrators' inner
-// loop: no allocation after warm-up, core/sensitivity.h).
-namespace {
-std::atomic<long long> g_heap_allocations{0};
-}  // namespace
-void* operator new(std::size_t size) {
-  ++g_heap_allocations;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace quasiroll {
 namespace {
@@ -385,9 +367,9 @@ TEST(SensitivityWorkspace, NoAllocationAfterWarmUpAndRepeatable) {
   QuasiStaticSensitivities first, second;
   ASSERT_EQ(analyzer.Compute(solver.problem(), sol.z, &first),
             SensitivityStatus::kOk);
-  const long long before = g_heap_allocations.load();
+  const long long before = testing_util::g_heap_allocations.load();
   analyzer.Compute(solver.problem(), sol.z, &second);
-  EXPECT_EQ(g_heap_allocations.load() - before, 0);
+  EXPECT_EQ(testing_util::g_heap_allocations.load() - before, 0);
   EXPECT_EQ(first.twist, second.twist);
   EXPECT_EQ(first.forces, second.forces);
   EXPECT_EQ(first.multipliers, second.multipliers);
