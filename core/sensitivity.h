@@ -30,10 +30,12 @@
 //    eps, max(1, |rate|)): truncation h^2 f'''/6 and round-off eps_mach f/h
 //    balance at h ~ cbrt(eps_mach) times the scale on which f varies, both
 //    ~eps_mach^(2/3) ~ 4e-11 relative;
-//  - D_t grad_z L by one central difference along the tangent with
-//    t = sqrt(eps_mach) s_k: along the tangent the slips move smoothly, and
-//    the O(t^2) curvature of the path in the slips (|d2 vel/dp2| t^2
-//    against sigma >= eps) stays below round-off.
+//  - D_t grad_z L by central differences along the tangent at t = h_k and
+//    t/2, Richardson-extrapolated (truncation O(t^4)): along the tangent
+//    the slips move smoothly; the multipliers of the friction rows scale
+//    like 1/sigma and the paper-mode path curves on a scale ~1e-4 in p, so
+//    one plain difference left ~1e-5 (measured, docs/model.md §7.8).
+//    The multipliers themselves solve J_E^T l_E = -grad f.
 //  - dy/dp|_z by central differences with h_k (smooth: rotations in Theta).
 //
 // Active set (tolerances in SensitivityOptions): an inequality side or bound
