@@ -32,6 +32,7 @@ void WriteSensitivities(JsonWriter* w, const QuasiStaticSensitivities& s) {
   for (const char* name : JointNames()) w->Value(name);
   w->EndArray();
   if (s.status == SensitivityStatus::kOk) {
+    w->Key("multiplier_values").Array(Eigen::VectorXd(s.multiplier_values));
     for (const SensitivityEntry& e : SensitivityEntries(s)) {
       w->Key(e.name);
       if (e.vector) {

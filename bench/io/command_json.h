@@ -34,7 +34,8 @@ std::string PoseJson(const Scene& scene, const KinematicModel& model,
 // null (docs/cli.md, "Conventions").
 // With `sensitivities` (solve --sensitivities) the object also has the key
 // "sensitivities": null when the solve failed, else status, method,
-// one_sided, one_sided_constraints, state_names, rate_names and the entries
+// one_sided, one_sided_constraints, state_names, rate_names,
+// multiplier_values and the entries
 // d<output>_d<input> of SensitivityEntries() (vectors, or arrays of rows).
 std::string SolveJson(const Scene& scene, const std::string& nlp,
                       QuasiStaticStatus status, const QuasiStaticSolution& sol,

@@ -87,6 +87,7 @@ def test_solve_sensitivities_match_resolves_and_cli():
     assert s["dtwist_drates"].shape == (6, 6)
     assert s["dforces_dmu"].shape == (9,)
     assert s["dmultipliers_dstate"].shape == (18, 21)
+    assert s["multiplier_values"].shape == (18,)
     # Independent reference: central difference of two re-solves in mu,
     # h = 1e-4 mu (truncation O(h^2): 1.4e-9 measured at 1e-3 mu; solve
     # error 1e-14 x cond ~3e4 / h), forces to 1e-6 relative.
