@@ -179,20 +179,34 @@ Eigen::Matrix<double, 9, 1> QuasiStaticProblem::ContactLinearVelocities(
 }
 
 QuasiStaticProblem::ConstraintTerms QuasiStaticProblem::Terms(
-    const Eigen::Ref<const Eigen::VectorXd>& z) const {
+    const Eigen::Ref<const Eigen::VectorXd>& z,
+    const Eigen::Matrix<double, 9, 1>& vel) const {
   const int nm = num_motion();
   return {nm,
           6 + num_passive_,
           z.segment<9>(nm),
-          ContactLinearVelocities(z),
+          vel,
           1.0 / v0_,
           params_.mu,
           params_.epsilon * params_.epsilon};
 }
 
+Mat2 QuasiStaticProblem::SlipDerivative(const Vec2& s, const Vec2& ft,
+                                        double fn, double mu, double eps2) {
+  const double sigma = std::sqrt(s.squaredNorm() + eps2);
+  return ft * s.transpose() / sigma + mu * fn * Mat2::Identity();
+}
+
 void QuasiStaticProblem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& z,
                                      Eigen::Ref<Eigen::VectorXd> g) const {
-  const auto [nm, ns, f, vel, inv_v0, mu, eps2] = Terms(z);
+  ConstraintsAtVelocities(z, ContactLinearVelocities(z), g);
+}
+
+void QuasiStaticProblem::ConstraintsAtVelocities(
+    const Eigen::Ref<const Eigen::VectorXd>& z,
+    const Eigen::Matrix<double, 9, 1>& velocities,
+    Eigen::Ref<Eigen::VectorXd> g) const {
+  const auto [nm, ns, f, vel, inv_v0, mu, eps2] = Terms(z, velocities);
   for (int i = 0; i < 3; ++i) g(i) = vel(3 * i + 2) * inv_v0;  // E1
   g.segment(3, ns).noalias() = statics_f_ * f;                 // E2, E3
   g.segment(3, ns) += statics_0_;
@@ -212,7 +226,8 @@ void QuasiStaticProblem::Constraints(const Eigen::Ref<const Eigen::VectorXd>& z,
 void QuasiStaticProblem::ConstraintJacobian(
     const Eigen::Ref<const Eigen::VectorXd>& z,
     Eigen::Ref<Eigen::MatrixXd> jac) const {
-  const auto [nm, ns, f, vel, inv_v0, mu, eps2] = Terms(z);
+  const auto [nm, ns, f, vel, inv_v0, mu, eps2] =
+      Terms(z, ContactLinearVelocities(z));
   jac.setZero();
   for (int i = 0; i < 3; ++i)
     jac.row(i).head(nm) = vel_m_.row(3 * i + 2) * inv_v0;
@@ -223,8 +238,7 @@ void QuasiStaticProblem::ConstraintJacobian(
     const Vec2 ft = f.segment<2>(3 * i);
     const double fn = f(3 * i + 2);
     const double sigma = std::sqrt(s.squaredNorm() + eps2);
-    // dC/ds = f_t s^T / sigma + mu f_n I (model.md §7.3).
-    const Mat2 dcds = ft * s.transpose() / sigma + mu * fn * Mat2::Identity();
+    const Mat2 dcds = SlipDerivative(s, ft, fn, mu, eps2);
     jac.block(c0 + 2 * i, 0, 2, nm).noalias() =
         inv_v0 * dcds * vel_m_.block(3 * i, 0, 2, nm);
     jac.block<2, 2>(c0 + 2 * i, nm + 3 * i) = sigma * inv_v0 * Mat2::Identity();
@@ -232,6 +246,29 @@ void QuasiStaticProblem::ConstraintJacobian(
     jac.block<1, 2>(c0 + 6 + i, nm + 3 * i) = -2.0 * ft.transpose();
     jac(c0 + 6 + i, nm + 3 * i + 2) = 2.0 * mu * mu * fn;
   }
+}
+
+void QuasiStaticProblem::ConstraintVelocityJacobian(
+    const Eigen::Ref<const Eigen::VectorXd>& z,
+    Eigen::Ref<Eigen::MatrixXd> dg_dvel) const {
+  const auto [nm, ns, f, vel, inv_v0, mu, eps2] =
+      Terms(z, ContactLinearVelocities(z));
+  dg_dvel.setZero();
+  const int c0 = 3 + ns;
+  for (int i = 0; i < 3; ++i) {
+    dg_dvel(i, 3 * i + 2) = inv_v0;  // E1
+    dg_dvel.block<2, 2>(c0 + 2 * i, 3 * i) =
+        inv_v0 * SlipDerivative(vel.segment<2>(3 * i), f.segment<2>(3 * i),
+                                f(3 * i + 2), mu, eps2);
+  }
+}
+
+void QuasiStaticProblem::set_joint_rates(const std::array<double, 6>& rates) {
+  params_.joint_rates = rates;
+  for (int j = 0; j < 6; ++j) w_fixed_(6 + j) = rates[j];
+  for (int k = 0; k < num_passive_; ++k) w_fixed_(6 + passive_[k]) = 0.0;
+  for (int i = 0; i < 3; ++i)
+    vel_0_.segment<3>(3 * i).noalias() = L_[i].topRows<3>() * w_fixed_;
 }
 
 void QuasiStaticProblem::ColdStartGuess(Eigen::Ref<Eigen::VectorXd> z) const {

@@ -59,6 +59,9 @@ class QuasiStaticProblem final : public NlpProblem {
   void SetConfiguration(const Configuration& theta);
   void set_mu(double mu) { params_.mu = mu; }
   void set_epsilon(double epsilon) { params_.epsilon = epsilon; }
+  // Sets the commanded joint rates (passive entries are ignored) and keeps
+  // the scaling v0 of construction, so z keeps its meaning (sensitivity.h).
+  void set_joint_rates(const std::array<double, 6>& rates);
   const QuasiStaticParameters& parameters() const { return params_; }
   const Configuration& configuration() const { return theta_; }
   const std::array<ChainState, 3>& chains() const { return chains_; }
@@ -95,6 +98,19 @@ class QuasiStaticProblem final : public NlpProblem {
   // 2-norm condition number of the scaled equality Jacobian at z.
   double ConditionNumber(const Eigen::Ref<const Eigen::VectorXd>& z) const;
 
+  // (v_x, v_y, v_z) of the three contacts [m/s] at scaled unknowns z.
+  Eigen::Matrix<double, 9, 1> ContactLinearVelocities(
+      const Eigen::Ref<const Eigen::VectorXd>& z) const;
+  // Constraints g with the contact velocities `vel` (9) given instead of
+  // those of z (Constraints(z) = this with vel = ContactLinearVelocities(z)).
+  void ConstraintsAtVelocities(const Eigen::Ref<const Eigen::VectorXd>& z,
+                               const Eigen::Matrix<double, 9, 1>& vel,
+                               Eigen::Ref<Eigen::VectorXd> g) const;
+  // dg/dvel at fixed forces (num_constraints x 9): E1 and C rows only, the
+  // C blocks dC/ds / v0 of model.md §7.3.
+  void ConstraintVelocityJacobian(const Eigen::Ref<const Eigen::VectorXd>& z,
+                                  Eigen::Ref<Eigen::MatrixXd> dg_dvel) const;
+
   // Static friction requirement mu_min (model.md §7.7): min over forces
   // satisfying E2(, E3), f_n >= 0 of max_i |f_ti|/f_ni. +inf when no such
   // force exists (lift-off). `critical` receives the contact that attains it
@@ -114,16 +130,17 @@ class QuasiStaticProblem final : public NlpProblem {
   double rho() const { return rho_; }
 
  private:
-  // (v_x, v_y, v_z) of the three contacts [m/s] at scaled unknowns z.
-  Eigen::Matrix<double, 9, 1> ContactLinearVelocities(
-      const Eigen::Ref<const Eigen::VectorXd>& z) const;
   // What the constraints at z and their Jacobian both start from.
   struct ConstraintTerms {
     int nm, ns;                          // motion unknowns, statics rows
     Eigen::Matrix<double, 9, 1> f, vel;  // contact forces, linear velocities
     double inv_v0, mu, eps2;             // 1 / v0, mu, epsilon^2
   };
-  ConstraintTerms Terms(const Eigen::Ref<const Eigen::VectorXd>& z) const;
+  ConstraintTerms Terms(const Eigen::Ref<const Eigen::VectorXd>& z,
+                        const Eigen::Matrix<double, 9, 1>& vel) const;
+  // dC_i/ds_i = f_t s^T / sigma + mu f_n I (model.md §7.3), unscaled.
+  static Mat2 SlipDerivative(const Vec2& s, const Vec2& ft, double fn,
+                             double mu, double eps2);
 
   const KinematicModel& model_;
   QuasiStaticParameters params_;

@@ -22,6 +22,7 @@
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/scene.h"
+#include "quasiroll/core/sensitivity.h"
 #include "quasiroll/core/simulator.h"
 
 namespace quasiroll::cli {
@@ -195,6 +196,9 @@ void Commands::Register(CLI::App& app) {
                     "NLP backend option key=value (repeatable; see 'quasiroll "
                     "list --options')");
   solve->add_flag("--json", solve_.json, "Print JSON instead of text");
+  solve->add_flag("--sensitivities", solve_.sensitivities,
+                  "Also compute the derivatives of the solution w.r.t. the "
+                  "state, mu, eps and the commanded rates (docs/cli.md)");
   solve->callback([this] { selected_ = [this] { return RunSolve(solve_); }; });
 
   RegisterRun(app, nlps, daes);
@@ -392,6 +396,34 @@ void SetSceneOverrides(const SceneOverrides& o, bench::RunRequest* request) {
 
 }  // namespace
 
+namespace {
+
+// `solve --sensitivities` text: a short summary (the JSON has them all).
+void PrintSensitivities(const QuasiStaticSensitivities& s) {
+  std::printf("sensitivities %s (%s), %s\n", ToString(s.status),
+              QuasiStaticSensitivities::kMethod,
+              s.one_sided ? "ONE-SIDED at:" : "two-sided");
+  for (int a = 0; a < s.num_one_sided; ++a)
+    std::printf(
+        "  %s\n",
+        OneSidedName(s, s.one_sided_items[static_cast<size_t>(a)]).c_str());
+  if (s.status != SensitivityStatus::kOk) return;
+  auto row = [](const char* name, const Eigen::VectorXd& v) {
+    std::printf("  %-13s", name);
+    for (Eigen::Index i = 0; i < v.size(); ++i) std::printf(" %.6g", v(i));
+    std::printf("\n");
+  };
+  row("dtwist/dmu", s.twist.col(SensitivityParameter::kMu));
+  row("dtwist/deps", s.twist.col(SensitivityParameter::kEpsilon));
+  row("dforces/dmu", s.forces.col(SensitivityParameter::kMu));
+  std::printf(
+      "  |dtwist/dstate|max %.6g, |dtwist/drates|max %.6g\n",
+      s.twist.leftCols(SensitivityParameter::kNumState).cwiseAbs().maxCoeff(),
+      s.twist.rightCols(6).cwiseAbs().maxCoeff());
+}
+
+}  // namespace
+
 int RunSolve(const SolveArgs& args) {
   RegisterBuiltinNlpSolvers();
   bench::RunRequest request;
@@ -414,11 +446,16 @@ int RunSolve(const SolveArgs& args) {
   QuasiStaticSolution sol;
   const QuasiStaticStatus status = solver.Solve(theta, &sol);
   const bool ok = status == QuasiStaticStatus::kOk;
+  QuasiStaticSensitivities sens;
+  if (ok && args.sensitivities)
+    SensitivityAnalyzer().Compute(solver.problem(), sol.z, &sens);
   // 1-based wheel, or none (docs/cli.md, "No wheel").
   const int critical_wheel =
       sol.critical_contact >= 0 ? sol.critical_contact + 1 : 0;
   if (args.json) {
-    std::cout << SolveJson(scene, args.nlp, status, sol) << "\n";
+    std::cout << SolveJson(scene, args.nlp, status, sol,
+                           args.sensitivities ? &sens : nullptr)
+              << "\n";
     return ok ? kExitOk : kExitNotOk;
   }
   std::printf("status       %s%s%s\n", ToString(status),
@@ -454,6 +491,7 @@ int RunSolve(const SolveArgs& args) {
   std::printf("actuator torques ");
   for (double t : sol.actuator_torques) std::printf("%.6f ", t);
   std::printf("N m (nan = passive)\ngap G = %.3e W\n", sol.gap);
+  if (args.sensitivities) PrintSensitivities(sens);
   return kExitOk;
 }
 

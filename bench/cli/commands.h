@@ -37,6 +37,7 @@ struct SolveArgs {
   std::optional<int> nlp_max_iter;
   std::vector<std::string> nlp_opts;  // --nlp-opt key=value
   bool json = false;
+  bool sensitivities = false;  // --sensitivities (core/sensitivity.h)
 };
 
 struct RunArgs {

@@ -16,6 +16,38 @@ void NullArray(JsonWriter* w, int n) {
   w->EndArray();
 }
 
+void WriteSensitivities(JsonWriter* w, const QuasiStaticSensitivities& s) {
+  w->BeginObject();
+  w->Key("status").Value(ToString(s.status));
+  w->Key("method").Value(QuasiStaticSensitivities::kMethod);
+  w->Key("one_sided").Value(s.one_sided);
+  w->Key("one_sided_constraints").BeginArray();
+  for (int a = 0; a < s.num_one_sided; ++a)
+    w->Value(OneSidedName(s, s.one_sided_items[static_cast<size_t>(a)]));
+  w->EndArray();
+  w->Key("state_names").BeginArray();
+  for (const char* name : StateNames()) w->Value(name);
+  w->EndArray();
+  w->Key("rate_names").BeginArray();
+  for (const char* name : JointNames()) w->Value(name);
+  w->EndArray();
+  if (s.status == SensitivityStatus::kOk) {
+    w->Key("multiplier_values").Array(Eigen::VectorXd(s.multiplier_values));
+    for (const SensitivityEntry& e : SensitivityEntries(s)) {
+      w->Key(e.name);
+      if (e.vector) {
+        w->Array(Eigen::VectorXd(e.value.col(0)));
+        continue;
+      }
+      w->BeginArray();
+      for (Eigen::Index r = 0; r < e.value.rows(); ++r)
+        w->Array(Eigen::VectorXd(e.value.row(r).transpose()));
+      w->EndArray();
+    }
+  }
+  w->EndObject();
+}
+
 }  // namespace
 
 PoseView EvaluatePose(const KinematicModel& model, const Configuration& theta) {
@@ -57,8 +89,8 @@ std::string PoseJson(const Scene& scene, const KinematicModel& model,
 }
 
 std::string SolveJson(const Scene& scene, const std::string& nlp,
-                      QuasiStaticStatus status,
-                      const QuasiStaticSolution& sol) {
+                      QuasiStaticStatus status, const QuasiStaticSolution& sol,
+                      const QuasiStaticSensitivities* sensitivities) {
   const bool ok = status == QuasiStaticStatus::kOk;
   const int critical_wheel =
       sol.critical_contact >= 0 ? sol.critical_contact + 1 : 0;
@@ -114,6 +146,10 @@ std::string SolveJson(const Scene& scene, const std::string& nlp,
     w.EndObject();
   }
   w.EndArray();
+  if (sensitivities) {
+    w.Key("sensitivities");
+    ok ? WriteSensitivities(&w, *sensitivities) : (void)w.Null();
+  }
   w.EndObject();
   return w.str();
 }

@@ -9,6 +9,7 @@
 #include "quasiroll/core/kinematics.h"
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/scene.h"
+#include "quasiroll/core/sensitivity.h"
 
 namespace quasiroll {
 
@@ -31,7 +32,13 @@ std::string PoseJson(const Scene& scene, const KinematicModel& model,
 // did not produce (everything but the diagnostics when the status is not
 // OK) is null, arrays keeping their length; critical_wheel is 1-based or
 // null (docs/cli.md, "Conventions").
+// With `sensitivities` (solve --sensitivities) the object also has the key
+// "sensitivities": null when the solve failed, else status, method,
+// one_sided, one_sided_constraints, state_names, rate_names,
+// multiplier_values and the entries
+// d<output>_d<input> of SensitivityEntries() (vectors, or arrays of rows).
 std::string SolveJson(const Scene& scene, const std::string& nlp,
-                      QuasiStaticStatus status, const QuasiStaticSolution& sol);
+                      QuasiStaticStatus status, const QuasiStaticSolution& sol,
+                      const QuasiStaticSensitivities* sensitivities = nullptr);
 
 }  // namespace quasiroll

@@ -26,6 +26,7 @@
 #include "quasiroll/core/plugin_loader.h"
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/scene.h"
+#include "quasiroll/core/sensitivity.h"
 #include "quasiroll/core/simulator.h"
 
 namespace py = pybind11;
@@ -96,7 +97,7 @@ std::string SolveText(const Scene& scene_in, const std::string& nlp,
                       std::optional<std::string> mode,
                       std::optional<double> nlp_tol,
                       std::optional<int> nlp_max_iter,
-                      const GivenOptions& nlp_options) {
+                      const GivenOptions& nlp_options, bool sensitivities) {
   const bench::RunRequest request =
       SolveRequest(nlp, mu, eps, mode, nlp_tol, nlp_max_iter, nlp_options);
   const bench::ResolvedSolve resolved = bench::ResolveSolveRequest(
@@ -116,7 +117,11 @@ std::string SolveText(const Scene& scene_in, const std::string& nlp,
                              std::move(solver_nlp), options);
     QuasiStaticSolution sol;
     const QuasiStaticStatus status = solver.Solve(theta, &sol);
-    json = SolveJson(scene, resolved.nlp, status, sol);
+    QuasiStaticSensitivities sens;
+    if (status == QuasiStaticStatus::kOk && sensitivities)
+      SensitivityAnalyzer().Compute(solver.problem(), sol.z, &sens);
+    json = SolveJson(scene, resolved.nlp, status, sol,
+                     sensitivities ? &sens : nullptr);
   }
   return json;
 }
@@ -268,7 +273,8 @@ PYBIND11_MODULE(_quasiroll, m) {
   m.def("_pose_json", &PoseText, py::arg("scene"));
   m.def("_solve_json", &SolveText, py::arg("scene"), py::arg("nlp"),
         py::arg("mu"), py::arg("eps"), py::arg("mode"), py::arg("nlp_tol"),
-        py::arg("nlp_max_iter"), py::arg("nlp_options"));
+        py::arg("nlp_max_iter"), py::arg("nlp_options"),
+        py::arg("sensitivities") = false);
   m.def("_run_text", &RunText, py::arg("scene"), py::arg("nlp"), py::arg("dae"),
         py::arg("coupling"), py::arg("dt"), py::arg("t_end"), py::arg("mu"),
         py::arg("eps"), py::arg("mode"), py::arg("rk_method"), py::arg("sigma"),

@@ -3,27 +3,9 @@
 // Advance() runs; this binary replaces operator new, so it is kept separate.
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
-
 #include "quasiroll/core/simulator.h"
+#include "tests/heap_counter.h"
 #include "tests/test_names.h"
-
-namespace {
-std::atomic<long long> g_allocations{0};
-}  // namespace
-
-void* operator new(std::size_t size) {
-  ++g_allocations;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace quasiroll {
 namespace {
@@ -50,10 +32,10 @@ class WarmStep : public ::testing::TestWithParam<std::string> {
     for (int k = 0; k < 5; ++k)
       EXPECT_TRUE(sim.Advance(result)) << result->stop_reason;
     *warm_checkpoints = result->checkpoints.size();
-    const long long before = g_allocations.load();
+    const long long before = testing_util::g_heap_allocations.load();
     for (int k = 0; k < 50; ++k)
       EXPECT_TRUE(sim.Advance(result)) << result->stop_reason;
-    return g_allocations.load() - before;
+    return testing_util::g_heap_allocations.load() - before;
   }
 };
 

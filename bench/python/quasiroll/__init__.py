@@ -72,19 +72,30 @@ def _given_options(name, value):
 
 
 def solve(scene, nlp=None, *, mu=None, eps=None, mode=None, nlp_tol=None,
-          nlp_max_iter=None, nlp_options=None):
+          nlp_max_iter=None, nlp_options=None, sensitivities=False):
     """One quasi-static solve at the scene's initial configuration
     (`quasiroll solve --json`). Returns a dict: status, message, mu_min,
     twist, joint_rates, actuator_torques (numpy; None when the status is not
     OK), gap, iterations, residual, condition_number, wall_s, critical_wheel
     (1-based or None), contacts (list of 3 dicts of numpy arrays, or None)
-    and ok (status == "OK"). The keywords are run()'s, with its rules."""
+    and ok (status == "OK"). The keywords are run()'s, with its rules.
+    sensitivities=True (`solve --sensitivities`): also "sensitivities", a
+    dict with the JSON's keys, each d<output>_d<input> and multiplier_values
+    a numpy array (1-D for mu and eps, else rows = output, columns = input);
+    None when the solve failed."""
     d = json.loads(_quasiroll._solve_json(
         scene, nlp or "", mu, eps, mode, nlp_tol, nlp_max_iter,
-        _given_options("nlp_options", nlp_options)))
+        _given_options("nlp_options", nlp_options), bool(sensitivities)))
     if d["status"] != "OK":
         d["contacts"] = None
+    sens = d.pop("sensitivities", None)
     d = _arrays(d)
+    if sensitivities:
+        if sens is not None:
+            sens = {k: np.array(v, dtype=float)
+                    if k.startswith("d") or k == "multiplier_values" else v
+                    for k, v in sens.items()}
+        d["sensitivities"] = sens
     d["ok"] = d["status"] == "OK"
     return d
 
