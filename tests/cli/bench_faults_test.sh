@@ -17,7 +17,8 @@
 #          partial file is left and no run without all its files counted as
 #          done; --resume after the space is freed completes the suite to the
 #          uninterrupted output. Exits 77 (skipped) where no tmpfs can be
-#          mounted (neither root nor unprivileged user namespaces).
+#          mounted (neither root nor unprivileged user namespaces) or pages
+#          are not 4 KiB.
 # Processes are frozen with SIGSTOP at the moment of interest instead of
 # timed, so the test does not depend on the machine's speed or load.
 set -euo pipefail
@@ -55,28 +56,30 @@ expect_refused() {  # expect_refused DIR PID OUT: a bench on OUT exits 2 naming 
   grep -qF "process $2" <<< "$err" || fail "the error does not name pid $2: $err"
 }
 
+# full_disk SIZE WHAT: the suite on a fresh tmpfs of SIZE at $disk exits 3
+# naming a file under $disk/out/WHAT and ENOSPC, and leaves no temporary file.
+full_disk() {
+  mount -t tmpfs -o size="$1" quasiroll_faults "$disk"
+  local code=0 err
+  err=$("$bin" "${args[@]}" --out "$disk/out" 2>&1 > /dev/null) || code=$?
+  [ "$code" -eq 3 ] || fail "a full disk ($1) exited $code, expected 3: $err"
+  grep -q "cannot write '$disk/out/${2:-}.*No space left on device" <<< "$err" \
+    || fail "the error does not name a file under $disk/out/${2:-} and ENOSPC: $err"
+  [ -z "$(find "$disk/out" -name '*.tmp.*')" ] \
+    || fail "temporary files left: $(find "$disk/out" -name '*.tmp.*')"
+}
+
 if [ "$mode" = disk-inner ]; then  # in the private mount namespace
   whole=$3 disk=$4
   # 64 KiB: meta.json and the terrain fit, the 79 KB reference does not.
-  mount -t tmpfs -o size=64k quasiroll_faults "$disk"
-  code=0
-  err=$("$bin" "${args[@]}" --out "$disk/out" 2>&1 > /dev/null) || code=$?
-  [ "$code" -eq 3 ] || fail "a full disk exited $code, expected 3: $err"
-  grep -q "cannot write '$disk/out/references/.*No space left on device" <<< "$err" \
-    || fail "the error does not name the reference file and ENOSPC: $err"
+  full_disk 64k references/
   [ "$(finished "$disk/out")" -eq 0 ] || fail "runs done without their reference"
   umount "$disk"
   # 160 KiB: the reference and a few runs fit.
-  mount -t tmpfs -o size=160k quasiroll_faults "$disk"
-  code=0
-  err=$("$bin" "${args[@]}" --out "$disk/out" 2>&1 > /dev/null) || code=$?
-  [ "$code" -eq 3 ] || fail "a full disk exited $code, expected 3: $err"
-  grep -q "cannot write '$disk/out/.*No space left on device" <<< "$err" \
-    || fail "the error does not name the file and ENOSPC: $err"
+  full_disk 160k
   done_runs=$(finished "$disk/out")
   [ "$done_runs" -ge 1 ] && [ "$done_runs" -lt $runs ] \
     || fail "$done_runs runs done on the full disk, expected 1..$((runs - 1))"
-  [ -z "$(find "$disk/out" -name '*.tmp.*')" ] || fail "temporary files left: $(find "$disk/out" -name '*.tmp.*')"
   [ ! -e "$disk/out/runs.csv" ] || fail "runs.csv written on a full disk"
   grep -q '"complete":false' "$disk/out/meta.json" || fail "meta.json says complete"
   header=$(head -1 "$whole/runs.csv")
@@ -155,6 +158,11 @@ case "$mode" in
     ;;
   disk)
     mkdir "$tmp/disk"
+    # The sizes below count 4 KiB pages (tmpfs allocates whole pages).
+    if [ "$(getconf PAGESIZE)" -ne 4096 ]; then
+      echo "bench faults (disk): skipped, page size $(getconf PAGESIZE), the sizes assume 4096"
+      exit 77
+    fi
     as_root=()
     [ "$(id -u)" -eq 0 ] || as_root=(-r)  # an unprivileged user namespace
     if ! unshare -m "${as_root[@]}" true 2> /dev/null; then
