@@ -17,8 +17,15 @@ build=build-fuzz
 jobs=$(nproc 2>/dev/null || echo 2)
 command -v clang++ > /dev/null || { echo "fuzz.sh: clang++ not found (scripts/install-deps.sh --fuzz)" >&2; exit 2; }
 
+# ccache when present, as scripts/test.sh: the instrumented build is most of
+# the step's time (docs/fuzzing.md).
+launcher=()
+if command -v ccache > /dev/null; then
+  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=true
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
 # Only what the targets need: no optional solver backends, tests, benchmarks.
-cmake -S . -B "$build" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+cmake -S . -B "$build" "${launcher[@]}" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DQUASIROLL_FUZZ=ON -DBUILD_TESTING=OFF -DQUASIROLL_WITH_BENCHMARKS=OFF \
   -DQUASIROLL_WITH_IPOPT=OFF -DQUASIROLL_WITH_NLOPT=OFF \
   -DQUASIROLL_WITH_CERES=OFF -DQUASIROLL_WITH_SUNDIALS=OFF > "$build.configure.log" \

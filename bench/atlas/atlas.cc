@@ -18,6 +18,7 @@
 #include "quasiroll/bench/io/csv.h"
 #include "quasiroll/bench/io/format.h"
 #include "quasiroll/bench/io/json_writer.h"
+#include "quasiroll/bench/io/output_lock.h"
 #include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/bench/io/terrain_json.h"
 #include "quasiroll/core/initial_configuration.h"
@@ -314,6 +315,8 @@ AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path out(options.out_dir);
   fs::create_directories(out);
+  // One writer per directory (bench/io/output_lock.h), held to the end.
+  const auto lock = LockOutputDirectory(out.string(), "", "--out");
   AtlasSummary s;
   s.cells = spec.CellCount();
   std::map<std::int64_t, std::string> done;

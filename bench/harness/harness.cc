@@ -27,6 +27,7 @@
 #include "quasiroll/bench/harness/shard.h"
 #include "quasiroll/bench/io/csv.h"
 #include "quasiroll/bench/io/json_writer.h"
+#include "quasiroll/bench/io/output_lock.h"
 #include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/bench/io/runs_schema.h"
 #include "quasiroll/bench/io/terrain_json.h"
@@ -402,7 +403,9 @@ class Scheduler {
         remaining_(static_cast<int>(classes_.size())) {}
 
   // Runs fn(task) for every task; the first exception thrown by fn is
-  // rethrown after all threads have finished.
+  // rethrown after all threads have finished. No task starts after one has
+  // thrown: a write failure (a full disk) would fail every later run too,
+  // after computing it.
   template <typename Fn>
   void Run(Fn fn) {
     std::vector<std::thread> threads;
@@ -420,9 +423,11 @@ class Scheduler {
       {
         std::unique_lock<std::mutex> lock(mutex_);
         cv_.wait(lock, [&] {
+          if (error_) return true;
           task = Pick();
           return task >= 0 || remaining_ == 0;
         });
+        if (error_) return;
         if (task < 0) {
           if (remaining_ == 0) return;
           continue;
@@ -611,6 +616,10 @@ void ReferenceJob::Compute(const std::string& dir,
   try {
     reference =
         LoadOrComputeReference(dir, scene, terrain, digest, settings, label);
+  } catch (const FileWriteError&) {
+    // Not a property of the reference: its runs' rows would be kept by
+    // --resume without their accuracy (a full disk stops the suite).
+    throw;
   } catch (const std::exception& e) {
     error = e.what();
   }
@@ -837,6 +846,9 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options) {
                  : static_cast<int>(std::thread::hardware_concurrency());
   if (jobs <= 0) jobs = 1;
 
+  // One writer per output (bench/io/output_lock.h), before resume reads it.
+  const std::vector<OutputLock> locks = LockOutputDirectory(
+      dir, options.shard_count > 0 ? SuiteOutputDir(options) : "", "--out");
   SuitePlan plan = PlanSuite(suite, options);
   BeginSuiteOutput(suite, options, plan, jobs, start_time);
 

@@ -73,8 +73,11 @@ std::vector<std::string> ErrorRow(const RunSpec& run,
                                   const Reference* reference,
                                   const std::string& reference_error = "");
 
-// Runs the suite. Throws SceneError for a bad filter; I/O errors propagate
-// as std::runtime_error. Failing runs never stop the suite.
+// Runs the suite. Throws SceneError for a bad filter, OutputLockedError
+// (bench/io/output_lock.h) when another process writes the same output
+// (DIR, or DIR/shards/I-of-N with --shard); I/O errors propagate as
+// FileWriteError and stop the suite (no run starts after one). Failing runs
+// never stop the suite.
 HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options);
 
 // The runner's scheduler: calls fn(k) once for every task k < classes.size().
@@ -83,8 +86,8 @@ HarnessSummary RunSuite(const Suite& suite, const HarnessOptions& options);
 // runs (NLP backends whose solver objects may not run concurrently); then
 // the tasks with alone[k] true (group key `exclusive`), one at a time, each
 // starting after every other task has finished: nothing shares the cores
-// with them. The first exception thrown by fn is rethrown at the end of its
-// phase.
+// with them. The first exception thrown by fn is rethrown once the tasks
+// running then have finished; no task starts after it.
 void ScheduleTasks(const std::vector<int>& classes,
                    const std::vector<bool>& alone, int jobs,
                    const std::function<void(int)>& fn);
@@ -104,7 +107,7 @@ struct ReferenceJob {
   std::optional<Reference> reference;
   std::string error;  // why `reference` is empty ("" = not computed yet)
   // Loads DIR/references/<hash> or computes and caches it; a failure is
-  // kept in `error`, never thrown.
+  // kept in `error`, except a FileWriteError (a full disk), which is thrown.
   void Compute(const std::string& dir, const ReferenceSettings& settings);
 };
 

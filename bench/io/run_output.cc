@@ -1,12 +1,15 @@
 #include "quasiroll/bench/io/run_output.h"
 
 #include <dlfcn.h>
+#include <fcntl.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -45,27 +48,39 @@ void AtomicWriteFile(const std::string& path, const std::string& content) {
     std::error_code ec;
     fs::create_directories(target.parent_path(), ec);
     if (ec)
-      throw std::runtime_error("cannot create directory '" +
-                               target.parent_path().string() +
-                               "': " + ec.message());
+      throw FileWriteError("cannot create directory '" +
+                           target.parent_path().string() +
+                           "': " + ec.message());
   }
-  std::ostringstream tmp_name;
-  tmp_name << path << ".tmp." << ::getpid() << "."
-           << std::hash<std::thread::id>{}(std::this_thread::get_id());
-  {
-    std::ofstream out(tmp_name.str(), std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write '" + tmp_name.str() + "'");
-    out << content;
-    out.flush();
-    if (!out)
-      throw std::runtime_error("write failed for '" + tmp_name.str() + "'");
+  std::ostringstream tmp_stream;
+  tmp_stream << path << ".tmp." << ::getpid() << "."
+             << std::hash<std::thread::id>{}(std::this_thread::get_id());
+  const std::string tmp = tmp_stream.str();
+  // POSIX calls rather than a stream: errno says why (ENOSPC, EDQUOT), and
+  // close(2) reports what a network file system defers to it.
+  const auto fail = [&](const std::string& what, int err) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);  // a partial file must not hold the space
+    throw FileWriteError("cannot write '" + path + "' (" + what + " '" + tmp +
+                         "'): " + std::strerror(err));
+  };
+  const int fd =
+      ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) fail("creating", errno);
+  for (std::size_t done = 0; done < content.size();) {
+    const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int err = errno;
+      ::close(fd);
+      fail("writing", err);
+    }
+    done += static_cast<std::size_t>(n);
   }
+  if (::close(fd) != 0) fail("closing", errno);
   std::error_code ec;
-  fs::rename(tmp_name.str(), target, ec);
-  if (ec) {
-    fs::remove(tmp_name.str(), ec);
-    throw std::runtime_error("cannot rename onto '" + path + "'");
-  }
+  fs::rename(tmp, target, ec);
+  if (ec) fail("renaming", ec.value());
 }
 
 namespace {

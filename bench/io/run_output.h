@@ -3,6 +3,7 @@
 #pragma once
 
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -12,9 +13,17 @@
 
 namespace quasiroll {
 
+// A file could not be written (a full disk, no permission): an I/O failure
+// that stops a suite, never a result of one run or reference.
+class FileWriteError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 // Writes `content` to `path` atomically: a temporary file in the same
-// directory, then rename(2). Creates parent directories. Throws
-// std::runtime_error naming the path on I/O failure.
+// directory, then rename(2); a reader sees the old file or the whole new one,
+// also after the process is killed. Creates parent directories. Throws
+// FileWriteError naming the path and the system's reason ("No space left on
+// device") on I/O failure, after removing the temporary file.
 void AtomicWriteFile(const std::string& path, const std::string& content);
 // The whole file, bytes as they are, into *text; false (and *text empty) if
 // it cannot be opened.

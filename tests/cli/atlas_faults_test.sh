@@ -2,7 +2,8 @@
 # quasiroll atlas survives faults (issue #23 item 5): a run killed with
 # SIGKILL mid-way resumes from the rows it had finished and ends with the
 # atlas.csv of an uninterrupted run (all but wall_s); a write failure names
-# the file and exits non-zero without a complete-looking atlas.csv.
+# the file and exits non-zero without a complete-looking atlas.csv; a second
+# process on the same directory is refused.
 #   tests/cli/atlas_faults_test.sh QUASIROLL_BINARY
 set -euo pipefail
 bin=$1
@@ -46,4 +47,25 @@ set -e
 [ "$code" -ne 0 ] || { echo "a write failure exited 0"; exit 1; }
 echo "$err" | grep -q "atlas.partial.csv" || { echo "error does not name the file: $err"; exit 1; }
 [ ! -f "$tmp/full/atlas.csv" ] || { echo "atlas.csv written after a write failure"; exit 1; }
-echo "atlas faults: kill at $kept rows resumed to the uninterrupted atlas; full disk named"
+# Two writers on one directory: the second one, started while the first is
+# frozen (SIGSTOP) holding it, exits 2 naming the directory and the first
+# one's pid (bench/io/output_lock.h); the first one's atlas is intact.
+"$bin" "${args[@]}" --out "$tmp/two" > /dev/null &
+pid=$!
+for _ in $(seq 3000); do
+  [ -e "$tmp/two/meta.json" ] && break  # written after the lock is taken
+  sleep 0.02
+done
+kill -STOP "$pid"
+set +e
+err=$("$bin" "${args[@]}" --out "$tmp/two" --resume 2>&1 > /dev/null)
+code=$?
+set -e
+kill -CONT "$pid"
+[ "$code" -eq 2 ] || { echo "a second writer exited $code, expected 2: $err"; exit 1; }
+echo "$err" | grep -qF "'$tmp/two'" || { echo "error does not name the directory: $err"; exit 1; }
+echo "$err" | grep -qF "process $pid" || { echo "error does not name pid $pid: $err"; exit 1; }
+wait "$pid" || { echo "the first writer failed"; exit 1; }
+diff <(strip "$tmp/whole/atlas.csv") <(strip "$tmp/two/atlas.csv") \
+  || { echo "the first writer's atlas was disturbed"; exit 1; }
+echo "atlas faults: kill at $kept rows resumed to the uninterrupted atlas; full disk named; second writer refused"

@@ -24,12 +24,19 @@
 #include "quasiroll/core/scene.h"
 
 namespace {
+char g_work_dir[] = "/tmp/quasiroll-fuzz-scene.XXXXXX";
+
+// At exit (the fuzzer's and the corpus replay's): /tmp keeps nothing.
+void RemoveWorkDir() {
+  std::remove((std::string(g_work_dir) + "/grid.csv").c_str());
+  ::rmdir(g_work_dir);
+}
+
 const std::string& WorkDir() {
   static const std::string dir = [] {
-    char tmpl[] = "/tmp/quasiroll-fuzz-scene.XXXXXX";
-    const char* d = ::mkdtemp(tmpl);
-    if (d == nullptr) std::abort();
-    return std::string(d);
+    if (::mkdtemp(g_work_dir) == nullptr) std::abort();
+    std::atexit(RemoveWorkDir);
+    return std::string(g_work_dir);
   }();
   return dir;
 }
