@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -12,6 +13,41 @@
 #include "quasiroll/integrators/sundials_support_internal.h"
 
 namespace quasiroll {
+
+namespace {
+
+class IdaIntegrator final : public Integrator {
+ public:
+  IdaIntegrator();
+  ~IdaIntegrator() override;
+  std::string name() const override { return "ida"; }
+  OptionTable option_table() const override;
+
+ private:
+  void ApplyBackendOptions(const OptionValues& values) override;
+  void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
+                   Eigen::Ref<Eigen::VectorXd> y,
+                   const IntegratorOptions& options,
+                   IntegratorResult* result) override;
+
+  struct Impl;
+  static void ConfigureAndSolve(Impl& s, ConstrainedOde& ode, int flag,
+                                double t0, double t1,
+                                Eigen::Ref<Eigen::VectorXd> y,
+                                const IntegratorOptions& options,
+                                IntegratorResult* result);
+  static void IntegrateResidualForm(Impl& s, ConstrainedOde& ode, double t0,
+                                    double t1, Eigen::Ref<Eigen::VectorXd> y,
+                                    const IntegratorOptions& options,
+                                    IntegratorResult* result);
+  static void Finish(Impl& s, ConstrainedOde& ode, double t1,
+                     Eigen::Ref<Eigen::VectorXd> y,
+                     const IntegratorOptions& options,
+                     IntegratorResult* result);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace
 
 using Eigen::Map;
 using Eigen::MatrixXd;
@@ -628,6 +664,10 @@ void IdaIntegrator::ConfigureAndSolve(Impl& s, ConstrainedOde& ode, int flag,
     return;
   }
   Finish(s, ode, t1, y, options, result);
+}
+
+std::unique_ptr<Integrator> MakeIdaIntegrator() {
+  return std::make_unique<IdaIntegrator>();
 }
 
 }  // namespace quasiroll

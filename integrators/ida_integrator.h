@@ -47,41 +47,12 @@
 #pragma once
 
 #include <memory>
-#include <string>
 
 #include "quasiroll/core/dae.h"
 
 namespace quasiroll {
 
-class IdaIntegrator final : public Integrator {
- public:
-  IdaIntegrator();
-  ~IdaIntegrator() override;
-  std::string name() const override { return "ida"; }
-  OptionTable option_table() const override;
-
- private:
-  void ApplyBackendOptions(const OptionValues& values) override;
-  void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
-                   Eigen::Ref<Eigen::VectorXd> y,
-                   const IntegratorOptions& options,
-                   IntegratorResult* result) override;
-
-  struct Impl;
-  static void ConfigureAndSolve(Impl& s, ConstrainedOde& ode, int flag,
-                                double t0, double t1,
-                                Eigen::Ref<Eigen::VectorXd> y,
-                                const IntegratorOptions& options,
-                                IntegratorResult* result);
-  static void IntegrateResidualForm(Impl& s, ConstrainedOde& ode, double t0,
-                                    double t1, Eigen::Ref<Eigen::VectorXd> y,
-                                    const IntegratorOptions& options,
-                                    IntegratorResult* result);
-  static void Finish(Impl& s, ConstrainedOde& ode, double t1,
-                     Eigen::Ref<Eigen::VectorXd> y,
-                     const IntegratorOptions& options,
-                     IntegratorResult* result);
-  std::unique_ptr<Impl> impl_;
-};
+// The "ida" integrator (registered by integrators/registry.cc).
+std::unique_ptr<Integrator> MakeIdaIntegrator();
 
 }  // namespace quasiroll

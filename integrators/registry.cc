@@ -72,9 +72,8 @@ void RegisterBuiltinIntegrators() {
         0.00559);
     ida.adaptive = [](const OptionValues&) { return true; };
     ida.roles = {BackendRole::kReferenceCheck};
-    IntegratorRegistry::Register("ida", std::move(ida), [] {
-      return std::make_unique<IdaIntegrator>();
-    });
+    IntegratorRegistry::Register("ida", std::move(ida),
+                                 [] { return MakeIdaIntegrator(); });
     BackendInfo cvode = Info(
         "SUNDIALS CVODE BDF with its projection onto H = 0 (CVodeSetProjFn)",
         "BDF (ODE + projection)", "SUNDIALS CVODE", QUASIROLL_SUNDIALS_VERSION,

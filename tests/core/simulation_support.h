@@ -5,6 +5,7 @@
 
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/nlp.h"
+#include "quasiroll/core/scene.h"
 #include "quasiroll/core/simulator.h"
 
 namespace quasiroll {
@@ -20,6 +21,12 @@ inline SimulationOptions BuiltinOptions(const std::string& dae,
   options.coupling = coupling;
   options.dt = dt;
   return options;
+}
+
+// bench/scenes/paper.yaml.
+inline Scene PaperScene() {
+  return LoadScene(std::string(QUASIROLL_SOURCE_DIR) +
+                   "/bench/scenes/paper.yaml");
 }
 
 }  // namespace quasiroll

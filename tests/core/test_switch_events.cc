@@ -10,6 +10,7 @@
 #include "quasiroll/core/simulator.h"
 #include "quasiroll/core/slip_regimes.h"
 #include "quasiroll/core/switch_events.h"
+#include "simulation_support.h"
 
 namespace quasiroll {
 namespace {
@@ -204,16 +205,10 @@ TEST(SwitchEvents, ResolvedIntegrationAcrossAKinkMeetsTheTolerance) {
 
 SimulationResult RunPaper(double dt, Coupling coupling, bool locate,
                           double t_end = 3.2) {
-  RegisterBuiltinNlpSolvers();
-  RegisterBuiltinIntegrators();
-  const Scene scene =
-      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
-  SimulationOptions o;
-  o.dt = dt;
+  SimulationOptions o = BuiltinOptions("rk-projection", coupling, dt);
   o.t_end = t_end;
-  o.coupling = coupling;
   o.locate_switches = locate;
-  return Simulator(scene, o).Run();
+  return Simulator(PaperScene(), o).Run();
 }
 
 // The paper scene's first switch: wheel 1 starts sliding at ~2.9029 s
@@ -302,13 +297,9 @@ const SimulationResult& PaperReference(double rtol, double dt) {
   static bool have = false;
   const bool main_reference = rtol == 1e-12 && dt == 0.003125;
   if (main_reference && have) return cached;
-  RegisterBuiltinNlpSolvers();
-  RegisterBuiltinIntegrators();
-  const Scene scene =
-      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
-  SimulationOptions ro;
-  ro.coupling = Coupling::kCoupled;
-  ro.dt = dt;
+  const Scene scene = PaperScene();
+  SimulationOptions ro =
+      BuiltinOptions("rk-projection", Coupling::kCoupled, dt);
   ro.t_end = 20;
   ro.dae_options["rk_method"] = "dp54";
   ro.integrator.rtol = rtol;
