@@ -27,17 +27,9 @@ const std::array<const char*, 6>& JointNames() {
 }
 
 const char* ToString(SensitivityStatus status) {
-  switch (status) {
-    case SensitivityStatus::kOk:
-      return "OK";
-    case SensitivityStatus::kSingular:
-      return "SINGULAR";
-    case SensitivityStatus::kNotSquare:
-      return "NOT_SQUARE";
-    case SensitivityStatus::kNotComputed:
-      return "NOT_COMPUTED";
-  }
-  return "UNKNOWN";
+  static constexpr const char* kNames[] = {"OK", "SINGULAR", "NOT_SQUARE",
+                                           "NOT_COMPUTED"};
+  return kNames[static_cast<int>(status)];
 }
 
 bool SensitivityOptions::IsValid(std::string* why) const {
@@ -109,21 +101,28 @@ double SensitivityAnalyzer::Scale(int k) const {
   return 1.0;  // Theta: angles [rad] and chart lengths [m] of order 1
 }
 
-void SensitivityAnalyzer::SetParameter(int k, double delta) {
-  QuasiStaticProblem& p = *work_;
+void PerturbParameter(const QuasiStaticParameters& nominal, int k, double delta,
+                      QuasiStaticProblem* problem, Configuration* theta) {
+  problem->set_mu(nominal.mu);
+  problem->set_epsilon(nominal.epsilon);
+  problem->set_joint_rates(nominal.joint_rates);
   if (k < SensitivityParameter::kMu) {
-    Configuration theta = theta_;
-    theta(k) += delta;
-    p.SetConfiguration(theta);
+    (*theta)(k) += delta;
   } else if (k == SensitivityParameter::kMu) {
-    p.set_mu(nominal_.mu + delta);
+    problem->set_mu(nominal.mu + delta);
   } else if (k == SensitivityParameter::kEpsilon) {
-    p.set_epsilon(nominal_.epsilon + delta);
+    problem->set_epsilon(nominal.epsilon + delta);
   } else {
-    std::array<double, 6> rates = nominal_.joint_rates;
+    std::array<double, 6> rates = nominal.joint_rates;
     rates[static_cast<size_t>(k - SensitivityParameter::kRates)] += delta;
-    p.set_joint_rates(rates);
+    problem->set_joint_rates(rates);
   }
+}
+
+void SensitivityAnalyzer::SetParameter(int k, double delta) {
+  Configuration theta = theta_;
+  PerturbParameter(nominal_, k, delta, &*work_, &theta);
+  if (k < SensitivityParameter::kMu) work_->SetConfiguration(theta);
 }
 
 void SensitivityAnalyzer::Restore(int k) {

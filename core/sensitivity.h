@@ -141,6 +141,13 @@ struct SensitivityEntry {
 std::vector<SensitivityEntry> SensitivityEntries(
     const QuasiStaticSensitivities& sens);
 
+// Sets parameter k (SensitivityParameter) to nominal + delta: a Theta
+// coordinate in *theta (the configuration to set the problem up at), mu,
+// epsilon or a commanded rate on *problem; the other parameters of *problem
+// are reset to nominal.
+void PerturbParameter(const QuasiStaticParameters& nominal, int k, double delta,
+                      QuasiStaticProblem* problem, Configuration* theta);
+
 // Computes sensitivities with preallocated workspaces: after the first call
 // for a given mode, Compute() does not allocate (one_sided names aside).
 class SensitivityAnalyzer {

@@ -111,22 +111,8 @@ struct Reference {
 Configuration Perturb(QuasiStaticSolver* solver,
                       const QuasiStaticParameters& nominal,
                       const Configuration& theta, int k, double delta) {
-  QuasiStaticProblem& p = solver->problem();
-  p.set_mu(nominal.mu);
-  p.set_epsilon(nominal.epsilon);
-  p.set_joint_rates(nominal.joint_rates);
   Configuration t = theta;
-  if (k < SensitivityParameter::kMu) {
-    t(k) += delta;
-  } else if (k == SensitivityParameter::kMu) {
-    p.set_mu(nominal.mu + delta);
-  } else if (k == SensitivityParameter::kEpsilon) {
-    p.set_epsilon(nominal.epsilon + delta);
-  } else {
-    std::array<double, 6> r = nominal.joint_rates;
-    r[k - SensitivityParameter::kRates] += delta;
-    p.set_joint_rates(r);
-  }
+  PerturbParameter(nominal, k, delta, &solver->problem(), &t);
   return t;
 }
 
