@@ -395,7 +395,9 @@ void BeginAtlasOutput(const AtlasSpec& spec, const std::string& dir,
   const fs::path out(dir);
   fs::create_directories(out);
   if (!resume) {  // rows of an earlier run must not be taken for this one's
-    for (const fs::path& p : PartialFiles(out)) fs::remove(p);
+    // (only files hold rows: a device stays, e.g. /dev/full in a test)
+    for (const fs::path& p : PartialFiles(out))
+      if (fs::is_regular_file(p)) fs::remove(p);
     fs::remove(out / "atlas.csv");
     fs::remove(out / "edge.csv");
   }

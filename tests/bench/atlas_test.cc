@@ -5,9 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -131,6 +133,114 @@ TEST(TraversabilityAtlas, OutputDoesNotDependOnJobsOrInterruption) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("atlas.csv"), std::string::npos);
   }
+  fs::remove_all(root);
+}
+
+// --shard I/N: contiguous ranges that cover every cell exactly once, sizes
+// differing by at most one, also where cells * index exceeds 64 bits.
+TEST(AtlasShards, CellRangesCoverEveryCellOnceBalancedByCount) {
+  for (std::int64_t cells :
+       {std::int64_t{0}, std::int64_t{1}, std::int64_t{7}, std::int64_t{240},
+        std::int64_t{131072}, std::int64_t{2000000000000000}}) {
+    for (int count : {1, 2, 3, 7, 1000, 1000000}) {
+      std::int64_t expected_begin = 0, smallest = cells, largest = 0;
+      for (int i = 0; i < count; ++i) {
+        const AtlasCellRange r = ShardCells(cells, i, count);
+        ASSERT_EQ(r.begin, expected_begin) << cells << " " << i << "/" << count;
+        ASSERT_LE(r.begin, r.end);
+        smallest = std::min(smallest, r.end - r.begin);
+        largest = std::max(largest, r.end - r.begin);
+        expected_begin = r.end;
+      }
+      EXPECT_EQ(expected_begin, cells) << count;
+      EXPECT_LE(largest - smallest, 1) << cells << " in " << count;
+    }
+  }
+  EXPECT_EQ(AtlasShardDir("out", 2, 16), "out/shards/2-of-16");
+}
+
+AtlasSpec SmallR1Spec() {
+  AtlasSpec spec;
+  spec.scene_path = kScenes + "paper.yaml";
+  spec.scene = LoadScene(spec.scene_path);
+  spec.x = {-0.5, 1.5, 3};
+  spec.y = {-0.5, 0.5, 2};
+  spec.headings = 2;
+  return spec;
+}
+
+// Shards write only their cells under OUT/shards/I-of-N; their rows,
+// finished together (what quasiroll merge does), are the one-process atlas;
+// a cell without a row is named.
+TEST(AtlasShards, ShardRowsFinishToTheOneProcessAtlas) {
+  const fs::path root = FreshTempDir("quasiroll_atlas_shards_");
+  const AtlasSpec spec = SmallR1Spec();  // 24 cells: shards of 8
+  AtlasOptions whole;
+  whole.out_dir = (root / "whole").string();
+  RunAtlas(spec, whole);
+  std::map<std::int64_t, std::string> rows;
+  for (int i = 0; i < 3; ++i) {
+    AtlasOptions shard;
+    shard.out_dir = (root / "sharded").string();
+    shard.shard_index = i;
+    shard.shard_count = 3;
+    const AtlasSummary s = RunAtlas(spec, shard);
+    EXPECT_EQ(s.cells, 8);
+    const fs::path dir = AtlasShardDir(shard.out_dir, i, 3);
+    const JsonValue meta = ParseJson(ReadAll(dir / "meta.json"));
+    EXPECT_EQ(meta.Find("shard")->Find("first_cell")->number(), 8 * i);
+    EXPECT_EQ(SpecFromAtlasMeta(meta, "meta.json").CellCount(), 24);
+    for (const auto& [index, row] : ReadFinishedAtlasRows(spec, dir.string()))
+      EXPECT_TRUE(rows.emplace(index, row).second) << "cell " << index;
+  }
+  EXPECT_FALSE(fs::exists(root / "sharded" / "atlas.csv"));
+  const std::map<std::int64_t, std::string> all = rows;
+  rows.erase(5);
+  rows.erase(17);
+  try {
+    FinishAtlasOutput(spec, (root / "merged").string(), rows, {}, {});
+    ADD_FAILURE() << "missing cells accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("2 of 24 cells have no row (first: 5)"),
+        std::string::npos)
+        << e.what();
+  }
+  fs::create_directories(root / "merged");
+  FinishAtlasOutput(spec, (root / "merged").string(), all, {}, {});
+  EXPECT_EQ(WithoutWallTime(root / "whole" / "atlas.csv"),
+            WithoutWallTime(root / "merged" / "atlas.csv"));
+  fs::remove_all(root);
+}
+
+// A partial file whose last line was torn by a kill: the next row starts on
+// a line of its own (appended to the fragment, "3" + "5,..." would read as
+// cell 35), and a row whose position columns are not its cell's is ignored.
+TEST(AtlasShards, TornPartialLinesAreNeverReadAsRows) {
+  const fs::path root = FreshTempDir("quasiroll_atlas_torn_");
+  const AtlasSpec spec = SmallR1Spec();
+  BeginAtlasOutput(spec, root.string(), false, {});
+  const std::string row0 =
+      AtlasCsvRow(EvaluateAtlasCell(spec, CellAt(spec, 0)));
+  const std::string row5 =
+      AtlasCsvRow(EvaluateAtlasCell(spec, CellAt(spec, 5)));
+  const fs::path partial = root / "atlas.partial.csv";
+  std::ofstream(partial) << row0 << "\n"
+                         << "1";
+  {
+    AtlasPartialFile file(partial.string());
+    file.Append(row5);
+  }
+  EXPECT_EQ(ReadAll(partial), row0 + "\n" + row5 + "\n");
+  // A glued line: cell 1's index in front of cell 5's row.
+  std::ofstream(root / "atlas.partial.rank-1.csv") << "1" << row5 << "\n";
+  const auto rows = ReadFinishedAtlasRows(spec, root.string());
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows.at(0), row0);
+  EXPECT_EQ(rows.at(5), row5);
+  // Without --resume an earlier run's rows are removed, not reused.
+  BeginAtlasOutput(spec, root.string(), false, {});
+  EXPECT_TRUE(ReadFinishedAtlasRows(spec, root.string()).empty());
   fs::remove_all(root);
 }
 
