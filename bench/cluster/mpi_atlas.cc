@@ -276,23 +276,15 @@ int AtlasDriver(const AtlasArgs& args, const bench::AtlasSpec& spec,
 
 int Atlas(const AtlasArgs& args, int rank, int size) {
   RankStats stats;
-  // Every rank loads the spec; a failure is reported once (by rank 0, or by
-  // the ranks that failed alone).
+  // Every rank loads the spec (every rank evaluates cells of it).
   std::optional<bench::AtlasSpec> spec;
-  std::string error;
-  try {
-    spec.emplace(bench::LoadAtlasSpec(args.spec));
-    if (args.edge_cells) spec->edge_cells = *args.edge_cells;
-  } catch (const std::exception& e) {
-    error = e.what();
-  }
-  int rank0_ok = error.empty() ? 1 : 0;
-  MPI_Bcast(&rank0_ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  if (!AllRanksOk(error.empty())) {
-    if (!error.empty() && (rank == 0 || rank0_ok))
-      std::fprintf(stderr, "error: %s\n", error.c_str());
+  if (!LoadOnEveryRank(
+          [&] {
+            spec.emplace(bench::LoadAtlasSpec(args.spec));
+            if (args.edge_cells) spec->edge_cells = *args.edge_cells;
+          },
+          rank))
     return 2;
-  }
   std::map<std::int64_t, std::string> rows;
   bool ok = true;
   if (rank == 0) {

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -43,6 +44,10 @@ void SendString(const std::string& text, int dest, int tag);
 
 // Every rank reports whether it succeeded; true if all did.
 bool AllRanksOk(bool ok);
+// Runs `load` (reading the input every rank needs) on every rank; true if
+// it succeeded everywhere. A failure is reported once on stderr: by rank 0,
+// or by the ranks that failed alone (naming rank and host).
+bool LoadOnEveryRank(const std::function<void()>& load, int rank);
 // Can every rank read a file rank 0 wrote into DIR? Reports the ranks that
 // cannot (stderr) and returns false then, on every rank.
 bool SharedDirectory(const std::string& dir, int rank);

@@ -272,25 +272,11 @@ struct Args {
 
 int Bench(const Args& args, int rank, int size) {
   RankStats stats;
-  // Every rank loads the suite (deterministic: same runs, same order). A
-  // failure is reported once: by rank 0, or by the ranks that failed alone.
+  // Every rank loads the suite (deterministic: same runs, same order).
   std::optional<bench::Suite> suite;
-  std::string error;
-  try {
-    suite.emplace(bench::LoadSuite(args.suite));
-  } catch (const std::exception& e) {
-    error = e.what();
-  }
-  int rank0_ok = error.empty() ? 1 : 0;
-  MPI_Bcast(&rank0_ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  if (!AllRanksOk(error.empty())) {
-    if (!error.empty() && rank == 0)
-      std::fprintf(stderr, "error: %s\n", error.c_str());
-    else if (!error.empty() && rank0_ok)
-      std::fprintf(stderr, "error: rank %d on %s: %s\n", rank,
-                   ThisMachine().hostname.c_str(), error.c_str());
+  if (!LoadOnEveryRank([&] { suite.emplace(bench::LoadSuite(args.suite)); },
+                       rank))
     return 2;
-  }
 
   bench::HarnessOptions options;
   options.out_dir = args.out;

@@ -73,6 +73,24 @@ bool AllRanksOk(bool ok) {
   return all == 1;
 }
 
+bool LoadOnEveryRank(const std::function<void()>& load, int rank) {
+  std::string error;
+  try {
+    load();
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  int rank0_ok = error.empty() ? 1 : 0;
+  MPI_Bcast(&rank0_ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (AllRanksOk(error.empty())) return true;
+  if (!error.empty() && rank == 0)
+    std::fprintf(stderr, "error: %s\n", error.c_str());
+  else if (!error.empty() && rank0_ok)
+    std::fprintf(stderr, "error: rank %d on %s: %s\n", rank,
+                 ThisMachine().hostname.c_str(), error.c_str());
+  return false;
+}
+
 // Can every rank read a file rank 0 wrote into DIR? (Workers write their
 // trajectories there and rank 0 relies on them for --resume.)
 bool SharedDirectory(const std::string& dir, int rank) {

@@ -78,6 +78,17 @@ TEST(TraversabilityAtlas, PvcHeadingDependenceIsMirrorSymmetric) {
   EXPECT_GT(rows[4].mu_min, rows[8].mu_min);  // across vs down
 }
 
+// R1 (paper.yaml), 3 x 2 positions, both modes.
+AtlasSpec SmallR1Spec(int headings) {
+  AtlasSpec spec;
+  spec.scene_path = kScenes + "paper.yaml";
+  spec.scene = LoadScene(spec.scene_path);
+  spec.x = {-0.5, 1.5, 3};
+  spec.y = {-0.5, 0.5, 2};
+  spec.headings = headings;
+  return spec;
+}
+
 std::string WithoutWallTime(const fs::path& csv) {
   std::istringstream in(ReadAll(csv));
   std::string line, out;
@@ -89,12 +100,7 @@ std::string WithoutWallTime(const fs::path& csv) {
 // interruption that left only part of the rows (resume computes the rest).
 TEST(TraversabilityAtlas, OutputDoesNotDependOnJobsOrInterruption) {
   const fs::path root = FreshTempDir("quasiroll_atlas_test_");
-  AtlasSpec spec;
-  spec.scene_path = kScenes + "paper.yaml";
-  spec.scene = LoadScene(spec.scene_path);
-  spec.x = {-0.5, 1.5, 3};
-  spec.y = {-0.5, 0.5, 2};
-  spec.headings = 3;
+  AtlasSpec spec = SmallR1Spec(3);
   AtlasOptions one;
   one.out_dir = (root / "one").string();
   AtlasOptions two = one;
@@ -159,22 +165,12 @@ TEST(AtlasShards, CellRangesCoverEveryCellOnceBalancedByCount) {
   EXPECT_EQ(AtlasShardDir("out", 2, 16), "out/shards/2-of-16");
 }
 
-AtlasSpec SmallR1Spec() {
-  AtlasSpec spec;
-  spec.scene_path = kScenes + "paper.yaml";
-  spec.scene = LoadScene(spec.scene_path);
-  spec.x = {-0.5, 1.5, 3};
-  spec.y = {-0.5, 0.5, 2};
-  spec.headings = 2;
-  return spec;
-}
-
 // Shards write only their cells under OUT/shards/I-of-N; their rows,
 // finished together (what quasiroll merge does), are the one-process atlas;
 // a cell without a row is named.
 TEST(AtlasShards, ShardRowsFinishToTheOneProcessAtlas) {
   const fs::path root = FreshTempDir("quasiroll_atlas_shards_");
-  const AtlasSpec spec = SmallR1Spec();  // 24 cells: shards of 8
+  const AtlasSpec spec = SmallR1Spec(2);  // 24 cells: 3 shards of 8
   AtlasOptions whole;
   whole.out_dir = (root / "whole").string();
   RunAtlas(spec, whole);
@@ -218,7 +214,7 @@ TEST(AtlasShards, ShardRowsFinishToTheOneProcessAtlas) {
 // cell 35), and a row whose position columns are not its cell's is ignored.
 TEST(AtlasShards, TornPartialLinesAreNeverReadAsRows) {
   const fs::path root = FreshTempDir("quasiroll_atlas_torn_");
-  const AtlasSpec spec = SmallR1Spec();
+  const AtlasSpec spec = SmallR1Spec(2);
   BeginAtlasOutput(spec, root.string(), false, {});
   const std::string row0 =
       AtlasCsvRow(EvaluateAtlasCell(spec, CellAt(spec, 0)));

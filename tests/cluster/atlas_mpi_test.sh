@@ -12,16 +12,10 @@
 # usage: atlas_mpi_test.sh QUASIROLL_MPI SPEC REFERENCE WORKDIR
 set -euo pipefail
 quasiroll_mpi=$1 spec=$2 reference=$3 work=$4
-root=$(cd "$(dirname "$0")/../.." && pwd)
+source "$(dirname "$0")/lib.sh"
 compare=(/usr/bin/python3 "$root/tests/cluster/compare_atlas.py")
-fail() { echo "atlas_mpi_test: FAIL: $*" >&2; exit 1; }
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-export OMPI_MCA_btl=self,vader OMPI_MCA_btl_vader_single_copy_mechanism=none
-mpi() { local n=$1; shift; mpirun -np "$n" --oversubscribe "$quasiroll_mpi" "$@"; }
-rm -rf "$work"
-mkdir -p "$work"
-cd "$work"
-cells=$(/usr/bin/python3 -c "import json; print(json.load(open('$reference/meta.json'))['cells'])")
+fresh_workdir "$work"
+cells=$(atlas_cells "$reference")
 
 # 1.
 mpi 2 atlas --spec "$spec" --out out --progress none 2> out.log

@@ -15,15 +15,11 @@
 # usage: atlas_slurm_test.sh QUASIROLL SPEC REFERENCE WORKDIR
 set -euo pipefail
 quasiroll=$1 spec=$2 reference=$3 work=$4
-root=$(cd "$(dirname "$0")/../.." && pwd)
+source "$(dirname "$0")/lib.sh"
 compare=(/usr/bin/python3 "$root/tests/cluster/compare_atlas.py")
-fail() { echo "atlas_slurm_test: FAIL: $*" >&2; exit 1; }
-rm -rf "$work"
-mkdir -p "$work"
-cd "$work"
-export FAKE_SLURM_DIR=$work/slurm PATH=$root/tests/cluster/fake-slurm:$PATH
-export QUASIROLL=$quasiroll
-cells=$(/usr/bin/python3 -c "import json; print(json.load(open('$reference/meta.json'))['cells'])")
+fresh_workdir "$work"
+fake_slurm "$quasiroll"
+cells=$(atlas_cells "$reference")
 
 # 1. Array + merge.
 array=$(sbatch --parsable --array=0-2 "$root/bench/atlases/atlas-array.sbatch" "$spec" "$work/out")
