@@ -156,42 +156,69 @@ Scene SceneAt(const AtlasSpec& spec, const AtlasCell& cell) {
   return scene;
 }
 
-AtlasRow EvaluateAtlasCell(const AtlasSpec& spec, const AtlasCell& cell) {
-  const auto start = std::chrono::steady_clock::now();
+namespace {
+
+using SteadyClock = std::chrono::steady_clock;
+
+double SecondsSince(SteadyClock::time_point start) {
+  return std::chrono::duration<double>(SteadyClock::now() - start).count();
+}
+
+// A pose's placement and its checks (steps 1-2 of docs/atlas.md, "What one
+// cell does"): they depend on (x, y, heading) only, not on the mode.
+struct Placement {
+  std::string status, detail;  // status "" = placed and valid
+  Configuration theta;
+  double z = kNaN, roll = kNaN, pitch = kNaN;
+};
+
+Placement PlaceAt(const KinematicModel& model, const Scene& scene) {
+  Placement pl;
+  try {
+    pl.theta = SolveInitialConfiguration(model, scene);
+  } catch (const GeometryError& e) {
+    pl.status = "no_contact";
+    pl.detail = e.what();
+    return pl;
+  }
+  Mat3 r;
+  Vec3 p;
+  model.PlatformPose(pl.theta, &r, &p);
+  const Vec3 rpy = RpyFromRotation(r);
+  pl.z = p(2);
+  pl.roll = rpy(0);
+  pl.pitch = rpy(1);
+  const ValidityReport validity = CheckValidity(model, pl.theta, true);
+  if (!validity.ok()) {
+    pl.status = "degenerate_contact";
+    pl.detail = validity.Describe();
+  }
+  return pl;
+}
+
+// Steps 3-4 for one mode at a placement (wall_s left 0).
+AtlasRow RowAt(const AtlasSpec& spec, const AtlasCell& cell,
+               const KinematicModel& model, const Placement& pl) {
   AtlasRow row;
   row.cell = cell;
   row.mu = spec.scene.mu;
   row.mu_min = row.margin = row.min_normal_force = kNaN;
-  row.z = row.roll = row.pitch = kNaN;
-  const Scene scene = SceneAt(spec, cell);
-  const KinematicModel model(scene.geometry, scene.terrain);
-  auto finish = [&](const char* status, std::string detail) {
-    row.status = status;
-    row.detail = std::move(detail);
-    row.wall_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-            .count();
+  row.z = pl.z;
+  row.roll = pl.roll;
+  row.pitch = pl.pitch;
+  if (!pl.status.empty()) {
+    row.status = pl.status;
+    row.detail = pl.detail;
     return row;
-  };
-  Configuration theta;
-  try {
-    theta = SolveInitialConfiguration(model, scene);
-  } catch (const GeometryError& e) {
-    return finish("no_contact", e.what());
   }
-  Mat3 r;
-  Vec3 p;
-  model.PlatformPose(theta, &r, &p);
-  const Vec3 rpy = RpyFromRotation(r);
-  row.z = p(2);
-  row.roll = rpy(0);
-  row.pitch = rpy(1);
-  const ValidityReport validity = CheckValidity(model, theta, true);
-  if (!validity.ok()) return finish("degenerate_contact", validity.Describe());
+  const Scene scene = SceneAt(spec, cell);
   QuasiStaticProblem problem(model, QuasiStaticParameters::FromScene(scene));
-  problem.SetConfiguration(theta);
-  if (!problem.StaticsFullRank())
-    return finish("singular_statics", "the statics rows are rank deficient");
+  problem.SetConfiguration(pl.theta);
+  if (!problem.StaticsFullRank()) {
+    row.status = "singular_statics";
+    row.detail = "the statics rows are rank deficient";
+    return row;
+  }
   int critical = -1;
   double fn_min = kNaN;
   row.mu_min = problem.MinimumFriction(&critical, &fn_min);
@@ -199,10 +226,48 @@ AtlasRow EvaluateAtlasCell(const AtlasSpec& spec, const AtlasCell& cell) {
   row.min_normal_force = fn_min;
   if (std::isinf(row.mu_min)) {
     row.mu_min = kNaN;
-    return finish("lift_off", "no statically admissible force without pulling");
+    row.status = "lift_off";
+    row.detail = "no statically admissible force without pulling";
+    return row;
   }
   row.margin = scene.mu - row.mu_min;
-  return finish("ok", "");
+  row.status = "ok";
+  return row;
+}
+
+}  // namespace
+
+AtlasRow EvaluateAtlasCell(const AtlasSpec& spec, const AtlasCell& cell) {
+  const auto start = SteadyClock::now();
+  const Scene scene = SceneAt(spec, cell);
+  const KinematicModel model(scene.geometry, scene.terrain);
+  AtlasRow row = RowAt(spec, cell, model, PlaceAt(model, scene));
+  row.wall_s = SecondsSince(start);
+  return row;
+}
+
+std::vector<AtlasRow> EvaluateAtlasCells(
+    const AtlasSpec& spec, const std::vector<std::int64_t>& cells) {
+  const auto nm = static_cast<std::int64_t>(spec.modes.size());
+  std::vector<AtlasRow> rows;
+  rows.reserve(cells.size());
+  for (std::size_t k = 0; k < cells.size();) {
+    // cells[k, end): consecutive cells of one pose.
+    std::size_t end = k + 1;
+    while (end < cells.size() && cells[end] / nm == cells[k] / nm) ++end;
+    const auto start = SteadyClock::now();
+    const AtlasCell first = CellAt(spec, cells[k]);
+    const Scene scene = SceneAt(spec, first);
+    const KinematicModel model(scene.geometry, scene.terrain);
+    const Placement pl = PlaceAt(model, scene);
+    const double shared = SecondsSince(start) / static_cast<double>(end - k);
+    for (; k < end; ++k) {
+      const auto own = SteadyClock::now();
+      rows.push_back(RowAt(spec, CellAt(spec, cells[k]), model, pl));
+      rows.back().wall_s = shared + SecondsSince(own);
+    }
+  }
+  return rows;
 }
 
 std::string AtlasCsvHeader() {
@@ -532,27 +597,39 @@ AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options) {
       ++s.reused;
     else
       todo.push_back(i);
-  std::vector<std::string> computed(todo.size());
+  // Units of work: the cells of one pose (they share its placement).
+  const auto nm = static_cast<std::int64_t>(spec.modes.size());
+  std::vector<std::vector<std::int64_t>> units;
+  for (std::int64_t i : todo)
+    if (units.empty() || units.back().back() / nm != i / nm)
+      units.push_back({i});
+    else
+      units.back().push_back(i);
+  std::map<std::int64_t, std::string> computed;
   std::atomic<std::size_t> next{0};
-  std::atomic<std::int64_t> finished{0};
+  std::int64_t finished = 0;
   std::mutex mutex;
   AtlasPartialFile partial((fs::path(out) / kPartialName).string());
   std::string write_error;
   auto worker = [&] {
-    for (std::size_t k = next++; k < todo.size(); k = next++) {
-      computed[k] = AtlasCsvRow(EvaluateAtlasCell(spec, CellAt(spec, todo[k])));
+    for (std::size_t u = next++; u < units.size(); u = next++) {
+      const std::vector<AtlasRow> rows = EvaluateAtlasCells(spec, units[u]);
       std::lock_guard<std::mutex> lock(mutex);
-      if (!write_error.empty()) return;
-      try {
-        partial.Append(computed[k]);
-      } catch (const std::runtime_error& e) {
-        write_error = e.what();
-        return;
+      for (const AtlasRow& row : rows) {
+        if (!write_error.empty()) return;
+        const std::string& line = computed[row.cell.index] = AtlasCsvRow(row);
+        try {
+          partial.Append(line);
+        } catch (const std::runtime_error& e) {
+          write_error = e.what();
+          return;
+        }
+        ++finished;
+        if (options.progress &&
+            (finished % 256 == 0 || finished == (std::int64_t)todo.size()))
+          std::fprintf(stderr, "\ratlas: %lld / %zu cells", (long long)finished,
+                       todo.size());
       }
-      const std::int64_t f = ++finished;
-      if (options.progress && (f % 256 == 0 || f == (std::int64_t)todo.size()))
-        std::fprintf(stderr, "\ratlas: %lld / %zu cells", (long long)f,
-                     todo.size());
     }
   };
   std::vector<std::thread> threads;
@@ -561,7 +638,7 @@ AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options) {
   for (std::thread& t : threads) t.join();
   if (options.progress) std::fprintf(stderr, "\n");
   if (!write_error.empty()) throw std::runtime_error(write_error);
-  for (std::size_t k = 0; k < todo.size(); ++k) done[todo[k]] = computed[k];
+  done.merge(computed);
   s.computed = static_cast<std::int64_t>(todo.size());
   s.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)

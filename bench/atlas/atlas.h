@@ -83,6 +83,13 @@ struct AtlasRow {
 
 // Evaluates one cell (allocation aside, independent of every other cell).
 AtlasRow EvaluateAtlasCell(const AtlasSpec& spec, const AtlasCell& cell);
+// Evaluates cells given by index; consecutive cells of one pose (its modes)
+// share the placement and its checks, which do not depend on the mode (half
+// the cost of a cell on R1). Row k equals EvaluateAtlasCell(spec,
+// CellAt(spec, cells[k])) but for wall_s: the shared time is split evenly
+// among the pose's rows.
+std::vector<AtlasRow> EvaluateAtlasCells(
+    const AtlasSpec& spec, const std::vector<std::int64_t>& cells);
 
 struct AtlasOptions {
   std::string out_dir;

@@ -89,9 +89,8 @@ void AtlasWorker(const bench::AtlasSpec& spec, const std::string& dir, int rank,
     std::string reply = "ok\n";
     try {
       if (!open_error.empty()) throw std::runtime_error(open_error);
-      for (std::int64_t index : cells) {
-        const std::string row = bench::AtlasCsvRow(
-            bench::EvaluateAtlasCell(spec, bench::CellAt(spec, index)));
+      for (const bench::AtlasRow& r : bench::EvaluateAtlasCells(spec, cells)) {
+        const std::string row = bench::AtlasCsvRow(r);
         partial->Append(row);
         if (++written == kill_after) std::raise(SIGKILL);
         reply += row + "\n";
@@ -206,11 +205,10 @@ void ComputeLocally(const bench::AtlasSpec& spec, const std::string& dir,
                     std::map<std::int64_t, std::string>* rows,
                     Progress* progress) {
   bench::AtlasPartialFile partial(PartialOfRank(dir, 0));
-  for (std::int64_t index : todo) {
-    const std::string row = bench::AtlasCsvRow(
-        bench::EvaluateAtlasCell(spec, bench::CellAt(spec, index)));
+  for (const bench::AtlasRow& r : bench::EvaluateAtlasCells(spec, todo)) {
+    const std::string row = bench::AtlasCsvRow(r);
     partial.Append(row);
-    (*rows)[index] = row;
+    (*rows)[r.cell.index] = row;
     progress->Add(1);
   }
 }
@@ -235,12 +233,16 @@ int AtlasDriver(const AtlasArgs& args, const bench::AtlasSpec& spec,
                  static_cast<long long>(s.reused),
                  static_cast<long long>(spec.CellCount()));
   // Chunks: ~16 per worker, so the last ones even out the workers' ends;
-  // at most 64 cells (~0.5 s), at least 1.
+  // at most 64 cells (~0.3 s), at least 1; whole poses (a multiple of the
+  // modes: the modes of a pose share its placement).
   const int workers = std::max(1, size - 1);
+  const std::size_t modes = spec.modes.size();
   const std::size_t chunk =
       args.chunk > 0
           ? static_cast<std::size_t>(args.chunk)
-          : std::clamp<std::size_t>(todo.size() / (16 * workers), 1, 64);
+          : (std::clamp<std::size_t>(todo.size() / (16 * workers), 1, 64) +
+             modes - 1) /
+                modes * modes;
   std::signal(SIGTERM, OnTerminate);
   if (size == 1)
     ComputeLocally(spec, args.out, todo, &rows, &progress);

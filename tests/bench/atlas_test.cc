@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -263,6 +264,45 @@ TEST(TraversabilityAtlas, PoseWithoutContactIsARowWithItsCause) {
   EXPECT_TRUE(std::isnan(spike.mu_min));
   const AtlasRow clear = EvaluateAtlasCell(spec, CellAt(spec, 1));
   EXPECT_EQ(clear.status, "ok") << clear.detail;
+  fs::remove_all(root);
+}
+
+// The modes of a pose share its placement (EvaluateAtlasCells): every row,
+// a failed placement's included, is the row of the cell evaluated alone but
+// for wall_s, whatever cells are grouped (a pose's modes split or not).
+TEST(TraversabilityAtlas, PosesSharedAcrossModesGiveTheRowsOfSingleCells) {
+  const fs::path root = FreshTempDir("quasiroll_atlas_shared_");
+  const std::string scene = (root / "spike.yaml").string();
+  std::ofstream(scene)
+      << "name: spike\nmode: paper\nmu: 0.5\n"
+         "initial: {x: 0, y: 0, yaw: 0, joint_angles: [0, 0, 0, 0, 0, 0]}\n"
+         "terrain: {type: gaussians, bumps: [{amplitude: 0.05, x: 0.27, y: 0, "
+         "sigma: 0.01}]}\n";
+  for (const AtlasSpec& spec : {SmallR1Spec(2), [&] {
+                                  AtlasSpec s = SmallR1Spec(2);
+                                  s.scene_path = scene;
+                                  s.scene = LoadScene(scene);
+                                  s.x = {0.0, 2.0, 2};
+                                  s.y = {0.0, 0.0, 1};
+                                  return s;
+                                }()}) {
+    std::vector<std::int64_t> cells;
+    for (std::int64_t i = 0; i < spec.CellCount(); ++i)
+      if (i % 5 != 2) cells.push_back(i);  // some poses with one mode only
+    const std::vector<AtlasRow> rows = EvaluateAtlasCells(spec, cells);
+    ASSERT_EQ(rows.size(), cells.size());
+    std::set<std::string> statuses;
+    for (std::size_t k = 0; k < cells.size(); ++k) {
+      AtlasRow alone = EvaluateAtlasCell(spec, CellAt(spec, cells[k]));
+      alone.wall_s = rows[k].wall_s;
+      EXPECT_EQ(AtlasCsvRow(rows[k]), AtlasCsvRow(alone)) << cells[k];
+      statuses.insert(rows[k].status);
+    }
+    EXPECT_TRUE(statuses.count("ok"));
+    if (spec.scene_path == scene) {
+      EXPECT_TRUE(statuses.count("no_contact"));
+    }
+  }
   fs::remove_all(root);
 }
 
