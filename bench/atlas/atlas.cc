@@ -335,8 +335,11 @@ bool RowOfCell(const AtlasSpec& spec, std::int64_t index,
          fields[3] == Num(c.heading) && fields[4] == ToString(c.mode);
 }
 
-void ParseRows(const AtlasSpec& spec, const std::string& text,
-               std::map<std::int64_t, std::string>* rows) {
+}  // namespace
+
+void ParseAtlasRows(const AtlasSpec& spec, std::string text,
+                    std::map<std::int64_t, std::string>* rows) {
+  WholeLines(&text);
   std::istringstream in(text);
   std::string line;
   const std::int64_t n = spec.CellCount();
@@ -351,6 +354,8 @@ void ParseRows(const AtlasSpec& spec, const std::string& text,
     if (index < n && RowOfCell(spec, index, fields)) (*rows)[index] = line;
   }
 }
+
+namespace {
 
 void WriteAtlasMeta(const AtlasSpec& spec, const fs::path& out,
                     const AtlasSummary& s, const AtlasOutputInfo& info) {
@@ -426,13 +431,11 @@ std::map<std::int64_t, std::string> ReadFinishedAtlasRows(
         CanonicalAtlasKey(spec) + ")");
   // A row is the same text in atlas.csv (with a header) and in a partial
   // file (rows as they were finished, none).
-  WholeLines(&text);
-  ParseRows(spec, text, &rows);
+  ParseAtlasRows(spec, std::move(text), &rows);
   for (const fs::path& p : partials) {
     std::string partial;
-    if (!ReadTextFile(p.string(), &partial)) continue;
-    WholeLines(&partial);
-    ParseRows(spec, partial, &rows);
+    if (ReadTextFile(p.string(), &partial))
+      ParseAtlasRows(spec, std::move(partial), &rows);
   }
   return rows;
 }

@@ -140,6 +140,13 @@ AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options);
 std::map<std::int64_t, std::string> ReadFinishedAtlasRows(
     const AtlasSpec& spec, const std::string& dir);
 
+// Adds the rows in `text` (atlas.csv or a partial file, or the end of one)
+// to *rows with the rules of ReadFinishedAtlasRows: a last line without its
+// newline, a line with other columns or position columns other than its
+// cell's are ignored.
+void ParseAtlasRows(const AtlasSpec& spec, std::string text,
+                    std::map<std::int64_t, std::string>* rows);
+
 // Appends rows to a partial file, one flushed line each, so that a killed
 // process leaves every finished row on disk. Opening drops a torn last line
 // (one without its newline) so that the next row starts on a line of its
