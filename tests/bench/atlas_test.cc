@@ -314,6 +314,11 @@ TEST(TraversabilityAtlas, ShippedSpecsLoad) {
   EXPECT_EQ(r1.edge_cells, 32);
   EXPECT_EQ(r1.scene.name, LoadScene(kScenes + "paper.yaml").name);
   EXPECT_EQ(LoadAtlasSpec(dir + "r1_small.yaml").CellCount(), 24 * 18 * 8 * 2);
+  const AtlasSpec fine = LoadAtlasSpec(dir + "r1_fine.yaml");
+  EXPECT_EQ(fine.CellCount(), std::int64_t{256} * 256 * 64 * 2);
+  // The same area as the default atlas, 4x finer in x, y and heading.
+  EXPECT_EQ(fine.x.lo, r1.x.lo);
+  EXPECT_EQ(fine.y.hi, r1.y.hi);
 }
 
 TEST(TraversabilityAtlas, InvalidGridNamesTheKey) {
