@@ -76,6 +76,21 @@ long KillAfterRows(int rank) {
   return n;
 }
 
+// Evaluates `cells` a pose at a time (its modes share the placement) and
+// hands each row to `on_row` as soon as its pose is done, so that a rank
+// killed mid-chunk has written all but its current pose's rows.
+template <typename OnRow>
+void EvaluateByPose(const bench::AtlasSpec& spec,
+                    const std::vector<std::int64_t>& cells, OnRow on_row) {
+  const std::size_t step = spec.modes.size();
+  for (std::size_t k = 0; k < cells.size(); k += step) {
+    const std::vector<std::int64_t> pose(
+        cells.begin() + k, cells.begin() + std::min(k + step, cells.size()));
+    for (const bench::AtlasRow& r : bench::EvaluateAtlasCells(spec, pose))
+      on_row(r);
+  }
+}
+
 // ------------------------------------------------------------- worker ----
 
 // Replies "ok\n" + one row per line, or "io_error\n" + the message.
@@ -103,13 +118,13 @@ void AtlasWorker(const bench::AtlasSpec& spec, const std::string& dir, int rank,
     std::string reply = "ok\n";
     try {
       if (!open_error.empty()) throw std::runtime_error(open_error);
-      for (const bench::AtlasRow& r : bench::EvaluateAtlasCells(spec, cells)) {
+      EvaluateByPose(spec, cells, [&](const bench::AtlasRow& r) {
         const std::string row = bench::AtlasCsvRow(r);
         if (g_terminate) Linger();
         partial->Append(row);
         if (++written == kill_after) std::raise(SIGKILL);
         reply += row + "\n";
-      }
+      });
     } catch (const std::exception& e) {  // I/O: the job cannot go on
       reply = std::string("io_error\n") + e.what();
     }
@@ -251,18 +266,13 @@ void ComputeLocally(const bench::AtlasSpec& spec, const std::string& dir,
                     std::map<std::int64_t, std::string>* rows,
                     Progress* progress) {
   bench::AtlasPartialFile partial(PartialOfRank(dir, 0));
-  const std::size_t step = spec.modes.size();  // a pose's cells at a time
-  for (std::size_t k = 0; k < todo.size(); k += step) {
+  EvaluateByPose(spec, todo, [&](const bench::AtlasRow& r) {
     if (g_terminate) ReportMissingAndExit(spec, dir, *rows, {});
-    const std::vector<std::int64_t> cells(
-        todo.begin() + k, todo.begin() + std::min(k + step, todo.size()));
-    for (const bench::AtlasRow& r : bench::EvaluateAtlasCells(spec, cells)) {
-      const std::string row = bench::AtlasCsvRow(r);
-      partial.Append(row);
-      (*rows)[r.cell.index] = row;
-      progress->Add(1);
-    }
-  }
+    const std::string row = bench::AtlasCsvRow(r);
+    partial.Append(row);
+    (*rows)[r.cell.index] = row;
+    progress->Add(1);
+  });
 }
 
 // Rank 0's part: resume, meta.json, dispatch, finish, stop the workers.
