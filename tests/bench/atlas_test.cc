@@ -241,17 +241,22 @@ TEST(AtlasShards, TornPartialLinesAreNeverReadAsRows) {
   fs::remove_all(root);
 }
 
-// A pose where the robot cannot stand is a row with its cause: a narrow
-// 5 cm spike under the front wheel (x = a = 0.25 m) leaves no consistent
-// contact.
-TEST(TraversabilityAtlas, PoseWithoutContactIsARowWithItsCause) {
-  const fs::path root = FreshTempDir("quasiroll_atlas_cause_");
-  const std::string scene = (root / "spike.yaml").string();
+// DIR/spike.yaml: a narrow 5 cm spike under the front wheel (x = a =
+// 0.25 m) at x = 0, which leaves no consistent contact; its path.
+std::string WriteSpikeScene(const fs::path& dir) {
+  const std::string scene = (dir / "spike.yaml").string();
   std::ofstream(scene)
       << "name: spike\nmode: paper\nmu: 0.5\n"
          "initial: {x: 0, y: 0, yaw: 0, joint_angles: [0, 0, 0, 0, 0, 0]}\n"
          "terrain: {type: gaussians, bumps: [{amplitude: 0.05, x: 0.27, y: 0, "
          "sigma: 0.01}]}\n";
+  return scene;
+}
+
+// A pose where the robot cannot stand is a row with its cause.
+TEST(TraversabilityAtlas, PoseWithoutContactIsARowWithItsCause) {
+  const fs::path root = FreshTempDir("quasiroll_atlas_cause_");
+  const std::string scene = WriteSpikeScene(root);
   AtlasSpec spec;
   spec.scene_path = scene;
   spec.scene = LoadScene(scene);
@@ -272,12 +277,7 @@ TEST(TraversabilityAtlas, PoseWithoutContactIsARowWithItsCause) {
 // for wall_s, whatever cells are grouped (a pose's modes split or not).
 TEST(TraversabilityAtlas, PosesSharedAcrossModesGiveTheRowsOfSingleCells) {
   const fs::path root = FreshTempDir("quasiroll_atlas_shared_");
-  const std::string scene = (root / "spike.yaml").string();
-  std::ofstream(scene)
-      << "name: spike\nmode: paper\nmu: 0.5\n"
-         "initial: {x: 0, y: 0, yaw: 0, joint_angles: [0, 0, 0, 0, 0, 0]}\n"
-         "terrain: {type: gaussians, bumps: [{amplitude: 0.05, x: 0.27, y: 0, "
-         "sigma: 0.01}]}\n";
+  const std::string scene = WriteSpikeScene(root);
   for (const AtlasSpec& spec : {SmallR1Spec(2), [&] {
                                   AtlasSpec s = SmallR1Spec(2);
                                   s.scene_path = scene;
