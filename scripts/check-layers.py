@@ -21,7 +21,7 @@ ALLOWED = {
     "integrators": {"core"},
     "bench/io": {"core"},
     "bench/harness": {"core", "bench/io"},
-    "bench/cluster": {"core", "bench/io", "bench/harness"},
+    "bench/cluster": {"core", "bench/io", "bench/harness", "bench/atlas"},
     "bench/atlas": {"core", "bench/io"},
     "bench/cli": {"core", "bench/io", "bench/harness", "bench/cluster",
                   "bench/atlas"},

@@ -157,42 +157,69 @@ Scene SceneAt(const AtlasSpec& spec, const AtlasCell& cell) {
   return scene;
 }
 
-AtlasRow EvaluateAtlasCell(const AtlasSpec& spec, const AtlasCell& cell) {
-  const auto start = std::chrono::steady_clock::now();
+namespace {
+
+using SteadyClock = std::chrono::steady_clock;
+
+double SecondsSince(SteadyClock::time_point start) {
+  return std::chrono::duration<double>(SteadyClock::now() - start).count();
+}
+
+// A pose's placement and its checks (steps 1-2 of docs/atlas.md, "What one
+// cell does"): they depend on (x, y, heading) only, not on the mode.
+struct Placement {
+  std::string status, detail;  // status "" = placed and valid
+  Configuration theta;
+  double z = kNaN, roll = kNaN, pitch = kNaN;
+};
+
+Placement PlaceAt(const KinematicModel& model, const Scene& scene) {
+  Placement pl;
+  try {
+    pl.theta = SolveInitialConfiguration(model, scene);
+  } catch (const GeometryError& e) {
+    pl.status = "no_contact";
+    pl.detail = e.what();
+    return pl;
+  }
+  Mat3 r;
+  Vec3 p;
+  model.PlatformPose(pl.theta, &r, &p);
+  const Vec3 rpy = RpyFromRotation(r);
+  pl.z = p(2);
+  pl.roll = rpy(0);
+  pl.pitch = rpy(1);
+  const ValidityReport validity = CheckValidity(model, pl.theta, true);
+  if (!validity.ok()) {
+    pl.status = "degenerate_contact";
+    pl.detail = validity.Describe();
+  }
+  return pl;
+}
+
+// Steps 3-4 for one mode at a placement (wall_s left 0).
+AtlasRow RowAt(const AtlasSpec& spec, const AtlasCell& cell,
+               const KinematicModel& model, const Placement& pl) {
   AtlasRow row;
   row.cell = cell;
   row.mu = spec.scene.mu;
   row.mu_min = row.margin = row.min_normal_force = kNaN;
-  row.z = row.roll = row.pitch = kNaN;
-  const Scene scene = SceneAt(spec, cell);
-  const KinematicModel model(scene.geometry, scene.terrain);
-  auto finish = [&](const char* status, std::string detail) {
-    row.status = status;
-    row.detail = std::move(detail);
-    row.wall_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-            .count();
+  row.z = pl.z;
+  row.roll = pl.roll;
+  row.pitch = pl.pitch;
+  if (!pl.status.empty()) {
+    row.status = pl.status;
+    row.detail = pl.detail;
     return row;
-  };
-  Configuration theta;
-  try {
-    theta = SolveInitialConfiguration(model, scene);
-  } catch (const GeometryError& e) {
-    return finish("no_contact", e.what());
   }
-  Mat3 r;
-  Vec3 p;
-  model.PlatformPose(theta, &r, &p);
-  const Vec3 rpy = RpyFromRotation(r);
-  row.z = p(2);
-  row.roll = rpy(0);
-  row.pitch = rpy(1);
-  const ValidityReport validity = CheckValidity(model, theta, true);
-  if (!validity.ok()) return finish("degenerate_contact", validity.Describe());
+  const Scene scene = SceneAt(spec, cell);
   QuasiStaticProblem problem(model, QuasiStaticParameters::FromScene(scene));
-  problem.SetConfiguration(theta);
-  if (!problem.StaticsFullRank())
-    return finish("singular_statics", "the statics rows are rank deficient");
+  problem.SetConfiguration(pl.theta);
+  if (!problem.StaticsFullRank()) {
+    row.status = "singular_statics";
+    row.detail = "the statics rows are rank deficient";
+    return row;
+  }
   int critical = -1;
   double fn_min = kNaN;
   row.mu_min = problem.MinimumFriction(&critical, &fn_min);
@@ -200,10 +227,48 @@ AtlasRow EvaluateAtlasCell(const AtlasSpec& spec, const AtlasCell& cell) {
   row.min_normal_force = fn_min;
   if (std::isinf(row.mu_min)) {
     row.mu_min = kNaN;
-    return finish("lift_off", "no statically admissible force without pulling");
+    row.status = "lift_off";
+    row.detail = "no statically admissible force without pulling";
+    return row;
   }
   row.margin = scene.mu - row.mu_min;
-  return finish("ok", "");
+  row.status = "ok";
+  return row;
+}
+
+}  // namespace
+
+AtlasRow EvaluateAtlasCell(const AtlasSpec& spec, const AtlasCell& cell) {
+  const auto start = SteadyClock::now();
+  const Scene scene = SceneAt(spec, cell);
+  const KinematicModel model(scene.geometry, scene.terrain);
+  AtlasRow row = RowAt(spec, cell, model, PlaceAt(model, scene));
+  row.wall_s = SecondsSince(start);
+  return row;
+}
+
+std::vector<AtlasRow> EvaluateAtlasCells(
+    const AtlasSpec& spec, const std::vector<std::int64_t>& cells) {
+  const auto nm = static_cast<std::int64_t>(spec.modes.size());
+  std::vector<AtlasRow> rows;
+  rows.reserve(cells.size());
+  for (std::size_t k = 0; k < cells.size();) {
+    // cells[k, end): consecutive cells of one pose.
+    std::size_t end = k + 1;
+    while (end < cells.size() && cells[end] / nm == cells[k] / nm) ++end;
+    const auto start = SteadyClock::now();
+    const AtlasCell first = CellAt(spec, cells[k]);
+    const Scene scene = SceneAt(spec, first);
+    const KinematicModel model(scene.geometry, scene.terrain);
+    const Placement pl = PlaceAt(model, scene);
+    const double shared = SecondsSince(start) / static_cast<double>(end - k);
+    for (; k < end; ++k) {
+      const auto own = SteadyClock::now();
+      rows.push_back(RowAt(spec, CellAt(spec, cells[k]), model, pl));
+      rows.back().wall_s = shared + SecondsSince(own);
+    }
+  }
+  return rows;
 }
 
 std::string AtlasCsvHeader() {
@@ -221,56 +286,80 @@ std::string AtlasCsvRow(const AtlasRow& row) {
        Num(row.pitch), Num(row.wall_s)});
 }
 
+AtlasCellRange ShardCells(std::int64_t cells, int index, int count) {
+  // q cells each, the first r shards one more: no product beyond `cells`.
+  const std::int64_t q = cells / count, r = cells % count;
+  const auto at = [&](std::int64_t i) { return i * q + std::min(i, r); };
+  return {at(index), at(index + 1)};
+}
+
+std::string AtlasShardDir(const std::string& out, int index, int count) {
+  return (fs::path(out) / "shards" /
+          (std::to_string(index) + "-of-" + std::to_string(count)))
+      .string();
+}
+
 namespace {
 
-// Rows appended as cells finish, so that a killed atlas resumes from them;
-// removed once atlas.csv is complete.
+// This process's partial file; MPI workers write atlas.partial.rank-R.csv
+// (quasiroll-mpi). Every atlas.partial*.csv of a directory is read on
+// resume and removed when atlas.csv is complete.
 constexpr const char* kPartialName = "atlas.partial.csv";
 // atlas.csv's `status` column (AtlasCsvHeader).
 constexpr std::size_t kStatusColumn = 5;
 
-// Rows of an existing atlas.csv (cell index -> the row's text), when its
-// meta.json names the same grid; throws when it names another.
-std::map<std::int64_t, std::string> ReadFinishedRows(const AtlasSpec& spec,
-                                                     const fs::path& out) {
-  std::map<std::int64_t, std::string> rows;
-  std::string text, partial, meta;
-  const bool have_csv = ReadTextFile((out / "atlas.csv").string(), &text);
-  const bool have_partial =
-      ReadTextFile((out / kPartialName).string(), &partial);
-  if (!have_csv && !have_partial) return rows;
-  if (!ReadTextFile((out / "meta.json").string(), &meta) ||
-      meta.find(CanonicalAtlasKey(spec)) == std::string::npos)
-    throw std::invalid_argument(
-        "--resume: " + (out / "atlas.csv").string() +
-        " belongs to another atlas grid (meta.json key differs from " +
-        CanonicalAtlasKey(spec) + ")");
-  // Every row is written with its newline: a last line without one was torn
-  // by the interruption and is dropped.
-  auto whole_lines = [](std::string* t) {
-    const std::size_t end = t->rfind('\n');
-    t->erase(end == std::string::npos ? 0 : end + 1);
-  };
-  whole_lines(&text);
-  whole_lines(&partial);
-  // atlas.csv has a header, the partial file (rows as they were finished)
-  // none; a row is the same text in both.
-  std::istringstream in(text + partial);
+std::vector<fs::path> PartialFiles(const fs::path& dir) {
+  std::vector<fs::path> files;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("atlas.partial", 0) == 0 && name.size() > 4 &&
+        name.compare(name.size() - 4, 4, ".csv") == 0)
+      files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// Drops a last line without its newline (torn by an interruption).
+void WholeLines(std::string* text) {
+  const std::size_t end = text->rfind('\n');
+  text->erase(end == std::string::npos ? 0 : end + 1);
+}
+
+// Is `fields` the row of cell `index` (its position columns as CellAt
+// writes them)? Guards against a torn line glued to the next row.
+bool RowOfCell(const AtlasSpec& spec, std::int64_t index,
+               const std::vector<std::string>& fields) {
+  const AtlasCell c = CellAt(spec, index);
+  return fields[1] == Num(c.x) && fields[2] == Num(c.y) &&
+         fields[3] == Num(c.heading) && fields[4] == ToString(c.mode);
+}
+
+}  // namespace
+
+void ParseAtlasRows(const AtlasSpec& spec, std::string text,
+                    std::map<std::int64_t, std::string>* rows) {
+  WholeLines(&text);
+  std::istringstream in(text);
   std::string line;
   const std::int64_t n = spec.CellCount();
   const std::size_t columns = SplitCsvLine(AtlasCsvHeader()).size();
   while (std::getline(in, line)) {
     if (line.empty() || line == AtlasCsvHeader()) continue;
     const std::vector<std::string> fields = SplitCsvLine(line);
-    if (fields.size() != columns) continue;
+    if (fields.size() != columns || fields[0].empty() ||
+        fields[0].find_first_not_of("0123456789") != std::string::npos)
+      continue;
     const std::int64_t index = std::stoll(fields[0]);
-    if (index >= 0 && index < n) rows[index] = line;
+    if (index < n && RowOfCell(spec, index, fields)) (*rows)[index] = line;
   }
-  return rows;
 }
 
+namespace {
+
 void WriteAtlasMeta(const AtlasSpec& spec, const fs::path& out,
-                    const AtlasSummary& s, int jobs) {
+                    const AtlasSummary& s, const AtlasOutputInfo& info) {
   JsonWriter j;
   j.BeginObject();
   j.Key("kind").Value("atlas");
@@ -283,14 +372,25 @@ void WriteAtlasMeta(const AtlasSpec& spec, const fs::path& out,
   j.Key("reused").Value(static_cast<double>(s.reused));
   j.Key("edge_cells").Value(spec.edge_cells);
   j.Key("edge_solves").Value(static_cast<double>(s.edge_solves));
-  j.Key("jobs").Value(jobs);
+  j.Key("jobs").Value(info.jobs);
   j.Key("wall_s").Value(s.wall_seconds);
   j.Key("host").Value(ThisMachine().hostname);
   j.Key("cpu_model").Value(ThisMachine().cpu);
   j.Key("library_versions");
   WriteLibraryVersions(&j);
-  j.EndObject();
-  AtomicWriteFile((out / "meta.json").string(), j.str() + "\n");
+  std::string text = j.str();  // members below are JSON text already
+  text += ",\"spec\":" + AtlasSpecJson(spec);
+  if (info.shard_count > 1) {
+    const AtlasCellRange r =
+        ShardCells(spec.CellCount(), info.shard_index, info.shard_count);
+    text += ",\"shard\":{\"index\":" + std::to_string(info.shard_index) +
+            ",\"count\":" + std::to_string(info.shard_count) +
+            ",\"first_cell\":" + std::to_string(r.begin) +
+            ",\"end_cell\":" + std::to_string(r.end) + "}";
+  }
+  for (const auto& [key, json] : info.extra_meta)
+    text += "," + JsonQuote(key) + ":" + json;
+  AtomicWriteFile((out / "meta.json").string(), text + "}\n");
 }
 
 // OUT/terrain.json for the maps' contours (the scene file's terrain; none
@@ -306,70 +406,104 @@ void WriteAtlasTerrain(const AtlasSpec& spec, const fs::path& out) {
   if (!json.empty()) AtomicWriteFile((out / "terrain.json").string(), json);
 }
 
+AtlasAxis AxisFromJson(const JsonValue* v, const std::string& path,
+                       const char* key) {
+  if (!v || !v->is_array() || v->items().size() != 3)
+    throw SceneError(path + ": spec." + key + ": [lo, hi, count] expected");
+  return {v->items()[0].number(), v->items()[1].number(),
+          static_cast<int>(v->items()[2].number())};
+}
+
 }  // namespace
 
-AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options) {
-  spec.Validate();
-  if (options.jobs < 1)
-    Fail("--jobs", "must be >= 1, got " + std::to_string(options.jobs));
-  const auto start = std::chrono::steady_clock::now();
-  const fs::path out(options.out_dir);
+std::map<std::int64_t, std::string> ReadFinishedAtlasRows(
+    const AtlasSpec& spec, const std::string& dir) {
+  std::map<std::int64_t, std::string> rows;
+  const fs::path out(dir);
+  std::string text, meta;
+  const bool have_csv = ReadTextFile((out / "atlas.csv").string(), &text);
+  const std::vector<fs::path> partials = PartialFiles(out);
+  if (!have_csv && partials.empty()) return rows;
+  if (!ReadTextFile((out / "meta.json").string(), &meta) ||
+      meta.find(JsonQuote(CanonicalAtlasKey(spec))) == std::string::npos)
+    throw std::invalid_argument(
+        "--resume: " + (out / "atlas.csv").string() +
+        " belongs to another atlas grid (meta.json key differs from " +
+        CanonicalAtlasKey(spec) + ")");
+  // A row is the same text in atlas.csv (with a header) and in a partial
+  // file (rows as they were finished, none).
+  ParseAtlasRows(spec, std::move(text), &rows);
+  for (const fs::path& p : partials) {
+    std::string partial;
+    if (ReadTextFile(p.string(), &partial))
+      ParseAtlasRows(spec, std::move(partial), &rows);
+  }
+  return rows;
+}
+
+AtlasPartialFile::AtlasPartialFile(std::string path) : path_(std::move(path)) {
+  std::error_code ec;
+  if (fs::is_regular_file(path_, ec)) {
+    std::string text;
+    if (ReadTextFile(path_, &text) && !text.empty() && text.back() != '\n') {
+      WholeLines(&text);
+      fs::resize_file(path_, text.size());
+    }
+  }
+  out_.open(path_, std::ios::app);
+  if (!out_) throw std::runtime_error(path_ + ": cannot open for writing");
+}
+
+void AtlasPartialFile::Append(const std::string& row) {
+  out_ << row << '\n' << std::flush;
+  if (!out_) throw std::runtime_error(path_ + ": write failed (disk full?)");
+}
+
+void BeginAtlasOutput(const AtlasSpec& spec, const std::string& dir,
+                      bool resume, const AtlasOutputInfo& info) {
+  const fs::path out(dir);
   fs::create_directories(out);
-  // One writer per directory (bench/io/output_lock.h), held to the end.
-  const auto lock = LockOutputDirectory(out.string(), "", "--out");
+  if (!resume) {  // rows of an earlier run must not be taken for this one's
+    // (only files hold rows: a device stays, e.g. /dev/full in a test)
+    for (const fs::path& p : PartialFiles(out))
+      if (fs::is_regular_file(p)) fs::remove(p);
+    fs::remove(out / "atlas.csv");
+    fs::remove(out / "edge.csv");
+  }
   AtlasSummary s;
   s.cells = spec.CellCount();
-  std::map<std::int64_t, std::string> done;
-  if (options.resume) done = ReadFinishedRows(spec, out);
-  s.reused = static_cast<std::int64_t>(done.size());
-  std::vector<std::int64_t> todo;
-  for (std::int64_t i = 0; i < s.cells; ++i)
-    if (!done.count(i)) todo.push_back(i);
-  std::vector<std::string> computed(todo.size());
-  std::atomic<std::size_t> next{0};
-  std::atomic<std::int64_t> finished{0};
-  std::mutex progress_mutex;
-  WriteAtlasMeta(spec, out, s, options.jobs);  // the key, for a resume
-  const std::string partial_path = (out / kPartialName).string();
-  std::ofstream partial(partial_path, std::ios::app);
-  std::string write_error;
-  auto worker = [&] {
-    for (std::size_t k = next++; k < todo.size(); k = next++) {
-      computed[k] = AtlasCsvRow(EvaluateAtlasCell(spec, CellAt(spec, todo[k])));
-      {
-        std::lock_guard<std::mutex> lock(progress_mutex);
-        partial << computed[k] << '\n' << std::flush;
-        if (!partial && write_error.empty())
-          write_error = partial_path + ": write failed (disk full?)";
-      }
-      const std::int64_t f = ++finished;
-      if (options.progress &&
-          (f % 256 == 0 || f == (std::int64_t)todo.size())) {
-        std::lock_guard<std::mutex> lock(progress_mutex);
-        std::fprintf(stderr, "\ratlas: %lld / %zu cells", (long long)f,
-                     todo.size());
-      }
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int t = 1; t < options.jobs; ++t) threads.emplace_back(worker);
-  worker();
-  for (std::thread& t : threads) t.join();
-  if (options.progress) std::fprintf(stderr, "\n");
-  if (!write_error.empty()) throw std::runtime_error(write_error);
-  for (std::size_t k = 0; k < todo.size(); ++k) done[todo[k]] = computed[k];
-  s.computed = static_cast<std::int64_t>(todo.size());
+  WriteAtlasMeta(spec, out, s, info);  // the key, for a resume
+}
+
+AtlasSummary FinishAtlasOutput(const AtlasSpec& spec, const std::string& dir,
+                               const std::map<std::int64_t, std::string>& rows,
+                               AtlasSummary s, const AtlasOutputInfo& info) {
+  const auto start = std::chrono::steady_clock::now();
+  const fs::path out(dir);
+  const AtlasCellRange range =
+      ShardCells(spec.CellCount(), info.shard_index, info.shard_count);
   std::string csv = AtlasCsvHeader() + "\n";
   std::vector<std::int64_t> ok_cells;
-  for (const auto& [index, line] : done) {
-    csv += line + "\n";
-    if (SplitCsvLine(line)[kStatusColumn] == "ok") ok_cells.push_back(index);
+  std::int64_t missing = 0, first_missing = -1;
+  for (std::int64_t i = range.begin; i < range.end; ++i) {
+    const auto it = rows.find(i);
+    if (it == rows.end()) {
+      if (missing++ == 0) first_missing = i;
+      continue;
+    }
+    csv += it->second + "\n";
+    if (SplitCsvLine(it->second)[kStatusColumn] == "ok") ok_cells.push_back(i);
   }
+  if (missing > 0)
+    throw std::invalid_argument(
+        "atlas: " + std::to_string(missing) + " of " +
+        std::to_string(range.end - range.begin) +
+        " cells have no row (first: " + std::to_string(first_missing) + ")");
+  s.cells = range.end - range.begin;
   s.ok = static_cast<std::int64_t>(ok_cells.size());
   AtomicWriteFile((out / "atlas.csv").string(), csv);
-  partial.close();
-  fs::remove(partial_path);
-  if (spec.edge_cells > 0) {
+  for (const fs::path& p : PartialFiles(out)) fs::remove(p);
+  if (spec.edge_cells > 0 && info.shard_count == 1) {
     EdgeOptions edge;
     edge.cells = spec.edge_cells;
     std::string text = EdgeCsvHeader() + "\n";
@@ -380,12 +514,144 @@ AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options) {
     }
     AtomicWriteFile((out / "edge.csv").string(), text);
   }
+  s.wall_seconds +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
+  WriteAtlasMeta(spec, out, s, info);
+  WriteAtlasTerrain(spec, out);
+  return s;
+}
+
+std::string AtlasSpecJson(const AtlasSpec& spec) {
+  JsonWriter j;
+  j.BeginObject();
+  j.Key("scene").Value(
+      fs::absolute(spec.scene_path).lexically_normal().string());
+  for (const auto& [key, a] :
+       {std::pair<const char*, AtlasAxis>{"x", spec.x},
+        std::pair<const char*, AtlasAxis>{"y", spec.y}}) {
+    j.Key(key).BeginArray().Value(a.lo).Value(a.hi).Value(a.count).EndArray();
+  }
+  j.Key("headings").Value(spec.headings);
+  j.Key("modes").BeginArray();
+  for (ActuationMode m : spec.modes) j.Value(ToString(m));
+  j.EndArray();
+  j.Key("edge_cells").Value(spec.edge_cells);
+  j.EndObject();
+  return j.str();
+}
+
+AtlasSpec SpecFromAtlasMeta(const JsonValue& meta, const std::string& path) {
+  const JsonValue* v = meta.Find("spec");
+  const JsonValue* key = meta.Find("key");
+  if (!v || !v->is_object() || !key || !key->is_string())
+    throw SceneError(path +
+                     ": no atlas spec or key (made by an older quasiroll?)");
+  AtlasSpec spec;
+  try {
+    spec.scene_path = v->Find("scene") ? v->Find("scene")->str() : "";
+    spec.x = AxisFromJson(v->Find("x"), path, "x");
+    spec.y = AxisFromJson(v->Find("y"), path, "y");
+    spec.headings = static_cast<int>(v->Find("headings")->number());
+    spec.modes.clear();
+    for (const JsonValue& m : v->Find("modes")->items())
+      spec.modes.push_back(m.str() == "pvc" ? ActuationMode::kPvc
+                                            : ActuationMode::kPaper);
+    spec.edge_cells = static_cast<int>(v->Find("edge_cells")->number());
+  } catch (const JsonError& e) {
+    throw SceneError(path + ": spec: " + e.what());
+  }
+  spec.scene = LoadScene(spec.scene_path);
+  const std::string k = CanonicalAtlasKey(spec);
+  if (k != key->str())
+    throw SceneError(path + ": key: the spec it records gives " + k +
+                     " now (scene file " + spec.scene_path +
+                     " changed?), meta.json has " + key->str());
+  return spec;
+}
+
+AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options) {
+  spec.Validate();
+  if (options.jobs < 1)
+    Fail("--jobs", "must be >= 1, got " + std::to_string(options.jobs));
+  if (options.shard_count < 1 || options.shard_index < 0 ||
+      options.shard_index >= options.shard_count)
+    Fail("--shard", "must be I/N with 0 <= I < N, got " +
+                        std::to_string(options.shard_index) + "/" +
+                        std::to_string(options.shard_count));
+  const auto start = std::chrono::steady_clock::now();
+  AtlasOutputInfo info;
+  info.jobs = options.jobs;
+  info.shard_index = options.shard_index;
+  info.shard_count = options.shard_count;
+  const std::string out =
+      options.shard_count > 1
+          ? AtlasShardDir(options.out_dir, options.shard_index,
+                          options.shard_count)
+          : options.out_dir;
+  const AtlasCellRange range =
+      ShardCells(spec.CellCount(), options.shard_index, options.shard_count);
+  // One writer per directory (bench/io/output_lock.h), held to the end and
+  // taken before a resume reads: DIR, or DIR shared and the shard's own.
+  const std::vector<OutputLock> locks = LockOutputDirectory(
+      options.out_dir, options.shard_count > 1 ? out : "", "--out");
+  std::map<std::int64_t, std::string> done;
+  if (options.resume) done = ReadFinishedAtlasRows(spec, out);
+  BeginAtlasOutput(spec, out, options.resume, info);
+  AtlasSummary s;
+  std::vector<std::int64_t> todo;
+  for (std::int64_t i = range.begin; i < range.end; ++i)
+    if (done.count(i))
+      ++s.reused;
+    else
+      todo.push_back(i);
+  // Units of work: the cells of one pose (they share its placement).
+  const auto nm = static_cast<std::int64_t>(spec.modes.size());
+  std::vector<std::vector<std::int64_t>> units;
+  for (std::int64_t i : todo)
+    if (units.empty() || units.back().back() / nm != i / nm)
+      units.push_back({i});
+    else
+      units.back().push_back(i);
+  std::map<std::int64_t, std::string> computed;
+  std::atomic<std::size_t> next{0};
+  std::int64_t finished = 0;
+  std::mutex mutex;
+  AtlasPartialFile partial((fs::path(out) / kPartialName).string());
+  std::string write_error;
+  auto worker = [&] {
+    for (std::size_t u = next++; u < units.size(); u = next++) {
+      const std::vector<AtlasRow> rows = EvaluateAtlasCells(spec, units[u]);
+      std::lock_guard<std::mutex> lock(mutex);
+      for (const AtlasRow& row : rows) {
+        if (!write_error.empty()) return;
+        const std::string& line = computed[row.cell.index] = AtlasCsvRow(row);
+        try {
+          partial.Append(line);
+        } catch (const std::runtime_error& e) {
+          write_error = e.what();
+          return;
+        }
+        ++finished;
+        if (options.progress &&
+            (finished % 256 == 0 || finished == (std::int64_t)todo.size()))
+          std::fprintf(stderr, "\ratlas: %lld / %zu cells", (long long)finished,
+                       todo.size());
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 1; t < options.jobs; ++t) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
+  if (options.progress) std::fprintf(stderr, "\n");
+  if (!write_error.empty()) throw std::runtime_error(write_error);
+  done.merge(computed);
+  s.computed = static_cast<std::int64_t>(todo.size());
   s.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();
-  WriteAtlasMeta(spec, out, s, options.jobs);
-  WriteAtlasTerrain(spec, out);
-  return s;
+  return FinishAtlasOutput(spec, out, done, s, info);
 }
 
 }  // namespace quasiroll::bench

@@ -17,9 +17,13 @@
 #pragma once
 
 #include <cstdint>
+#include <fstream>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "quasiroll/bench/io/json_reader.h"
 #include "quasiroll/core/scene.h"
 
 namespace quasiroll::bench {
@@ -79,13 +83,36 @@ struct AtlasRow {
 
 // Evaluates one cell (allocation aside, independent of every other cell).
 AtlasRow EvaluateAtlasCell(const AtlasSpec& spec, const AtlasCell& cell);
+// Evaluates cells given by index; consecutive cells of one pose (its modes)
+// share the placement and its checks, which do not depend on the mode (half
+// the cost of a cell on R1). Row k equals EvaluateAtlasCell(spec,
+// CellAt(spec, cells[k])) but for wall_s: the shared time is split evenly
+// among the pose's rows.
+std::vector<AtlasRow> EvaluateAtlasCells(
+    const AtlasSpec& spec, const std::vector<std::int64_t>& cells);
 
 struct AtlasOptions {
   std::string out_dir;
   int jobs = 1;
   bool resume = false;
   int progress = 0;  // 0 none, 1 a line on stderr
+  // --shard I/N (docs/cluster.md, "Atlas"): compute only ShardCells(I, N)
+  // into OUT/shards/I-of-N/ (atlas.csv, meta.json, its partial file), no
+  // edge study (it needs every cell: `quasiroll merge` runs it). count 1 =
+  // the whole atlas into OUT.
+  int shard_index = 0, shard_count = 1;
 };
+
+// The cells of shard `index` of `count`: a contiguous index range,
+// [i q + min(i, r), (i + 1) q + min(i + 1, r)) with q = cells / count and
+// r = cells mod count: the first r shards have q + 1 cells, the others q,
+// and together they cover every cell once.
+struct AtlasCellRange {
+  std::int64_t begin = 0, end = 0;
+};
+AtlasCellRange ShardCells(std::int64_t cells, int index, int count);
+// "OUT/shards/I-of-N" (as `bench --shard` names its shard directories).
+std::string AtlasShardDir(const std::string& out, int index, int count);
 
 struct AtlasSummary {
   std::int64_t cells = 0, computed = 0, reused = 0;
@@ -100,6 +127,74 @@ struct AtlasSummary {
 // With `resume`, rows of an existing atlas.csv of the same grid are kept and
 // only the missing cells computed; a different grid is an error.
 AtlasSummary RunAtlas(const AtlasSpec& spec, const AtlasOptions& options);
+
+// --- The steps of RunAtlas, shared by shards, quasiroll merge and
+// quasiroll-mpi (docs/cluster.md) so that every path writes the same files.
+
+// Finished rows in DIR (cell index -> the row's text, without newline):
+// atlas.csv and every atlas.partial*.csv (this process's, an MPI worker's),
+// when DIR/meta.json names the same grid; throws std::invalid_argument
+// naming --resume and both keys when it names another. A row whose
+// position columns differ from CellAt (a torn or foreign line) is ignored,
+// as is a last line without its newline.
+std::map<std::int64_t, std::string> ReadFinishedAtlasRows(
+    const AtlasSpec& spec, const std::string& dir);
+
+// Adds the rows in `text` (atlas.csv or a partial file, or the end of one)
+// to *rows with the rules of ReadFinishedAtlasRows: a last line without its
+// newline, a line with other columns or position columns other than its
+// cell's are ignored.
+void ParseAtlasRows(const AtlasSpec& spec, std::string text,
+                    std::map<std::int64_t, std::string>* rows);
+
+// Appends rows to a partial file, one flushed line each, so that a killed
+// process leaves every finished row on disk. Opening drops a torn last line
+// (one without its newline) so that the next row starts on a line of its
+// own. Append throws std::runtime_error naming the file on a failed write.
+class AtlasPartialFile {
+ public:
+  explicit AtlasPartialFile(std::string path);
+  void Append(const std::string& row);
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::ofstream out_;
+};
+
+// Starts an output directory: creates it, removes stale partial files
+// unless `resume`, and writes meta.json with the grid's key (so that a
+// killed run can resume).
+// How the rows of an output directory were made (its meta.json).
+struct AtlasOutputInfo {
+  int jobs = 1;
+  // A shard writes only the rows of ShardCells(index, count), "shard" in
+  // meta.json, and no edge study.
+  int shard_index = 0, shard_count = 1;
+  // Further meta.json members, key -> JSON text ("mpi", "merge").
+  std::vector<std::pair<std::string, std::string>> extra_meta;
+};
+
+void BeginAtlasOutput(const AtlasSpec& spec, const std::string& dir,
+                      bool resume, const AtlasOutputInfo& info);
+
+// Finishes DIR with the row of every cell (of the shard's cells, for a
+// shard): atlas.csv (in cell index order), edge.csv when spec.edge_cells > 0
+// (not for a shard), meta.json (the summary: `summary.wall_seconds` so far,
+// plus the time spent here), terrain.json; removes the partial files. Rows
+// outside the cells are ignored. Throws std::invalid_argument naming how
+// many cells are missing and the first when one has no row. Returns the
+// summary with `cells`, `ok`, `edge_solves` and `wall_seconds` set.
+AtlasSummary FinishAtlasOutput(const AtlasSpec& spec, const std::string& dir,
+                               const std::map<std::int64_t, std::string>& rows,
+                               AtlasSummary summary,
+                               const AtlasOutputInfo& info);
+
+// The spec as meta.json's "spec" member records it (scene: an absolute
+// path), and back; SpecFromAtlasMeta loads the scene and throws SceneError
+// naming the file when it is missing or the grid's key differs from `key`.
+std::string AtlasSpecJson(const AtlasSpec& spec);
+AtlasSpec SpecFromAtlasMeta(const JsonValue& meta, const std::string& path);
 
 // atlas.csv: the header line and one row (no trailing newline).
 std::string AtlasCsvHeader();

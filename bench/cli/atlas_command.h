@@ -21,6 +21,7 @@ struct AtlasArgs {
   std::optional<int> jobs;  // default: hardware concurrency
   bool resume = false;
   std::string progress = "auto";
+  std::string shard;  // "I/N" (docs/cluster.md), "" = the whole atlas
 };
 
 class AtlasCommand {

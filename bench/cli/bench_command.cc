@@ -161,6 +161,14 @@ int RunMerge(const MergeArgs& args) {
   const bench::MergeSummary s = bench::MergeOutputs(options);
   std::string hosts;
   for (const std::string& h : s.hosts) hosts += (hosts.empty() ? "" : ", ") + h;
+  if (s.atlas) {
+    std::fprintf(
+        stderr,
+        "merge: atlas of %d cells from %d meta.json, %d not ok; hosts: %s\n",
+        s.runs, s.metas, s.failures, hosts.c_str());
+    std::printf("%s/atlas.csv\n", args.out.c_str());
+    return kExitOk;
+  }
   std::fprintf(stderr,
                "merge: %d runs from %d meta.json (%d duplicates, %d of them "
                "differing), %d not successful; hosts: %s\n",

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "quasiroll/bench/atlas/atlas.h"
 #include "quasiroll/bench/harness/harness.h"
 #include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/bench/io/csv.h"
@@ -122,15 +123,15 @@ std::vector<Meta> CollectMetas(const std::vector<std::string>& inputs) {
 }
 
 // Keys that must be byte-identical in every input: what was run, with what.
-void CheckAgreement(const std::vector<Meta>& metas) {
-  for (const char* key : {"suite_hash", "commit", "build", "library_versions",
-                          "numerical_libraries", "reference", "filter"}) {
+void CheckAgreement(const std::vector<Meta>& metas,
+                    const std::vector<std::string>& keys) {
+  for (const std::string& key : keys) {
     const std::string* first = metas[0].Get(key);
     for (std::size_t k = 1; k < metas.size(); ++k) {
       const std::string* v = metas[k].Get(key);
       if ((first == nullptr) != (v == nullptr) || (first && *first != *v))
-        throw SceneError(std::string("merge: inputs disagree on ") + key +
-                         ": " + metas[0].path + " has " +
+        throw SceneError("merge: inputs disagree on " + key + ": " +
+                         metas[0].path + " has " +
                          (first ? *first : "(no such key)") + ", " +
                          metas[k].path + " has " + (v ? *v : "(no such key)") +
                          " (merge only runs of one suite, commit and build)");
@@ -405,15 +406,17 @@ std::string MergedOptionsJson(const Meta& tmpl, const std::string& out) {
 // The "merge" member: which inputs went in (with their invocation keys, so a
 // merged directory still tells where each part ran) and the duplicate counts.
 std::string MergeRecordJson(const std::vector<Meta>& metas,
-                            const MergeSummary& summary) {
+                            const MergeSummary& summary,
+                            const std::vector<std::string>& keys = {
+                                "shard", "machine", "jobs", "start_time",
+                                "end_time", "wall_s", "runs_selected",
+                                "runs_executed", "runs_resumed", "complete"}) {
   std::string merge = "{\"inputs\":[";
   for (std::size_t k = 0; k < metas.size(); ++k) {
     const Meta& m = metas[k];
     if (k) merge += ",";
     merge += "{\"meta\":" + JsonQuote(m.path);
-    for (const char* key :
-         {"shard", "machine", "jobs", "start_time", "end_time", "wall_s",
-          "runs_selected", "runs_executed", "runs_resumed", "complete"}) {
+    for (const std::string& key : keys) {
       const std::string* v = m.Get(key);
       merge += std::string(",") + JsonQuote(key) + ":" + (v ? *v : "null");
     }
@@ -474,12 +477,129 @@ void WriteMergedMeta(const fs::path& out, const std::vector<Meta>& metas,
   AtomicWriteFile((out / "meta.json").string(), meta);
 }
 
+// ---------------------------------------------------------- atlases ----
+
+// The atlas outputs to merge: an input's shards/*/meta.json when it has
+// any (its own meta.json is then an earlier merge's), else its meta.json.
+std::vector<Meta> AtlasInputs(const std::vector<Meta>& metas) {
+  std::set<std::string> with_shards;
+  for (const Meta& m : metas) {
+    const fs::path dir = fs::path(m.path).parent_path();
+    if (dir.parent_path().filename() == "shards")
+      with_shards.insert(dir.parent_path().parent_path().string());
+  }
+  std::vector<Meta> inputs;
+  for (const Meta& m : metas) {
+    if (m.Str("kind") != "atlas")
+      throw SceneError("merge: " + m.path + " is not an atlas's meta.json (" +
+                       metas[0].path +
+                       " is): merge atlases and suites separately");
+    const fs::path dir = fs::path(m.path).parent_path();
+    if (dir.parent_path().filename() != "shards" &&
+        with_shards.count(dir.string()))
+      continue;
+    inputs.push_back(m);
+  }
+  return inputs;
+}
+
+// Rows of every input's atlas.csv by cell index; a cell in two inputs is an
+// error naming both files (shards of different counts in one directory?).
+std::map<std::int64_t, std::string> CollectAtlasRows(
+    const std::vector<Meta>& inputs, std::int64_t cells, std::FILE* log) {
+  std::map<std::int64_t, std::string> rows;
+  std::map<std::int64_t, std::string> source;
+  for (const Meta& m : inputs) {
+    const fs::path csv = fs::path(m.path).parent_path() / "atlas.csv";
+    std::string text;
+    if (!ReadTextFile(csv.string(), &text)) {
+      if (log)
+        std::fprintf(log,
+                     "merge: warning: %s is missing (shard not finished?); "
+                     "its cells count as missing\n",
+                     csv.c_str());
+      continue;
+    }
+    std::istringstream in(text);
+    std::string line;
+    std::getline(in, line);
+    if (line != AtlasCsvHeader())
+      throw SceneError("merge: " + csv.string() +
+                       " has other columns than this quasiroll writes (made "
+                       "by another version?)");
+    while (std::getline(in, line)) {
+      const std::int64_t index = std::stoll(SplitCsvLine(line).at(0));
+      if (index < 0 || index >= cells)
+        throw SceneError("merge: " + csv.string() + ": cell " +
+                         std::to_string(index) + " outside the grid's " +
+                         std::to_string(cells) + " cells");
+      const auto [it, inserted] = rows.emplace(index, line);
+      if (!inserted)
+        throw SceneError("merge: cell " + std::to_string(index) +
+                         " is in both " + source[index] + " and " +
+                         csv.string() +
+                         " (shards of different counts? merge one set)");
+      source[index] = csv.string();
+    }
+  }
+  return rows;
+}
+
+// An atlas (docs/cluster.md, "Atlas"): the inputs agree on the grid and the
+// commit, every cell has exactly one row; then the steps of a one-process
+// atlas's end (FinishAtlasOutput: atlas.csv, the edge study, meta.json,
+// terrain.json), so the result is that of one process but for wall_s.
+MergeSummary MergeAtlas(const MergeOptions& options,
+                        const std::vector<Meta>& metas) {
+  const std::vector<Meta> inputs = AtlasInputs(metas);
+  CheckAgreement(inputs, {"key", "commit"});
+  const AtlasSpec spec = SpecFromAtlasMeta(inputs[0].doc, inputs[0].path);
+  const std::int64_t cells = spec.CellCount();
+  const auto rows = CollectAtlasRows(inputs, cells, options.log);
+  if (static_cast<std::int64_t>(rows.size()) < cells) {
+    std::int64_t first = 0;
+    while (rows.count(first)) ++first;
+    throw SceneError(
+        "merge: " +
+        std::to_string(cells - static_cast<std::int64_t>(rows.size())) +
+        " of " + std::to_string(cells) +
+        " atlas cells have no row in the inputs (first: " +
+        std::to_string(first) +
+        "); run the shards that hold them again with --resume, then merge");
+  }
+  AtlasSummary s;
+  MergeSummary summary;
+  std::set<std::string> hosts;
+  for (const Meta& m : inputs) {
+    s.computed += static_cast<std::int64_t>(NumberOr(m.Get("computed"), 0));
+    s.reused += static_cast<std::int64_t>(NumberOr(m.Get("reused"), 0));
+    s.wall_seconds += NumberOr(m.Get("wall_s"), 0);
+    hosts.insert(m.Str("host"));
+  }
+  summary.hosts.assign(hosts.begin(), hosts.end());
+  summary.metas = static_cast<int>(inputs.size());
+  AtlasOutputInfo info;
+  info.jobs = static_cast<int>(NumberOr(inputs[0].Get("jobs"), 1));
+  info.extra_meta = {
+      {"merge", MergeRecordJson(inputs, summary,
+                                {"shard", "host", "jobs", "wall_s", "cells",
+                                 "computed", "reused"})}};
+  fs::create_directories(options.out);
+  const AtlasSummary done = FinishAtlasOutput(spec, options.out, rows, s, info);
+  summary.runs = static_cast<int>(done.cells);
+  summary.failures = static_cast<int>(done.cells - done.ok);
+  summary.atlas = true;
+  return summary;
+}
+
 }  // namespace
 
 MergeSummary MergeOutputs(const MergeOptions& options) {
   if (options.inputs.empty()) throw SceneError("merge: no input directory");
   const std::vector<Meta> metas = CollectMetas(options.inputs);
-  CheckAgreement(metas);
+  if (metas[0].Str("kind") == "atlas") return MergeAtlas(options, metas);
+  CheckAgreement(metas, {"suite_hash", "commit", "build", "library_versions",
+                         "numerical_libraries", "reference", "filter"});
   MergeSummary summary;
   summary.metas = static_cast<int>(metas.size());
 

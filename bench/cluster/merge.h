@@ -1,6 +1,7 @@
 // `quasiroll merge DIR [DIR...] --out DIR` (docs/cluster.md): joins the
 // output of shards (bench --shard), partial runs (--filter) and MPI runs of
-// one suite into the runs.csv and meta.json a one-machine run writes.
+// one suite into the runs.csv and meta.json a one-machine run writes; and
+// the shards of an atlas (atlas --shard) into its atlas.csv.
 #pragma once
 
 #include <cstdio>
@@ -26,6 +27,10 @@ struct MergeSummary {
                        // columns (a warning each)
   int failures = 0;    // rows whose status is not "success"
   std::vector<std::string> hosts;  // distinct `host` values of the rows
+  // The inputs were atlas outputs (quasiroll atlas --shard, quasiroll-mpi
+  // atlas): `runs` counts cells, `failures` cells not "ok", and OUT has
+  // atlas.csv, meta.json and (with an edge study) edge.csv.
+  bool atlas = false;
 };
 
 // meta.json keys that describe how, where and when a run was made, not what
@@ -36,7 +41,11 @@ const std::vector<std::string>& InvocationMetaKeys();
 // column is byte-identical between a merged and a one-machine run.
 const std::vector<std::string>& TimingAndHostColumns();
 
-// Merges. Throws SceneError (one line naming the file, the key and both
+// Merges. Atlas directories (meta.json "kind": "atlas") are merged as
+// atlases (docs/cluster.md, "Atlas"): same grid key and commit, every cell
+// exactly once (else a SceneError naming how many are missing and the
+// first), then atlas.csv, edge.csv and meta.json as one process writes them.
+// Throws SceneError (one line naming the file, the key and both
 // values) when the inputs disagree on the suite hash, commit, library
 // versions, numerical libraries, reference settings or filter, when the
 // suite file does not match, or when selected runs are missing (naming how

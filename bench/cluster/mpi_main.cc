@@ -18,9 +18,11 @@
 // Idle ranks do not spin: Open MPI's blocking receive busy-polls (a waiting
 // rank would burn a core), so every wait here is MPI_Iprobe plus a sleep
 // that grows from 50 us to 2 ms (measured CPU of idle ranks: DIR/mpi.json,
-// docs/cluster.md). Everything MPI stays in this file.
+// docs/cluster.md). Everything MPI stays in this file, the helpers both
+// commands share (mpi_support.cc) and the atlas command (mpi_atlas.cc):
+//
+//   mpirun -np K quasiroll-mpi atlas --spec FILE --out DIR [--resume]
 #include <mpi.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -38,6 +40,7 @@
 #include <thread>
 #include <vector>
 
+#include "quasiroll/bench/cluster/mpi_internal.h"
 #include "quasiroll/bench/harness/harness.h"
 #include "quasiroll/bench/harness/shard.h"
 #include "quasiroll/bench/harness/suite.h"
@@ -53,63 +56,9 @@ namespace quasiroll::mpi {
 namespace {
 
 using bench::ReferenceJob;
-using Clock = std::chrono::steady_clock;
 
 enum Tag : int { kTagTask = 1, kTagResult = 2, kTagStats = 3 };
 enum TaskKind : int { kReference = 0, kRun = 1, kStop = 2 };
-
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
-
-double CpuSeconds() {
-  rusage u{};
-  ::getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
-         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
-
-// Time and CPU time of this rank, in total and while waiting for messages.
-struct RankStats {
-  Clock::time_point start = Clock::now();
-  double cpu_start = CpuSeconds();
-  double idle_wall = 0, idle_cpu = 0;
-  int tasks = 0;
-  double busy_wall = 0;
-};
-
-// Waits for a message from `source` with `tag` without spinning: MPI_Iprobe,
-// then sleep 50 us, doubling up to 2 ms. Returns its status.
-MPI_Status WaitForMessage(int source, int tag, RankStats* stats) {
-  const auto t0 = Clock::now();
-  const double c0 = CpuSeconds();
-  int flag = 0;
-  MPI_Status status{};
-  std::chrono::microseconds pause(50);
-  for (;;) {
-    MPI_Iprobe(source, tag, MPI_COMM_WORLD, &flag, &status);
-    if (flag) break;
-    std::this_thread::sleep_for(pause);
-    pause = std::min(pause * 2, std::chrono::microseconds(2000));
-  }
-  stats->idle_wall += Seconds(t0);
-  stats->idle_cpu += CpuSeconds() - c0;
-  return status;
-}
-
-std::string ReceiveString(const MPI_Status& probed) {
-  int count = 0;
-  MPI_Get_count(&probed, MPI_CHAR, &count);
-  std::string text(static_cast<std::size_t>(count), '\0');
-  MPI_Recv(text.data(), count, MPI_CHAR, probed.MPI_SOURCE, probed.MPI_TAG,
-           MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-  return text;
-}
-
-void SendString(const std::string& text, int dest, int tag) {
-  MPI_Send(text.data(), static_cast<int>(text.size()), MPI_CHAR, dest, tag,
-           MPI_COMM_WORLD);
-}
 
 void SendTask(int kind, int grid_index, int dest) {
   const int task[2] = {kind, grid_index};
@@ -321,82 +270,13 @@ struct Args {
   bool resume = false;
 };
 
-// Every rank reports whether it succeeded; true if all did.
-bool AllRanksOk(bool ok) {
-  int mine = ok ? 1 : 0, all = 0;
-  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-  return all == 1;
-}
-
-// Can every rank read a file rank 0 wrote into DIR? (Workers write their
-// trajectories there and rank 0 relies on them for --resume.)
-bool SharedDirectory(const std::string& dir, int rank) {
-  std::string token(32, '\0');
-  if (rank == 0) {
-    std::random_device rd;
-    std::snprintf(token.data(), token.size(), "%08x%08x", rd(), rd());
-    AtomicWriteFile(dir + "/.mpi-probe", token);
-  }
-  MPI_Bcast(token.data(), static_cast<int>(token.size()), MPI_CHAR, 0,
-            MPI_COMM_WORLD);
-  std::ifstream in(dir + "/.mpi-probe", std::ios::binary);
-  std::string seen((std::istreambuf_iterator<char>(in)), {});
-  const bool ok = seen == token;
-  if (!ok)
-    std::fprintf(stderr,
-                 "error: rank %d on %s cannot see %s/.mpi-probe that rank 0 "
-                 "wrote: --out must be on a file system shared by all ranks\n",
-                 rank, ThisMachine().hostname.c_str(), dir.c_str());
-  const bool all = AllRanksOk(ok);
-  if (rank == 0) std::remove((dir + "/.mpi-probe").c_str());
-  return all;
-}
-
-void WriteRankStats(const std::string& dir,
-                    const std::vector<std::string>& rows) {
-  std::string json = "{\"ranks\":[";
-  for (std::size_t k = 0; k < rows.size(); ++k)
-    json += (k ? "," : "") + rows[k];
-  json += "]}\n";
-  AtomicWriteFile(dir + "/mpi.json", json);
-}
-
-std::string StatsJson(int rank, const RankStats& s) {
-  JsonWriter w;
-  w.BeginObject();
-  w.Key("rank").Value(rank);
-  w.Key("host").Value(ThisMachine().hostname);
-  w.Key("tasks").Value(s.tasks);
-  w.Key("wall_s").Value(Seconds(s.start));
-  w.Key("cpu_s").Value(CpuSeconds() - s.cpu_start);
-  w.Key("busy_wall_s").Value(s.busy_wall);
-  w.Key("idle_wall_s").Value(s.idle_wall);
-  w.Key("idle_cpu_s").Value(s.idle_cpu);
-  w.EndObject();
-  return w.str();
-}
-
 int Bench(const Args& args, int rank, int size) {
   RankStats stats;
-  // Every rank loads the suite (deterministic: same runs, same order). A
-  // failure is reported once: by rank 0, or by the ranks that failed alone.
+  // Every rank loads the suite (deterministic: same runs, same order).
   std::optional<bench::Suite> suite;
-  std::string error;
-  try {
-    suite.emplace(bench::LoadSuite(args.suite));
-  } catch (const std::exception& e) {
-    error = e.what();
-  }
-  int rank0_ok = error.empty() ? 1 : 0;
-  MPI_Bcast(&rank0_ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  if (!AllRanksOk(error.empty())) {
-    if (!error.empty() && rank == 0)
-      std::fprintf(stderr, "error: %s\n", error.c_str());
-    else if (!error.empty() && rank0_ok)
-      std::fprintf(stderr, "error: rank %d on %s: %s\n", rank,
-                   ThisMachine().hostname.c_str(), error.c_str());
+  if (!LoadOnEveryRank([&] { suite.emplace(bench::LoadSuite(args.suite)); },
+                       rank))
     return 2;
-  }
 
   bench::HarnessOptions options;
   options.out_dir = args.out;
@@ -496,8 +376,9 @@ int main(int argc, char** argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   CLI::App app{
-      "quasiroll-mpi: quasiroll bench over MPI ranks (mpirun -np K "
-      "quasiroll-mpi bench ...); rank 0 dispatches, ranks 1..K-1 run"};
+      "quasiroll-mpi: quasiroll bench and quasiroll atlas over MPI ranks "
+      "(mpirun -np K quasiroll-mpi bench|atlas ...); rank 0 dispatches, "
+      "ranks 1..K-1 run"};
   app.require_subcommand(1);
   quasiroll::mpi::Args args;
   CLI::App* bench = app.add_subcommand(
@@ -521,6 +402,37 @@ int main(int argc, char** argv) {
                    "auto (bar on a TTY, else lines) | bar | lines | none")
       ->check(CLI::IsMember({"auto", "bar", "lines", "none"}))
       ->capture_default_str();
+  quasiroll::mpi::AtlasArgs atlas_args;
+  CLI::App* atlas = app.add_subcommand(
+      "atlas",
+      "The traversability atlas of a spec; writes DIR/atlas.csv as "
+      "quasiroll atlas (docs/cluster.md)");
+  atlas->add_option("--spec", atlas_args.spec, "Atlas spec YAML")->required();
+  atlas->add_option("--plugin", plugins,
+                    "Load backends from a plugin library (the edge study's "
+                    "NLP backends; repeatable)");
+  atlas
+      ->add_option("--out", atlas_args.out,
+                   "Output directory (on a file system all ranks share)")
+      ->required();
+  atlas->add_flag("--resume", atlas_args.resume,
+                  "Keep the finished rows in DIR (atlas.csv and the partial "
+                  "files of every rank) and compute only the missing cells");
+  atlas
+      ->add_option("--edge-cells", atlas_args.edge_cells,
+                   "Cells of the edge-reliability study (overrides the "
+                   "spec's edge_cells; 0 = none)")
+      ->check(CLI::Range(0, 100000));
+  atlas
+      ->add_option("--chunk", atlas_args.chunk,
+                   "Cells per task (default: about 16 tasks per worker, "
+                   "1 to 64 cells)")
+      ->check(CLI::Range(1, 1000000));
+  atlas
+      ->add_option("--progress", atlas_args.progress,
+                   "auto (on a TTY) | bar | lines | none")
+      ->check(CLI::IsMember({"auto", "bar", "lines", "none"}))
+      ->capture_default_str();
   int code = 0;
   quasiroll::SetInvocation(argc, argv);
   try {
@@ -536,7 +448,9 @@ int main(int argc, char** argv) {
       plugins_loaded = false;
       code = 2;
     }
-    if (plugins_loaded) code = quasiroll::mpi::Bench(args, rank, size);
+    if (plugins_loaded)
+      code = atlas->parsed() ? quasiroll::mpi::Atlas(atlas_args, rank, size)
+                             : quasiroll::mpi::Bench(args, rank, size);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) {
       if (rank == 0) app.exit(e);

@@ -5,9 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -76,6 +79,17 @@ TEST(TraversabilityAtlas, PvcHeadingDependenceIsMirrorSymmetric) {
   EXPECT_GT(rows[4].mu_min, rows[8].mu_min);  // across vs down
 }
 
+// R1 (paper.yaml), 3 x 2 positions, both modes.
+AtlasSpec SmallR1Spec(int headings) {
+  AtlasSpec spec;
+  spec.scene_path = kScenes + "paper.yaml";
+  spec.scene = LoadScene(spec.scene_path);
+  spec.x = {-0.5, 1.5, 3};
+  spec.y = {-0.5, 0.5, 2};
+  spec.headings = headings;
+  return spec;
+}
+
 std::string WithoutWallTime(const fs::path& csv) {
   std::istringstream in(ReadAll(csv));
   std::string line, out;
@@ -87,12 +101,7 @@ std::string WithoutWallTime(const fs::path& csv) {
 // interruption that left only part of the rows (resume computes the rest).
 TEST(TraversabilityAtlas, OutputDoesNotDependOnJobsOrInterruption) {
   const fs::path root = FreshTempDir("quasiroll_atlas_test_");
-  AtlasSpec spec;
-  spec.scene_path = kScenes + "paper.yaml";
-  spec.scene = LoadScene(spec.scene_path);
-  spec.x = {-0.5, 1.5, 3};
-  spec.y = {-0.5, 0.5, 2};
-  spec.headings = 3;
+  AtlasSpec spec = SmallR1Spec(3);
   AtlasOptions one;
   one.out_dir = (root / "one").string();
   AtlasOptions two = one;
@@ -134,17 +143,120 @@ TEST(TraversabilityAtlas, OutputDoesNotDependOnJobsOrInterruption) {
   fs::remove_all(root);
 }
 
-// A pose where the robot cannot stand is a row with its cause: a narrow
-// 5 cm spike under the front wheel (x = a = 0.25 m) leaves no consistent
-// contact.
-TEST(TraversabilityAtlas, PoseWithoutContactIsARowWithItsCause) {
-  const fs::path root = FreshTempDir("quasiroll_atlas_cause_");
-  const std::string scene = (root / "spike.yaml").string();
+// --shard I/N: contiguous ranges that cover every cell exactly once, sizes
+// differing by at most one, also where cells * index exceeds 64 bits.
+TEST(AtlasShards, CellRangesCoverEveryCellOnceBalancedByCount) {
+  for (std::int64_t cells :
+       {std::int64_t{0}, std::int64_t{1}, std::int64_t{7}, std::int64_t{240},
+        std::int64_t{131072}, std::int64_t{2000000000000000}}) {
+    for (int count : {1, 2, 3, 7, 1000, 1000000}) {
+      std::int64_t expected_begin = 0, smallest = cells, largest = 0;
+      for (int i = 0; i < count; ++i) {
+        const AtlasCellRange r = ShardCells(cells, i, count);
+        ASSERT_EQ(r.begin, expected_begin) << cells << " " << i << "/" << count;
+        ASSERT_LE(r.begin, r.end);
+        smallest = std::min(smallest, r.end - r.begin);
+        largest = std::max(largest, r.end - r.begin);
+        expected_begin = r.end;
+      }
+      EXPECT_EQ(expected_begin, cells) << count;
+      EXPECT_LE(largest - smallest, 1) << cells << " in " << count;
+    }
+  }
+  EXPECT_EQ(AtlasShardDir("out", 2, 16), "out/shards/2-of-16");
+}
+
+// Shards write only their cells under OUT/shards/I-of-N; their rows,
+// finished together (what quasiroll merge does), are the one-process atlas;
+// a cell without a row is named.
+TEST(AtlasShards, ShardRowsFinishToTheOneProcessAtlas) {
+  const fs::path root = FreshTempDir("quasiroll_atlas_shards_");
+  const AtlasSpec spec = SmallR1Spec(2);  // 24 cells: 3 shards of 8
+  AtlasOptions whole;
+  whole.out_dir = (root / "whole").string();
+  RunAtlas(spec, whole);
+  std::map<std::int64_t, std::string> rows;
+  for (int i = 0; i < 3; ++i) {
+    AtlasOptions shard;
+    shard.out_dir = (root / "sharded").string();
+    shard.shard_index = i;
+    shard.shard_count = 3;
+    const AtlasSummary s = RunAtlas(spec, shard);
+    EXPECT_EQ(s.cells, 8);
+    const fs::path dir = AtlasShardDir(shard.out_dir, i, 3);
+    const JsonValue meta = ParseJson(ReadAll(dir / "meta.json"));
+    EXPECT_EQ(meta.Find("shard")->Find("first_cell")->number(), 8 * i);
+    EXPECT_EQ(SpecFromAtlasMeta(meta, "meta.json").CellCount(), 24);
+    for (const auto& [index, row] : ReadFinishedAtlasRows(spec, dir.string()))
+      EXPECT_TRUE(rows.emplace(index, row).second) << "cell " << index;
+  }
+  EXPECT_FALSE(fs::exists(root / "sharded" / "atlas.csv"));
+  const std::map<std::int64_t, std::string> all = rows;
+  rows.erase(5);
+  rows.erase(17);
+  try {
+    FinishAtlasOutput(spec, (root / "merged").string(), rows, {}, {});
+    ADD_FAILURE() << "missing cells accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("2 of 24 cells have no row (first: 5)"),
+        std::string::npos)
+        << e.what();
+  }
+  fs::create_directories(root / "merged");
+  FinishAtlasOutput(spec, (root / "merged").string(), all, {}, {});
+  EXPECT_EQ(WithoutWallTime(root / "whole" / "atlas.csv"),
+            WithoutWallTime(root / "merged" / "atlas.csv"));
+  fs::remove_all(root);
+}
+
+// A partial file whose last line was torn by a kill: the next row starts on
+// a line of its own (appended to the fragment, "3" + "5,..." would read as
+// cell 35), and a row whose position columns are not its cell's is ignored.
+TEST(AtlasShards, TornPartialLinesAreNeverReadAsRows) {
+  const fs::path root = FreshTempDir("quasiroll_atlas_torn_");
+  const AtlasSpec spec = SmallR1Spec(2);
+  BeginAtlasOutput(spec, root.string(), false, {});
+  const std::string row0 =
+      AtlasCsvRow(EvaluateAtlasCell(spec, CellAt(spec, 0)));
+  const std::string row5 =
+      AtlasCsvRow(EvaluateAtlasCell(spec, CellAt(spec, 5)));
+  const fs::path partial = root / "atlas.partial.csv";
+  std::ofstream(partial) << row0 << "\n"
+                         << "1";
+  {
+    AtlasPartialFile file(partial.string());
+    file.Append(row5);
+  }
+  EXPECT_EQ(ReadAll(partial), row0 + "\n" + row5 + "\n");
+  // A glued line: cell 1's index in front of cell 5's row.
+  std::ofstream(root / "atlas.partial.rank-1.csv") << "1" << row5 << "\n";
+  const auto rows = ReadFinishedAtlasRows(spec, root.string());
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows.at(0), row0);
+  EXPECT_EQ(rows.at(5), row5);
+  // Without --resume an earlier run's rows are removed, not reused.
+  BeginAtlasOutput(spec, root.string(), false, {});
+  EXPECT_TRUE(ReadFinishedAtlasRows(spec, root.string()).empty());
+  fs::remove_all(root);
+}
+
+// DIR/spike.yaml: a narrow 5 cm spike under the front wheel (x = a =
+// 0.25 m) at x = 0, which leaves no consistent contact; its path.
+std::string WriteSpikeScene(const fs::path& dir) {
+  const std::string scene = (dir / "spike.yaml").string();
   std::ofstream(scene)
       << "name: spike\nmode: paper\nmu: 0.5\n"
          "initial: {x: 0, y: 0, yaw: 0, joint_angles: [0, 0, 0, 0, 0, 0]}\n"
          "terrain: {type: gaussians, bumps: [{amplitude: 0.05, x: 0.27, y: 0, "
          "sigma: 0.01}]}\n";
+  return scene;
+}
+
+// A pose where the robot cannot stand is a row with its cause.
+TEST(TraversabilityAtlas, PoseWithoutContactIsARowWithItsCause) {
+  const fs::path root = FreshTempDir("quasiroll_atlas_cause_");
+  const std::string scene = WriteSpikeScene(root);
   AtlasSpec spec;
   spec.scene_path = scene;
   spec.scene = LoadScene(scene);
@@ -160,6 +272,40 @@ TEST(TraversabilityAtlas, PoseWithoutContactIsARowWithItsCause) {
   fs::remove_all(root);
 }
 
+// The modes of a pose share its placement (EvaluateAtlasCells): every row,
+// a failed placement's included, is the row of the cell evaluated alone but
+// for wall_s, whatever cells are grouped (a pose's modes split or not).
+TEST(TraversabilityAtlas, PosesSharedAcrossModesGiveTheRowsOfSingleCells) {
+  const fs::path root = FreshTempDir("quasiroll_atlas_shared_");
+  const std::string scene = WriteSpikeScene(root);
+  for (const AtlasSpec& spec : {SmallR1Spec(2), [&] {
+                                  AtlasSpec s = SmallR1Spec(2);
+                                  s.scene_path = scene;
+                                  s.scene = LoadScene(scene);
+                                  s.x = {0.0, 2.0, 2};
+                                  s.y = {0.0, 0.0, 1};
+                                  return s;
+                                }()}) {
+    std::vector<std::int64_t> cells;
+    for (std::int64_t i = 0; i < spec.CellCount(); ++i)
+      if (i % 5 != 2) cells.push_back(i);  // some poses with one mode only
+    const std::vector<AtlasRow> rows = EvaluateAtlasCells(spec, cells);
+    ASSERT_EQ(rows.size(), cells.size());
+    std::set<std::string> statuses;
+    for (std::size_t k = 0; k < cells.size(); ++k) {
+      AtlasRow alone = EvaluateAtlasCell(spec, CellAt(spec, cells[k]));
+      alone.wall_s = rows[k].wall_s;
+      EXPECT_EQ(AtlasCsvRow(rows[k]), AtlasCsvRow(alone)) << cells[k];
+      statuses.insert(rows[k].status);
+    }
+    EXPECT_TRUE(statuses.count("ok"));
+    if (spec.scene_path == scene) {
+      EXPECT_TRUE(statuses.count("no_contact"));
+    }
+  }
+  fs::remove_all(root);
+}
+
 // The shipped atlas specs load (scene path relative to the spec file).
 TEST(TraversabilityAtlas, ShippedSpecsLoad) {
   const std::string dir = std::string(QUASIROLL_SOURCE_DIR) + "/bench/atlases/";
@@ -168,6 +314,11 @@ TEST(TraversabilityAtlas, ShippedSpecsLoad) {
   EXPECT_EQ(r1.edge_cells, 32);
   EXPECT_EQ(r1.scene.name, LoadScene(kScenes + "paper.yaml").name);
   EXPECT_EQ(LoadAtlasSpec(dir + "r1_small.yaml").CellCount(), 24 * 18 * 8 * 2);
+  const AtlasSpec fine = LoadAtlasSpec(dir + "r1_fine.yaml");
+  EXPECT_EQ(fine.CellCount(), std::int64_t{256} * 256 * 64 * 2);
+  // The same area as the default atlas, 4x finer in x, y and heading.
+  EXPECT_EQ(fine.x.lo, r1.x.lo);
+  EXPECT_EQ(fine.y.hi, r1.y.hi);
 }
 
 TEST(TraversabilityAtlas, InvalidGridNamesTheKey) {

@@ -10,16 +10,9 @@
 # usage: mpi_test.sh QUASIROLL_MPI SUITE NP REFERENCE WORKDIR [--extra]
 set -euo pipefail
 quasiroll_mpi=$1 suite=$2 np=$3 reference=$4 work=$5 extra=${6:-}
-root=$(cd "$(dirname "$0")/../.." && pwd)
+source "$(dirname "$0")/lib.sh"
 compare=(/usr/bin/python3 "$root/scripts/compare-bench-outputs.py")
-fail() { echo "mpi_test: FAIL: $*" >&2; exit 1; }
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-# No network interfaces needed between local ranks; keep Open MPI quiet.
-export OMPI_MCA_btl=self,vader OMPI_MCA_btl_vader_single_copy_mechanism=none
-mpi() { local n=$1; shift; mpirun -np "$n" --oversubscribe "$quasiroll_mpi" "$@"; }
-rm -rf "$work"
-mkdir -p "$work"
-cd "$work"
+fresh_workdir "$work"
 
 # Every rank that waited >= 1 s in total: idle CPU / idle wall < 10 %.
 not_spinning() {  # DIR

@@ -12,14 +12,10 @@
 # usage: slurm_test.sh QUASIROLL SUITE N REFERENCE WORKDIR
 set -euo pipefail
 quasiroll=$1 suite=$2 shards=$3 reference=$4 work=$5
-root=$(cd "$(dirname "$0")/../.." && pwd)
+source "$(dirname "$0")/lib.sh"
 compare=(/usr/bin/python3 "$root/scripts/compare-bench-outputs.py")
-fail() { echo "slurm_test: FAIL: $*" >&2; exit 1; }
-rm -rf "$work"
-mkdir -p "$work"
-cd "$work"
-export FAKE_SLURM_DIR=$work/slurm PATH=$root/tests/cluster/fake-slurm:$PATH
-export QUASIROLL=$quasiroll
+fresh_workdir "$work"
+fake_slurm "$quasiroll"
 
 # 1. Array + merge.
 bash "$root/scripts/slurm/submit.sh" "$shards" "$suite" "$work/out"
