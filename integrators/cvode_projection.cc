@@ -13,6 +13,10 @@
 
 namespace quasiroll {
 
+using Eigen::Map;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
 namespace {
 
 class CvodeProjectionIntegrator final : public Integrator {
@@ -34,10 +38,6 @@ class CvodeProjectionIntegrator final : public Integrator {
 };
 
 }  // namespace
-
-using Eigen::Map;
-using Eigen::MatrixXd;
-using Eigen::VectorXd;
 
 namespace {
 // CVODE's own defaults of the step controls.

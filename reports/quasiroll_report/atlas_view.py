@@ -20,7 +20,7 @@ import shutil
 import numpy as np
 from matplotlib import colormaps
 
-from .replay import THREE_FILES, find_three
+from .replay import THREE_FILES, find_three, viewer_page
 from .terrain import terrain_height
 
 
@@ -85,7 +85,7 @@ def write_atlas_view(grid, terrain, out_dir):
                   allow_nan=False)
         handle.write(";\n")
     with open(os.path.join(folder, "index.html"), "w", encoding="utf-8") as handle:
-        handle.write(VIEWER_HTML)
+        handle.write(viewer_page(VIEWER_HTML, "QUASIROLL_ATLAS"))
     snippet = (
         "<h2>3D view</h2><p>The terrain coloured by mu_min (viridis, 0 to the key's "
         "maximum; grey: the robot cannot stand there), one heading at a time with "
@@ -112,11 +112,7 @@ html, body { margin: 0; height: 100%; overflow: hidden; font-family: sans-serif;
        font-size: 12px; padding: 4px 6px; border: 1px solid #ccc; }
 #ramp { width: 160px; height: 12px; display: block; margin: 2px 0; }
 </style>
-<script src="three.min.js"></script>
-<script src="OrbitControls.js"></script>
-<script src="data.js"></script>
-</head><body data-ready="0">
-<div id="view"></div>
+@PAGE_START@
 <div id="key"><span id="what"></span><canvas id="ramp" width="160" height="12"></canvas>
 <span id="range"></span></div>
 <div id="bar">
@@ -128,24 +124,8 @@ html, body { margin: 0; height: 100%; overflow: hidden; font-family: sans-serif;
 </div>
 <script>
 (function () {
-  "use strict";
-  var body = document.body, status = document.getElementById("status");
-  function fail(message) {
-    body.setAttribute("data-ready", "error");
-    status.textContent = "error: " + message;
-  }
-  if (typeof THREE === "undefined" || !window.QUASIROLL_ATLAS) {
-    fail("three.js or data.js did not load");
-    return;
-  }
+@BOOT@
   var d = window.QUASIROLL_ATLAS, nx = d.xs.length, ny = d.ys.length;
-  var renderer;
-  try {
-    renderer = new THREE.WebGLRenderer({antialias: true, preserveDrawingBuffer: true});
-  } catch (e) {
-    fail("WebGL unavailable (" + e.message + ")");
-    return;
-  }
   var view = document.getElementById("view");
   view.appendChild(renderer.domElement);
   var scene = new THREE.Scene();

@@ -155,7 +155,8 @@ def write_replay(ctx, runs):
         json.dump(data, handle, separators=(",", ":"), allow_nan=False)
         handle.write(";\n")
     with open(os.path.join(folder, "index.html"), "w", encoding="utf-8") as handle:
-        handle.write(VIEWER_HTML.replace("@CHASSIS@", CHASSIS_HEX))
+        handle.write(viewer_page(VIEWER_HTML, "QUASIROLL_REPLAY")
+                     .replace("@CHASSIS@", CHASSIS_HEX))
     names = ", ".join(f"{d['scene']} ({d['method']}, Δt={d['dt']:g} s, μ={d['mu']:g})"
                       for d in data)
     snippet = (
@@ -170,6 +171,45 @@ def write_replay(ctx, runs):
         'page</a>.</p><iframe src="replay/index.html" title="3D replay" '
         'style="width:100%;height:560px;border:1px solid #ccc"></iframe>')
     return snippet, []
+
+
+# The start of both 3D pages' script: `fail` (data-ready="error" and the
+# message in #status), the check that three.js and the page's data (@DATA@)
+# loaded, and `renderer`, a WebGL renderer (or fail when WebGL is missing).
+VIEWER_BOOT_JS = r"""  "use strict";
+  var body = document.body, status = document.getElementById("status");
+  function fail(message) {
+    body.setAttribute("data-ready", "error");
+    status.textContent = "error: " + message;
+  }
+  if (typeof THREE === "undefined" || !window.@DATA@) {
+    fail("three.js or data.js did not load");
+    return;
+  }
+  var renderer;
+  try {
+    renderer = new THREE.WebGLRenderer({antialias: true, preserveDrawingBuffer: true});
+  } catch (e) {
+    fail("WebGL unavailable (" + e.message + ")");
+    return;
+  }"""
+
+
+# The end of both pages' head and the start of their body: three.js, its
+# orbit controls and the page's data.js (copied beside index.html), and the
+# WebGL view.
+VIEWER_PAGE_START = """<script src="three.min.js"></script>
+<script src="OrbitControls.js"></script>
+<script src="data.js"></script>
+</head><body data-ready="0">
+<div id="view"></div>"""
+
+
+def viewer_page(template, data_name):
+    """A 3D page's HTML: `template` with @PAGE_START@ and @BOOT@ replaced by
+    the shared parts, its script reading window.<data_name>."""
+    return (template.replace("@PAGE_START@", VIEWER_PAGE_START)
+            .replace("@BOOT@", VIEWER_BOOT_JS.replace("@DATA@", data_name)))
 
 
 VIEWER_HTML = r"""<!DOCTYPE html>
@@ -188,11 +228,7 @@ html, body { margin: 0; height: 100%; overflow: hidden; font-family: sans-serif;
 #key { position: absolute; top: 6px; right: 6px; background: rgba(255,255,255,0.85);
        font-size: 12px; padding: 4px 6px; border: 1px solid #ccc; pointer-events: none; }
 </style>
-<script src="three.min.js"></script>
-<script src="OrbitControls.js"></script>
-<script src="data.js"></script>
-</head><body data-ready="0">
-<div id="view"></div>
+@PAGE_START@
 <div id="info"></div>
 <div id="key"></div>
 <div id="bar">
@@ -204,26 +240,10 @@ html, body { margin: 0; height: 100%; overflow: hidden; font-family: sans-serif;
 </div>
 <script>
 (function () {
-  "use strict";
-  var body = document.body, status = document.getElementById("status");
-  function fail(message) {
-    body.setAttribute("data-ready", "error");
-    status.textContent = "error: " + message;
-  }
-  if (typeof THREE === "undefined" || !window.QUASIROLL_REPLAY) {
-    fail("three.js or data.js did not load");
-    return;
-  }
+@BOOT@
   var params = new URLSearchParams(window.location.search);
   var showRobot = params.get("norobot") !== "1";
   var view = document.getElementById("view");
-  var renderer;
-  try {
-    renderer = new THREE.WebGLRenderer({antialias: true, preserveDrawingBuffer: true});
-  } catch (e) {
-    fail("WebGL unavailable (" + e.message + ")");
-    return;
-  }
   renderer.setPixelRatio(window.devicePixelRatio || 1);
   view.appendChild(renderer.domElement);
   var scene = new THREE.Scene();
