@@ -37,8 +37,8 @@
 #include <vector>
 
 #include "quasiroll/bench/atlas/atlas.h"
-#include "quasiroll/bench/io/output_lock.h"
 #include "quasiroll/bench/cluster/mpi_internal.h"
+#include "quasiroll/bench/io/output_lock.h"
 #include "quasiroll/core/scene.h"
 
 namespace quasiroll::mpi {
