@@ -323,9 +323,9 @@ MergedRows CollectRows(const MergeOptions& options, const SuitePlan& plan,
   return m;
 }
 
-// OUT/trajectories, OUT/runs, OUT/checkpoints (linked from the winning
-// inputs), the union of references and terrains, and OUT/runs.csv; counts
-// failures and hosts.
+// OUT/trajectories, OUT/runs, OUT/checkpoints, OUT/switches (linked from the
+// winning inputs), the union of references and terrains, and OUT/runs.csv;
+// counts failures and hosts.
 void WriteMergedRuns(const fs::path& out, const SuitePlan& plan,
                      const MergedRows& m, const MergeOptions& options,
                      MergeSummary* summary) {
@@ -341,10 +341,11 @@ void WriteMergedRuns(const fs::path& out, const SuitePlan& plan,
     LinkOrCopy(f.dir / "trajectories" / (id + ".csv"),
                out / "trajectories" / (id + ".csv"));
     LinkOrCopy(f.dir / "runs" / (id + ".csv"), out / "runs" / (id + ".csv"));
-    // Checkpoint samples (docs/harness.md, Errors at checkpoints), if any.
-    if (fs::exists(f.dir / "checkpoints" / (id + ".csv")))
-      LinkOrCopy(f.dir / "checkpoints" / (id + ".csv"),
-                 out / "checkpoints" / (id + ".csv"));
+    // Checkpoint samples (docs/harness.md, Errors at checkpoints) and the
+    // located switches (docs/formats.md), when the input has them.
+    for (const char* sub : {"checkpoints", "switches"})
+      if (fs::exists(f.dir / sub / (id + ".csv")))
+        LinkOrCopy(f.dir / sub / (id + ".csv"), out / sub / (id + ".csv"));
     csv += f.row + "\n";
     const auto fields = SplitCsvLine(f.row);
     const auto col = [&](auto it) -> std::string {

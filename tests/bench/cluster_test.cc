@@ -210,9 +210,10 @@ class ShardMerge : public TinySuiteTest<ShardMerge> {
     EXPECT_EQ(WithoutInvocation(root_ / "j1" / "meta.json"),
               WithoutInvocation(root_ / sub / "meta.json"));
     for (const RunSpec& r : suite_.runs)
-      EXPECT_EQ(ReadAll(root_ / "j1" / "trajectories" / (r.run_id + ".csv")),
-                ReadAll(root_ / sub / "trajectories" / (r.run_id + ".csv")))
-          << r.run_id;
+      for (const char* files : {"trajectories", "checkpoints", "switches"})
+        EXPECT_EQ(ReadAll(root_ / "j1" / files / (r.run_id + ".csv")),
+                  ReadAll(root_ / sub / files / (r.run_id + ".csv")))
+            << files << "/" << r.run_id;
     for (const auto& e : fs::directory_iterator(root_ / "j1" / "terrains"))
       EXPECT_TRUE(fs::exists(root_ / sub / "terrains" / e.path().filename()));
     for (const auto& e : fs::directory_iterator(root_ / "j1" / "references"))
