@@ -48,9 +48,6 @@ namespace fs = std::filesystem;
 
 enum AtlasTag : int { kTagCells = 11, kTagRows = 12, kTagAtlasStats = 13 };
 
-volatile std::sig_atomic_t g_terminate = 0;
-extern "C" void OnTerminate(int) { g_terminate = 1; }
-
 // A worker told to terminate writes no further row and lingers: mpirun
 // SIGKILLs it a second after its SIGTERM. Measured with Open MPI 4.1: when a
 // worker died of the SIGTERM instead, mpirun killed rank 0 before its
@@ -65,16 +62,6 @@ std::string PartialOfRank(const std::string& dir, int rank) {
   return (fs::path(dir) /
           ("atlas.partial.rank-" + std::to_string(rank) + ".csv"))
       .string();
-}
-
-// QUASIROLL_TEST_MPI_KILL=R:N -> N for rank R (0 otherwise: no kill).
-long KillAfterRows(int rank) {
-  const char* v = std::getenv("QUASIROLL_TEST_MPI_KILL");
-  if (!v) return 0;
-  int r = -1;
-  long n = 0;
-  if (std::sscanf(v, "%d:%ld", &r, &n) != 2 || r != rank) return 0;
-  return n;
 }
 
 // Evaluates `cells` a pose at a time (its modes share the placement) and
@@ -104,7 +91,7 @@ void AtlasWorker(const bench::AtlasSpec& spec, const std::string& dir, int rank,
   } catch (const std::exception& e) {
     open_error = e.what();
   }
-  const long kill_after = KillAfterRows(rank);
+  const long kill_after = TestKillAfter(rank);
   long written = 0;
   for (;;) {
     MPI_Status st{};
@@ -366,7 +353,7 @@ int Atlas(const AtlasArgs& args, int rank, int size) {
   }
   if (!AllRanksOk(ok)) return 2;
   if (!SharedDirectory(args.out, rank)) return 2;
-  std::signal(SIGTERM, OnTerminate);
+  InstallTerminateHandler();
   if (rank != 0) {
     AtlasWorker(*spec, args.out, rank, &stats);
     SendString(StatsJson(rank, stats), 0, kTagAtlasStats);

@@ -52,6 +52,16 @@ bool LoadOnEveryRank(const std::function<void()>& load, int rank);
 // cannot (stderr) and returns false then, on every rank.
 bool SharedDirectory(const std::string& dir, int rank);
 
+// Set by SIGTERM once InstallTerminateHandler() ran: mpirun's signal when a
+// rank died or the job was stopped (then SIGKILL about a second later).
+extern volatile std::sig_atomic_t g_terminate;
+void InstallTerminateHandler();
+
+// Test hook (docs/cluster.md): QUASIROLL_TEST_MPI_KILL=R:N makes worker rank
+// R raise SIGKILL after its N-th row (atlas) or run (bench); returns N for
+// this rank, 0 otherwise (no kill).
+long TestKillAfter(int rank);
+
 // DIR/mpi.json: {"ranks": [StatsJson of each rank]}.
 void WriteRankStats(const std::string& dir,
                     const std::vector<std::string>& rows);

@@ -28,6 +28,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -45,6 +46,7 @@
 #include "quasiroll/bench/harness/shard.h"
 #include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/bench/io/json_writer.h"
+#include "quasiroll/bench/io/output_lock.h"
 #include "quasiroll/bench/io/run_output.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/initial_configuration.h"
@@ -94,11 +96,16 @@ class ReferenceCache {
   std::map<std::string, ReferenceJob> jobs_;
 };
 
-void Worker(const bench::Suite& suite, const std::string& dir,
+void Worker(const bench::Suite& suite, const std::string& dir, int rank,
             RankStats* stats) {
   ReferenceCache references(suite, dir);
-  for (;;) {
-    const MPI_Status st = WaitForMessage(0, kTagTask, stats);
+  const long kill_after = TestKillAfter(rank);
+  for (long runs = 0;;) {
+    MPI_Status st{};
+    if (!WaitForMessageUnless(0, kTagTask, stats, &g_terminate, &st)) {
+      std::this_thread::sleep_for(std::chrono::seconds(3));
+      std::_Exit(128 + SIGTERM);
+    }
     int task[2] = {0, 0};
     MPI_Recv(task, 2, MPI_INT, st.MPI_SOURCE, kTagTask, MPI_COMM_WORLD,
              MPI_STATUS_IGNORE);
@@ -118,6 +125,7 @@ void Worker(const bench::Suite& suite, const std::string& dir,
             ref, dir);
         reply += "ok\n" + out.status + "\n" + Fmt(out.t_reached) + "\n" +
                  Fmt(out.wall_seconds) + "\n" + out.row;
+        if (++runs == kill_after) std::raise(SIGKILL);
       }
     } catch (const std::exception& e) {  // I/O: the job cannot go on
       reply += std::string("io_error\n") + e.what();
@@ -270,6 +278,32 @@ struct Args {
   bool resume = false;
 };
 
+// After SIGTERM on rank 0: the selected runs without a finished row on disk
+// (what --resume will compute; a worker still writing makes the count one
+// too high, never too low), on stderr; exit 3.
+[[noreturn]] void ReportMissingRunsAndExit(const bench::SuitePlan& plan,
+                                           const std::string& dir) {
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  int missing = 0;
+  std::string first;
+  for (int i : plan.pending) {
+    const std::string& id = plan.selected[static_cast<std::size_t>(i)]->run_id;
+    std::string row;
+    if (ReadTextFile(dir + "/runs/" + id + ".csv", &row) && !row.empty() &&
+        row.back() == '\n')
+      continue;
+    if (missing++ < 5) first += (first.empty() ? "" : ", ") + id;
+  }
+  std::fprintf(stderr,
+               "\nerror: quasiroll-mpi bench: terminated (a rank died or the "
+               "job was stopped): %d of %zu runs missing (first: %s); the "
+               "finished runs are on disk in %s; rerun with --resume to "
+               "compute only the missing runs\n",
+               missing, plan.pending.size(), first.c_str(), dir.c_str());
+  std::fflush(stderr);
+  std::_Exit(3);
+}
+
 int Bench(const Args& args, int rank, int size) {
   RankStats stats;
   // Every rank loads the suite (deterministic: same runs, same order).
@@ -292,20 +326,26 @@ int Bench(const Args& args, int rank, int size) {
   const std::string start_time = IsoTimeNow();
   std::optional<bench::SuitePlan> plan;
   bool ok = true;
+  std::vector<OutputLock> locks;  // rank 0 writes DIR (output_lock.h)
   if (rank == 0) {
     try {
+      locks = LockOutputDirectory(args.out, "", "--out");
       plan.emplace(bench::PlanSuite(*suite, options));
       bench::BeginSuiteOutput(*suite, options, *plan, options.jobs, start_time);
     } catch (const SceneError& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      ok = false;
+    } catch (const OutputLockedError& e) {
       std::fprintf(stderr, "error: %s\n", e.what());
       ok = false;
     }
   }
   if (!AllRanksOk(ok)) return 2;
   if (!SharedDirectory(args.out, rank)) return 2;
+  InstallTerminateHandler();
 
   if (rank != 0) {
-    Worker(*suite, args.out, &stats);
+    Worker(*suite, args.out, rank, &stats);
     SendString(StatsJson(rank, stats), 0, kTagStats);
     return 0;
   }
@@ -331,7 +371,10 @@ int Bench(const Args& args, int rank, int size) {
         ++busy;
       }
       if (busy == 0) break;  // nothing running, nothing ready: all done
-      const MPI_Status st = WaitForMessage(MPI_ANY_SOURCE, kTagResult, &stats);
+      MPI_Status st{};
+      if (!WaitForMessageUnless(MPI_ANY_SOURCE, kTagResult, &stats,
+                                &g_terminate, &st))
+        ReportMissingRunsAndExit(*plan, args.out);
       const std::string reply = ReceiveString(st);
       --busy;
       idle.push_back(st.MPI_SOURCE);

@@ -4,7 +4,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 #include <string>
@@ -50,6 +52,23 @@ MPI_Status WaitForMessage(int source, int tag, RankStats* stats) {
   MPI_Status status{};
   WaitForMessageUnless(source, tag, stats, nullptr, &status);
   return status;
+}
+
+volatile std::sig_atomic_t g_terminate = 0;
+
+namespace {
+extern "C" void OnTerminate(int) { g_terminate = 1; }
+}  // namespace
+
+void InstallTerminateHandler() { std::signal(SIGTERM, OnTerminate); }
+
+long TestKillAfter(int rank) {
+  const char* v = std::getenv("QUASIROLL_TEST_MPI_KILL");
+  if (!v) return 0;
+  int r = -1;
+  long n = 0;
+  if (std::sscanf(v, "%d:%ld", &r, &n) != 2 || r != rank) return 0;
+  return n;
 }
 
 std::string ReceiveString(const MPI_Status& probed) {
