@@ -337,23 +337,14 @@ int Atlas(const AtlasArgs& args, int rank, int size) {
           rank))
     return 2;
   std::map<std::int64_t, std::string> rows;
-  bool ok = true;
-  std::vector<OutputLock> locks;  // rank 0 writes DIR (output_lock.h)
-  if (rank == 0) {
-    try {
-      locks = LockOutputDirectory(args.out, "", "--out");
-      if (args.resume) rows = bench::ReadFinishedAtlasRows(*spec, args.out);
-      bench::AtlasOutputInfo info;
-      info.extra_meta = {{"mpi", "{\"ranks\":" + std::to_string(size) + "}"}};
-      bench::BeginAtlasOutput(*spec, args.out, args.resume, info);
-    } catch (const std::invalid_argument& e) {
-      std::fprintf(stderr, "error: %s\n", e.what());
-      ok = false;
-    }
-  }
-  if (!AllRanksOk(ok)) return 2;
-  if (!SharedDirectory(args.out, rank)) return 2;
-  InstallTerminateHandler();
+  std::vector<OutputLock> locks;
+  const auto begin = [&] {
+    if (args.resume) rows = bench::ReadFinishedAtlasRows(*spec, args.out);
+    bench::AtlasOutputInfo info;
+    info.extra_meta = {{"mpi", "{\"ranks\":" + std::to_string(size) + "}"}};
+    bench::BeginAtlasOutput(*spec, args.out, args.resume, info);
+  };
+  if (!BeginOutput(rank, args.out, begin, &locks)) return 2;
   if (rank != 0) {
     AtlasWorker(*spec, args.out, rank, &stats);
     SendString(StatsJson(rank, stats), 0, kTagAtlasStats);

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "quasiroll/bench/io/output_lock.h"
+
 namespace quasiroll::mpi {
 
 using Clock = std::chrono::steady_clock;
@@ -61,6 +63,16 @@ void InstallTerminateHandler();
 // R raise SIGKILL after its N-th row (atlas) or run (bench); returns N for
 // this rank, 0 otherwise (no kill).
 long TestKillAfter(int rank);
+
+// The start of a command writing DIR: rank 0 locks DIR for the lifetime of
+// *locks (bench/io/output_lock.h) and runs `begin` (plan, resume read, first
+// output); bad input there (std::invalid_argument or std::runtime_error
+// subclasses the caller names: a scene error, a locked directory) is
+// reported once. Then every rank checks that it sees DIR, and SIGTERM is
+// caught (g_terminate). False on every rank when anything failed (exit 2).
+bool BeginOutput(int rank, const std::string& dir,
+                 const std::function<void()>& begin,
+                 std::vector<OutputLock>* locks);
 
 // DIR/mpi.json: {"ranks": [StatsJson of each rank]}.
 void WriteRankStats(const std::string& dir,

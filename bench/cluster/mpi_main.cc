@@ -325,24 +325,12 @@ int Bench(const Args& args, int rank, int size) {
   const auto t_start = Clock::now();
   const std::string start_time = IsoTimeNow();
   std::optional<bench::SuitePlan> plan;
-  bool ok = true;
-  std::vector<OutputLock> locks;  // rank 0 writes DIR (output_lock.h)
-  if (rank == 0) {
-    try {
-      locks = LockOutputDirectory(args.out, "", "--out");
-      plan.emplace(bench::PlanSuite(*suite, options));
-      bench::BeginSuiteOutput(*suite, options, *plan, options.jobs, start_time);
-    } catch (const SceneError& e) {
-      std::fprintf(stderr, "error: %s\n", e.what());
-      ok = false;
-    } catch (const OutputLockedError& e) {
-      std::fprintf(stderr, "error: %s\n", e.what());
-      ok = false;
-    }
-  }
-  if (!AllRanksOk(ok)) return 2;
-  if (!SharedDirectory(args.out, rank)) return 2;
-  InstallTerminateHandler();
+  std::vector<OutputLock> locks;
+  const auto begin = [&] {
+    plan.emplace(bench::PlanSuite(*suite, options));
+    bench::BeginSuiteOutput(*suite, options, *plan, options.jobs, start_time);
+  };
+  if (!BeginOutput(rank, args.out, begin, &locks)) return 2;
 
   if (rank != 0) {
     Worker(*suite, args.out, rank, &stats);

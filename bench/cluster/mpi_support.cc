@@ -16,6 +16,7 @@
 #include "quasiroll/bench/cluster/mpi_internal.h"
 #include "quasiroll/bench/io/json_writer.h"
 #include "quasiroll/bench/io/run_output.h"
+#include "quasiroll/core/scene.h"
 
 namespace quasiroll::mpi {
 
@@ -61,6 +62,27 @@ extern "C" void OnTerminate(int) { g_terminate = 1; }
 }  // namespace
 
 void InstallTerminateHandler() { std::signal(SIGTERM, OnTerminate); }
+
+bool BeginOutput(int rank, const std::string& dir,
+                 const std::function<void()>& begin,
+                 std::vector<OutputLock>* locks) {
+  bool ok = true;
+  if (rank == 0) {
+    try {
+      *locks = LockOutputDirectory(dir, "", "--out");
+      begin();
+    } catch (const std::invalid_argument& e) {  // bad input, a locked DIR
+      std::fprintf(stderr, "error: %s\n", e.what());
+      ok = false;
+    } catch (const SceneError& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      ok = false;
+    }
+  }
+  if (!AllRanksOk(ok) || !SharedDirectory(dir, rank)) return false;
+  InstallTerminateHandler();
+  return true;
+}
 
 long TestKillAfter(int rank) {
   const char* v = std::getenv("QUASIROLL_TEST_MPI_KILL");

@@ -31,10 +31,7 @@ QUASIROLL_TEST_MPI_KILL=1:42 mpi 3 atlas --spec "$spec" --out killed \
   --progress none --chunk 4 > /dev/null 2> killed.log
 code=$?
 set -e
-[ "$code" != 0 ] || fail "a dead rank exited 0"
-line=$(grep "cells missing (first: " killed.log) || { cat killed.log; fail "no missing-cells report"; }
-missing=$(echo "$line" | sed -E 's/.*: ([0-9]+) of [0-9]+ cells missing.*/\1/')
-[ "$missing" -gt 0 ] || fail "reported $missing missing cells"
+missing=$(killed_job_missing cells "$code" killed.log)
 [ ! -f killed/atlas.csv ] || fail "atlas.csv written after a rank died"
 [ "$(wc -l < killed/atlas.partial.rank-1.csv)" = 42 ] || fail "rank 1's 42 rows are not on disk"
 mpi 2 atlas --spec "$spec" --out killed --resume --progress none 2> resume.log
