@@ -48,16 +48,6 @@ namespace fs = std::filesystem;
 
 enum AtlasTag : int { kTagCells = 11, kTagRows = 12, kTagAtlasStats = 13 };
 
-// A worker told to terminate writes no further row and lingers: mpirun
-// SIGKILLs it a second after its SIGTERM. Measured with Open MPI 4.1: when a
-// worker died of the SIGTERM instead, mpirun killed rank 0 before its
-// report in 1 of ~5 runs; with lingering workers in none of 12. Alone (a
-// SIGTERM not from mpirun) it exits after 3 s, and the job ends as above.
-[[noreturn]] void Linger() {
-  std::this_thread::sleep_for(std::chrono::seconds(3));
-  std::_Exit(128 + SIGTERM);
-}
-
 std::string PartialOfRank(const std::string& dir, int rank) {
   return (fs::path(dir) /
           ("atlas.partial.rank-" + std::to_string(rank) + ".csv"))

@@ -102,10 +102,7 @@ void Worker(const bench::Suite& suite, const std::string& dir, int rank,
   const long kill_after = TestKillAfter(rank);
   for (long runs = 0;;) {
     MPI_Status st{};
-    if (!WaitForMessageUnless(0, kTagTask, stats, &g_terminate, &st)) {
-      std::this_thread::sleep_for(std::chrono::seconds(3));
-      std::_Exit(128 + SIGTERM);
-    }
+    if (!WaitForMessageUnless(0, kTagTask, stats, &g_terminate, &st)) Linger();
     int task[2] = {0, 0};
     MPI_Recv(task, 2, MPI_INT, st.MPI_SOURCE, kTagTask, MPI_COMM_WORLD,
              MPI_STATUS_IGNORE);

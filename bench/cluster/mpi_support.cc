@@ -63,6 +63,11 @@ extern "C" void OnTerminate(int) { g_terminate = 1; }
 
 void InstallTerminateHandler() { std::signal(SIGTERM, OnTerminate); }
 
+void Linger() {
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  std::_Exit(128 + SIGTERM);
+}
+
 bool BeginOutput(int rank, const std::string& dir,
                  const std::function<void()>& begin,
                  std::vector<OutputLock>* locks) {
