@@ -66,7 +66,8 @@ void InstallTerminateHandler();
 [[noreturn]] void Linger();
 
 // Test hook (docs/cluster.md): QUASIROLL_TEST_MPI_KILL=R:N makes worker rank
-// R raise SIGKILL after its N-th row (atlas) or run (bench); returns N for
+// R raise SIGKILL after its N-th row (atlas) or when given its (N+1)-th run
+// (bench: that run is never done); returns N for
 // this rank, 0 otherwise (no kill).
 long TestKillAfter(int rank);
 

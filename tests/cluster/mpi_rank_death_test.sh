@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # quasiroll-mpi bench when a rank dies (issue #23 item 5; docs/cluster.md):
-# worker rank 1 of 3 raises SIGKILL after its 4th run (test hook
-# QUASIROLL_TEST_MPI_KILL=1:4). The job exits non-zero, rank 0 reports how
+# worker rank 1 of 3 raises SIGKILL when given its 5th run, after 4 finished
+# (test hook QUASIROLL_TEST_MPI_KILL=1:4), so that run is missing however fast
+# rank 2 finishes the rest. The job exits non-zero, rank 0 reports how
 # many runs are missing and the first ones, no runs.csv is written; a rerun
 # with --resume executes at most the reported runs (exactly those unless a
 # worker was still writing one when rank 0 looked) and its results equal
