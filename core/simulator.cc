@@ -922,12 +922,13 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
 }
 
 // Step doubling for fixed-step integrators (core/switch_events.h,
-// "Resolution"); +inf (no refinement) for adaptive ones.
+// "Resolution"): SwitchResolutionTolerance(dt); +inf (no refinement) for
+// adaptive ones.
 double Simulator::SwitchStepTolerance() const {
   return IntegratorRegistry::Info(options_.dae)
                  .IsAdaptive(session_->dae_options)
              ? std::numeric_limits<double>::infinity()
-             : options_.switch_step_tolerance;
+             : SwitchResolutionTolerance(dt_, options_.switch_step_tolerance);
 }
 
 SegmentAdvance Simulator::Advance() {

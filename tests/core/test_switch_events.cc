@@ -319,9 +319,9 @@ const SimulationResult& PaperReference(double rtol, double dt) {
 // reference's own error, estimated as the spread between two references
 // (coupled dp54 at rtol 1e-12, dt = 0.003125, and at rtol 1e-13, dt = 0.05:
 // 3.9e-11 m, made at the first switch, 2.907 s, where the slip jumps within
-// 0.5 ms). Measured (model.md §8.6): 1.36e-7, 1.55e-8, 1.03e-9, 1.28e-10 m
-// at dt = 1.6, 0.8, 0.4, 0.2 (fitted slope 3.41; 3.55 over the first
-// three), then 7.2e-11, 1.7e-11, 7.8e-11 m at 0.1, 0.05, 0.025: at the
+// 0.5 ms). Measured (model.md §8.6): 1.36e-7, 1.53e-8, 1.01e-9, 1.54e-10 m
+// at dt = 1.6, 0.8, 0.4, 0.2 (fitted slope 3.33; 3.54 over the first
+// three), then 3.0e-11, 5.6e-11, 7.6e-11 m at 0.1, 0.05, 0.025: at the
 // floor. Asserted: every rung above 2x the floor is below the one before;
 // those rungs (at least 4) fit a slope >= 3.3 and the three coarsest >= 3.5;
 // the rungs below stay within 3x the floor.
