@@ -1,5 +1,6 @@
 #include "quasiroll/core/simulator.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -237,11 +238,12 @@ Simulator::~Simulator() = default;
 
 void Simulator::Record(double t, const Configuration& theta,
                        const QuasiStaticSolution& sol, SimulationResult* result,
-                       int index) const {
+                       int index, const SlipIncrements* increments) const {
   TrajectorySample s;
   FillSample(*model_, t, theta, sol, &s);
   if (index > 0 && !result->samples.empty())
-    AccumulateSlipDistances(result->samples.back(), scene_.epsilon, &s);
+    AccumulateSlipDistances(result->samples.back(), scene_.epsilon, &s,
+                            increments);
   result->samples.push_back(std::move(s));
 }
 
@@ -345,6 +347,11 @@ struct Simulator::Session {
   double switch_tolerance = std::numeric_limits<double>::infinity();
   // The slip vectors of the last sample (reversals).
   std::array<Eigen::Vector2d, 3> slip_prev;
+  // The slip integrals of the interval ending at slip_increments_t, split
+  // at its located switches (RestartAtSwitches); NaN: none.
+  SlipIncrements slip_increments;
+  std::vector<double> slip_breaks;
+  double slip_increments_t = std::numeric_limits<double>::quiet_NaN();
 };
 
 // A bisection bracket: the limit is not met at a, met at b (or the state at
@@ -480,7 +487,9 @@ bool Simulator::Interval(SimulationResult* result) {
   if (!pending && sol.status != QuasiStaticStatus::kOk &&
       sol.status != QuasiStaticStatus::kSolverFailure)
     LocateSampleStop(&t, result);
-  Record(t, s.theta, s.sol, result, k);
+  Record(t, s.theta, s.sol, result, k,
+         s.slip_increments_t == t ? &s.slip_increments : nullptr);
+  s.slip_increments_t = kNaN;
   s.checkpoints.AtSample(result->samples.back(), &result->checkpoints);
   result->t_reached = t;
   if (sol.status == QuasiStaticStatus::kOk)
@@ -889,10 +898,12 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     return true;
   };
   const std::size_t first = result->switches.size();
-  if (change)
+  if (change) {
     LocateSwitchesAndReversals(s.t_prev, t, slip0, slip1, eps,
                                options_.event_tolerance, evaluate,
                                &result->switches);
+    IntegrateSlipAcrossSwitches(t, first, evaluate, result);
+  }
   if (!coupled) return;
   Eigen::VectorXd& y = s.y_event;
   y = th0;
@@ -919,6 +930,38 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   result->nlp_solves += s.sol.nlp_solves;
   result->nlp_iterations += s.sol.nlp_iterations;
   result->nlp_iterations_native += s.sol.nlp_iterations_native;
+}
+
+// The interval's slip integrals split at its located switches (all of
+// them located, else the trapezoid stays) for Record.
+void Simulator::IntegrateSlipAcrossSwitches(
+    double t, std::size_t first,
+    const std::function<bool(double, std::array<Eigen::Vector2d, 3>*)>&
+        evaluate,
+    SimulationResult* result) {
+  Session& s = *session_;
+  std::vector<double>& breaks = s.slip_breaks;
+  breaks.clear();
+  for (std::size_t j = first; j < result->switches.size(); ++j) {
+    if (!result->switches[j].located) return;
+    breaks.push_back(result->switches[j].t);
+  }
+  std::sort(breaks.begin(), breaks.end());
+  std::array<double, 3> slip0, slip1;
+  for (int i = 0; i < 3; ++i) {
+    slip0[i] = s.slip_prev[i].norm();
+    slip1[i] = s.sol.contacts[i].slip.norm();
+  }
+  std::array<Eigen::Vector2d, 3> v;
+  auto speeds = [&](double tm, std::array<double, 3>* f) {
+    if (!evaluate(tm, &v)) return false;
+    for (int i = 0; i < 3; ++i) (*f)[i] = v[i].norm();
+    return true;
+  };
+  int evaluations = 0;
+  if (IntegrateSlipRegimes(s.t_prev, t, slip0, slip1, breaks, scene_.epsilon,
+                           speeds, &s.slip_increments, &evaluations))
+    s.slip_increments_t = t;
 }
 
 // Step doubling for fixed-step integrators (core/switch_events.h,

@@ -10,6 +10,7 @@
 // sample computed before it is kept and the reason recorded.
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -236,12 +237,17 @@ class Simulator {
   // Switches (core/switch_events.h): locates class changes between the last
   // sample and s.sol at t; in coupled mode restarts the interval there.
   void RestartAtSwitches(double t, SimulationResult* result);
+  void IntegrateSlipAcrossSwitches(
+      double t, std::size_t first,
+      const std::function<bool(double, std::array<Eigen::Vector2d, 3>*)>&
+          evaluate,
+      SimulationResult* result);
   double SwitchStepTolerance() const;
   SegmentAdvance Advance();
   IntegratorStatus IntegrateInterval(double t, double t_next);
   void Record(double t, const Configuration& theta,
               const QuasiStaticSolution& sol, SimulationResult* result,
-              int index) const;
+              int index, const SlipIncrements* increments = nullptr) const;
 
   Scene scene_;
   SimulationOptions options_;

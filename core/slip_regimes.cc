@@ -5,13 +5,19 @@
 namespace quasiroll {
 
 void AccumulateSlipDistances(const TrajectorySample& previous, double epsilon,
-                             TrajectorySample* current) {
+                             TrajectorySample* current,
+                             const SlipIncrements* increments) {
   const double half_dt = 0.5 * (current->t - previous.t);
   for (int i = 0; i < 3; ++i) {
     const ContactSample& before = previous.contacts[i];
     ContactSample& now = current->contacts[i];
     now.sliding_distance = before.sliding_distance;
     now.creep_distance = before.creep_distance;
+    if (increments) {
+      now.sliding_distance += (*increments)[i].sliding;
+      now.creep_distance += (*increments)[i].creep;
+      continue;
+    }
     for (const double slip : {before.slip, now.slip}) {
       if (!std::isfinite(slip)) continue;
       (IsSliding(slip, epsilon) ? now.sliding_distance : now.creep_distance) +=

@@ -27,10 +27,12 @@ inline bool IsSliding(double slip_speed, double epsilon) {
 // The per-wheel cumulative distances of `current` (ContactSample::
 // sliding_distance, creep_distance): those of `previous` plus the trapezoid
 // rule over [previous.t, current.t], each end's half going to its own
-// regime, int |s_i| dt. A sample without a slip (NaN: failed solve) adds
-// nothing.
+// regime, int |s_i| dt; or, given `increments` (an interval with a located
+// switch: IntegrateSlipRegimes, core/switch_events.h), those. A sample
+// without a slip (NaN: failed solve) adds nothing.
 void AccumulateSlipDistances(const TrajectorySample& previous, double epsilon,
-                             TrajectorySample* current);
+                             TrajectorySample* current,
+                             const SlipIncrements* increments = nullptr);
 
 // Sum over the wheels of the last sample's cumulative distances (0 for no
 // samples): a run's sliding and creep distance [m].

@@ -165,4 +165,74 @@ bool IntegrateResolved(double a, double b, double tolerance, double min_step,
   return true;
 }
 
+namespace {
+using Slips = std::array<double, 3>;
+
+// Adaptive Simpson on [a, b] for the three slip speeds (f at a, m, b known;
+// `whole` the Simpson estimate); adds the integrals to *sum.
+bool SimpsonSlips(double a, const Slips& fa, double m, const Slips& fm,
+                  double b, const Slips& fb, const Slips& whole,
+                  const Slips& tol, int depth, const SlipEvaluator& evaluate,
+                  Slips* sum, int* evaluations) {
+  const double lm = 0.5 * (a + m), rm = 0.5 * (m + b);
+  Slips flm, frm;
+  *evaluations += 2;
+  if (!evaluate(lm, &flm) || !evaluate(rm, &frm)) return false;
+  Slips left, right;
+  bool good = true;
+  for (int i = 0; i < 3; ++i) {
+    left[i] = (m - a) / 6 * (fa[i] + 4 * flm[i] + fm[i]);
+    right[i] = (b - m) / 6 * (fm[i] + 4 * frm[i] + fb[i]);
+    good = good && std::abs(left[i] + right[i] - whole[i]) <= 15 * tol[i];
+  }
+  if (good || depth == 0) {
+    for (int i = 0; i < 3; ++i)
+      (*sum)[i] += left[i] + right[i] + (left[i] + right[i] - whole[i]) / 15;
+    return true;
+  }
+  Slips half;
+  for (int i = 0; i < 3; ++i) half[i] = 0.5 * tol[i];
+  return SimpsonSlips(a, fa, lm, flm, m, fm, left, half, depth - 1, evaluate,
+                      sum, evaluations) &&
+         SimpsonSlips(m, fm, rm, frm, b, fb, right, half, depth - 1, evaluate,
+                      sum, evaluations);
+}
+}  // namespace
+
+bool IntegrateSlipRegimes(double t0, double t1, const Slips& slip0,
+                          const Slips& slip1, const std::vector<double>& breaks,
+                          double epsilon, const SlipEvaluator& evaluate,
+                          SlipIncrements* out, int* evaluations) {
+  if (!(t1 > t0))
+    throw std::invalid_argument("IntegrateSlipRegimes: t1 must be > t0");
+  constexpr int kMaxDepth = 8;
+  *out = SlipIncrements{};
+  *evaluations = 0;
+  double a = t0;
+  Slips fa = slip0;
+  for (std::size_t j = 0; j <= breaks.size(); ++j) {
+    const double b = j < breaks.size() ? breaks[j] : t1;
+    if (!(b > a) || b > t1) continue;
+    Slips fb = slip1, fm;
+    const double m = 0.5 * (a + b);
+    *evaluations += j < breaks.size() ? 2 : 1;
+    if ((j < breaks.size() && !evaluate(b, &fb)) || !evaluate(m, &fm))
+      return false;
+    Slips whole, tol, sum{};
+    for (int i = 0; i < 3; ++i) {
+      whole[i] = (b - a) / 6 * (fa[i] + 4 * fm[i] + fb[i]);
+      tol[i] = std::max(1e-4 * std::abs(whole[i]), 1e-3 * epsilon * (b - a));
+    }
+    if (!SimpsonSlips(a, fa, m, fm, b, fb, whole, tol, kMaxDepth, evaluate,
+                      &sum, evaluations))
+      return false;
+    for (int i = 0; i < 3; ++i)
+      (IsSliding(fm[i], epsilon) ? (*out)[i].sliding : (*out)[i].creep) +=
+          sum[i];
+    a = b;
+    fa = fb;
+  }
+  return true;
+}
+
 }  // namespace quasiroll
