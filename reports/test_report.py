@@ -529,6 +529,15 @@ class SelectionTest(unittest.TestCase):
         self.assertIn("no sliding at any ε", pvc)
         self.assertIn("creep/ε constant within 0", pvc)
         self.assertNotIn("sliding distance", pvc)
+        self.assertNotIn("order ε²", paper)
+        # Creep/ε drifting by more than 5 % where the scene slides: the
+        # ε² tails of slides that slow to a stick are named (model.md §7.5).
+        for r in rows:
+            if r["scene"] == "paper":
+                r["creep_distance"] = (56 + 2.7e9 * r["eps"]) * r["eps"]
+        paper, _ = findings.epsilon_findings(rows)
+        self.assertIn("creep/ε constant within 41 %", paper)
+        self.assertIn("order ε²", paper)
 
     def test_validity_counts_failed_problems_not_blowups(self):
         # Issue #21 item 6: validity over every problem, failed runs up to

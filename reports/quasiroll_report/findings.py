@@ -213,6 +213,10 @@ def epsilon_findings(runs):
                      f"creep/ε constant within {fmt(100 * spread, 2)} % "
                      f"({'the two smallest ε' if slides else 'every ε'}): the "
                      "regularisation, not physics")
+            if slides and spread > 0.05:
+                text += ("; the excess is of order ε²: a slide that slows to a stick "
+                         "spends its last 100 ε/a seconds below the sliding threshold "
+                         "(docs/model.md §7.5)")
         out.append(text + ".")
     return out
 
