@@ -150,13 +150,19 @@ void StepSensitivity::Fail(StepSensitivityStatus status,
   out->jacobian.setConstant(kNaN);
 }
 
-bool StepSensitivity::SolveAt(const Configuration& y, const std::string& where,
+std::string StepSensitivity::Where() const {
+  if (stage_ < 0) return "Theta_k";
+  return "stage " + std::to_string(stage_ + 1) + " of step " +
+         std::to_string(step_ + 1);
+}
+
+bool StepSensitivity::SolveAt(const Configuration& y,
                               StepSensitivityResult* out) {
   const QuasiStaticStatus status = solver_->Solve(y, &sol_);
   ++out->quasi_static_solves;
   if (status != QuasiStaticStatus::kOk) {
     Fail(StepSensitivityStatus::kQuasiStaticFailure,
-         where + ": " + ToString(status) + ": " + sol_.message, out);
+         Where() + ": " + ToString(status) + ": " + sol_.message, out);
     return false;
   }
   w_ = solver_->problem().JointSpaceVelocity(sol_.z);
@@ -168,14 +174,14 @@ bool StepSensitivity::SolveAt(const Configuration& y, const std::string& where,
     // No derivative exists there: the value goes on, the Jacobian is NaN.
     have_singular_ = true;
     std::ostringstream os;
-    os << where << ": quasi-static sensitivities " << ToString(s) << " (rcond "
-       << sens_.rcond << ")";
+    os << Where() << ": quasi-static sensitivities " << ToString(s)
+       << " (rcond " << sens_.rcond << ")";
     out->message = os.str();
     return true;
   }
   for (int a = 0; a < sens_.num_one_sided; ++a)
     out->one_sided.push_back(
-        where + ": " +
+        Where() + ": " +
         OneSidedName(sens_, sens_.one_sided_items[static_cast<size_t>(a)]));
   dw_.topRows<6>() = sens_.twist;
   dw_.bottomRows<6>() = sens_.joint_rates;
@@ -282,14 +288,13 @@ bool StepSensitivity::Project(Configuration* y, StepSensitivityResult* out) {
 }
 
 bool StepSensitivity::StageTwist(const Configuration& y, const StateJac& s,
-                                 const std::string& where,
                                  StepSensitivityResult* out) {
   if (options_.coupling == Coupling::kZoh) {
     w_ = w_held_;
     dw_ = dw_held_;
     return true;
   }
-  if (!SolveAt(y, where, out)) return false;
+  if (!SolveAt(y, out)) return false;
   if (!options_.derivatives || have_singular_) return true;
   // dw = W_Theta(Y) S + [0 W_p(Y)]: the stage state carries Theta_k's
   // influence, the parameters act directly too.
@@ -311,9 +316,9 @@ bool StepSensitivity::RkStep(double h, int step, Configuration* y, StateJac* s,
       s_stage = *s;
       if (i > 0) s_stage.noalias() += (h * kA[i]) * dk[i - 1];
     }
-    const std::string where = "stage " + std::to_string(i + 1) + " of step " +
-                              std::to_string(step + 1);
-    if (!StageTwist(stage, s_stage, where, out)) return false;
+    stage_ = i;  // names a failure or a one-sided constraint (Where())
+    step_ = step;
+    if (!StageTwist(stage, s_stage, out)) return false;
     if (!Field(stage, w_, &k[i], out)) return false;
     if (derivs && !have_singular_ &&
         !FieldDerivative(stage, w_, s_stage, dw_, &dk[i], out))
@@ -346,7 +351,8 @@ StepSensitivityStatus StepSensitivity::Compute(
   Configuration y = theta;
   if (options_.coupling == Coupling::kZoh) {
     // The simulator solves at Theta_k as given (before any projection).
-    if (!SolveAt(y, "Theta_k", out)) return out->status;
+    stage_ = -1;
+    if (!SolveAt(y, out)) return out->status;
     w_held_ = w_;
     dw_held_ = dw_;
   }

@@ -16,7 +16,11 @@
 // (rk-baumgarte), and rk-projection projects the initial state and every
 // step's end with WeightedProjection::Project (model.md §8.4), the code the
 // backend itself calls. The value agrees with a one-interval Simulator run
-// to round-off (zoh) or to the NLP tolerance (coupled: warm starts differ).
+// to round-off in zoh and to the NLP tolerance in coupled mode (its stage
+// solves are warm-started differently); measured: bit for bit in both
+// (tests/core/test_step_sensitivity.cc). The simulator's other paths are
+// not this map: coupled intervals it integrates resolved (step doubling,
+// locate_switches with a wheel in the creep band) and located stops.
 //
 // Derivative (chain rule through the stages, the variational equations of
 // the discrete map). Parameters pi = (Theta_k, mu, eps, rates), 29 columns
@@ -164,8 +168,9 @@ class StepSensitivity {
   using StateJac = StepSensitivityResult::Jacobian;
 
   // Solves at y (and the sensitivities there if wanted) into w_, dw_dpi_.
-  bool SolveAt(const Configuration& y, const std::string& where,
-               StepSensitivityResult* out);
+  bool SolveAt(const Configuration& y, StepSensitivityResult* out);
+  // "Theta_k" or "stage i of step s" (1-based) for messages and names.
+  std::string Where() const;
   // Field value at (y, w); false on failure (status set in out).
   bool Field(const Configuration& y, const Vec12& w, Configuration* f,
              StepSensitivityResult* out);
@@ -175,7 +180,7 @@ class StepSensitivity {
                        StepSensitivityResult* out);
   // The stage's twist and its derivative: held (zoh) or solved at y.
   bool StageTwist(const Configuration& y, const StateJac& s,
-                  const std::string& where, StepSensitivityResult* out);
+                  StepSensitivityResult* out);
   // P = I - D J^T (J D J^T)^{-1} J at y.
   bool Projector(const Configuration& y, Eigen::Matrix<double, 21, 21>* p,
                  StepSensitivityResult* out);
@@ -200,6 +205,7 @@ class StepSensitivity {
   Vec12 w_ = Vec12::Zero(), w_held_ = Vec12::Zero();
   ParamJac dw_ = ParamJac::Zero(), dw_held_ = ParamJac::Zero();
   bool have_singular_ = false;
+  int stage_ = -1, step_ = 0;  // where the interval is (Where())
 };
 
 // Convenience: the scene's model and parameters, Theta_k = the scene's

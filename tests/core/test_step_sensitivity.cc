@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,9 @@ std::string CaseName(const Case& c) {
   return testing_util::GtestName(c.scene + "_" + ToString(c.coupling) + "_" +
                                  c.dae);
 }
+
+// gtest's name for a parameter in failure messages and test listings.
+void PrintTo(const Case& c, std::ostream* os) { *os << CaseName(c); }
 
 StepSensitivityOptions StepOptions(const Case& c, double dt) {
   StepSensitivityOptions o;
@@ -284,7 +288,7 @@ TEST(StepSensitivityProjection, ProjectorIsTheProjectionsDerivative) {
     worst = std::max(worst, (fd - p * v).lpNorm<Eigen::Infinity>() /
                                 (p * v).lpNorm<Eigen::Infinity>());
   }
-  // Truncation ~h |d2 Pi| and Newton's tolerance 1e-14 / h.
+  // Truncation ~h |d2 Pi| and Newton's tolerance 1e-14 / h; measured 4.9e-11.
   EXPECT_LE(worst, 1e-7);
   std::printf("projector vs differences of the projection: %.2e\n", worst);
 }
