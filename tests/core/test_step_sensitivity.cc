@@ -37,11 +37,13 @@ struct Case {
   std::string scene;
   Coupling coupling;
   std::string dae;
+  int substeps = 1;  // RK4 steps per interval
 };
 
 std::string CaseName(const Case& c) {
-  return testing_util::GtestName(c.scene + "_" + ToString(c.coupling) + "_" +
-                                 c.dae);
+  return testing_util::GtestName(
+      c.scene + "_" + ToString(c.coupling) + "_" + c.dae +
+      (c.substeps > 1 ? "_substeps" + std::to_string(c.substeps) : ""));
 }
 
 // gtest's name for a parameter in failure messages and test listings.
@@ -52,6 +54,7 @@ StepSensitivityOptions StepOptions(const Case& c, double dt) {
   o.coupling = c.coupling;
   o.dae = c.dae;
   o.dt = dt;
+  o.substeps = c.substeps;
   return o;
 }
 
@@ -182,8 +185,8 @@ TEST_P(StepSensitivityTest, AgreesWithResimulatedCentralDifferences) {
       }
       const Scene s_plus = k < 0 ? scene : Perturbed(scene, k, h);
       const Scene s_minus = k < 0 ? scene : Perturbed(scene, k, -h);
-      if (!Resimulate(s_plus, c, kDt, 1, t_plus, &plus) ||
-          !Resimulate(s_minus, c, kDt, 1, t_minus, &minus))
+      if (!Resimulate(s_plus, c, kDt, c.substeps, t_plus, &plus) ||
+          !Resimulate(s_minus, c, kDt, c.substeps, t_minus, &minus))
         return false;
       *out = (plus - minus) / (2 * h);
       return true;
@@ -216,8 +219,10 @@ INSTANTIATE_TEST_SUITE_P(Scenes, StepSensitivityTest,
                              {"incline10", Coupling::kZoh, "rk-projection"},
                              {"incline10", Coupling::kZoh, "rk-baumgarte"},
                              {"incline10", Coupling::kCoupled, "rk-projection"},
-                             {"incline10", Coupling::kCoupled,
-                              "rk-baumgarte"}}),
+                             {"incline10", Coupling::kCoupled, "rk-baumgarte"},
+                             {"paper", Coupling::kZoh, "rk-projection", 2},
+                             {"incline10", Coupling::kCoupled, "rk-baumgarte",
+                              2}}),
                          [](const auto& info) { return CaseName(info.param); });
 
 // The robot's H, J, D for WeightedProjection (as the simulator's).
@@ -334,6 +339,31 @@ TEST(StepSensitivityStatusTest, OneSidedAtTheFrictionConeIsReported) {
     EXPECT_NE(r.message.find("one-sided"), std::string::npos) << r.message;
     EXPECT_TRUE(r.theta_next.allFinite());
     EXPECT_TRUE(r.jacobian.allFinite());
+  }
+}
+
+// A singular quasi-static Jacobian is a status with the value and no
+// derivative. Forced here by counting every J_E as singular
+// (singular_rcond = 1: rcond <= 1 always; a J_E singular to working
+// precision is what the default 1e-14 catches, core/sensitivity.h).
+TEST(StepSensitivityStatusTest, SingularIsAStatusWithValueAndNoDerivative) {
+  RegisterBuiltinNlpSolvers();
+  const Scene scene = SceneFile("paper");
+  for (Coupling coupling : {Coupling::kZoh, Coupling::kCoupled}) {
+    StepSensitivityOptions o;
+    o.coupling = coupling;
+    o.sensitivity.singular_rcond = 1.0;
+    const StepSensitivityResult r = ComputeStepSensitivity(scene, o);
+    o.derivatives = false;
+    const StepSensitivityResult value = ComputeStepSensitivity(scene, o);
+    EXPECT_EQ(r.status, StepSensitivityStatus::kSingular) << r.message;
+    EXPECT_NE(
+        r.message.find(coupling == Coupling::kZoh ? "Theta_k" : "stage 1"),
+        std::string::npos)
+        << r.message;
+    EXPECT_NE(r.message.find("SINGULAR"), std::string::npos) << r.message;
+    EXPECT_EQ(r.theta_next, value.theta_next);
+    EXPECT_TRUE(r.jacobian.array().isNaN().all());
   }
 }
 
