@@ -141,9 +141,9 @@ struct StepSensitivityResult {
 std::vector<SensitivityEntry> StepSensitivityEntries(
     const StepSensitivityResult& result);
 
-// One interval and its derivative, with preallocated workspaces (after the
-// first Compute() only the solver's and the one-sided names' allocations
-// remain).
+// One interval and its derivative, with preallocated workspaces: after the
+// first call Compute() does not allocate (messages and one-sided names
+// aside; tests/core/test_step_sensitivity.cc counts it).
 class StepSensitivity {
  public:
   // `model` must outlive this. Validates options (std::invalid_argument

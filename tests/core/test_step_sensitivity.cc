@@ -21,6 +21,7 @@
 #include "quasiroll/core/simulator.h"
 #include "quasiroll/core/step_sensitivity.h"
 #include "quasiroll/core/weighted_projection.h"
+#include "tests/heap_counter.h"
 #include "tests/test_names.h"
 
 namespace quasiroll {
@@ -364,6 +365,32 @@ TEST(StepSensitivityStatusTest, SingularIsAStatusWithValueAndNoDerivative) {
     EXPECT_NE(r.message.find("SINGULAR"), std::string::npos) << r.message;
     EXPECT_EQ(r.theta_next, value.theta_next);
     EXPECT_TRUE(r.jacobian.array().isNaN().all());
+  }
+}
+
+// After a first call Compute() does not allocate (zoh and coupled: the
+// solver's warm-started solves and the analyzer reuse their workspaces) and
+// gives the same bits again (the solver restarts cold every call).
+TEST(StepSensitivityWorkspace, NoAllocationAfterWarmUpAndRepeatable) {
+  RegisterBuiltinNlpSolvers();
+  const Scene scene = SceneFile("paper");
+  const KinematicModel model(scene.geometry, scene.terrain);
+  const Configuration theta = SolveInitialConfiguration(model, scene);
+  for (Coupling coupling : {Coupling::kZoh, Coupling::kCoupled}) {
+    for (const char* dae : {"rk-projection", "rk-baumgarte"}) {
+      StepSensitivityOptions o;
+      o.coupling = coupling;
+      o.dae = dae;
+      StepSensitivity step(model, QuasiStaticParameters::FromScene(scene), o);
+      StepSensitivityResult first, second;
+      ASSERT_EQ(step.Compute(theta, &first), StepSensitivityStatus::kOk);
+      const long long before = testing_util::g_heap_allocations.load();
+      step.Compute(theta, &second);
+      EXPECT_EQ(testing_util::g_heap_allocations.load() - before, 0)
+          << dae << " " << ToString(coupling);
+      EXPECT_EQ(first.theta_next, second.theta_next);
+      EXPECT_EQ(first.jacobian, second.jacobian);
+    }
   }
 }
 
