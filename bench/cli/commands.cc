@@ -200,31 +200,36 @@ void Commands::Register(CLI::App& app) {
   solve->add_flag("--sensitivities", solve_.sensitivities,
                   "Also compute the derivatives of the solution w.r.t. the "
                   "state, mu, eps and the commanded rates (docs/cli.md)");
-  solve->add_flag("--step-derivative", solve_.step_derivative,
-                  "Also integrate one interval from the initial "
-                  "configuration and compute its derivative w.r.t. the "
-                  "state, mu, eps and the rates (docs/cli.md)");
+  CLI::Option* step = solve->add_flag(
+      "--step-derivative", solve_.step_derivative,
+      "Also integrate one interval from the initial configuration and "
+      "compute its derivative w.r.t. the state, mu, eps and the rates "
+      "(docs/cli.md)");
+  // The interval's flags mean nothing without --step-derivative.
   solve
       ->add_option("--dt", solve_.dt,
                    "--step-derivative: interval [s] (default: the scene's "
                    "dt)")
-      ->check(PositiveNumber());
+      ->check(PositiveNumber())
+      ->needs(step);
   solve
       ->add_option("--coupling", solve_.coupling,
                    "--step-derivative: zoh | coupled")
       ->check(OneOf({"zoh", "coupled"}))
-      ->capture_default_str();
-  solve->add_option("--dae", solve_.dae,
-                    "--step-derivative: explicit fixed-step integrator (" +
-                        StepSensitivityOptions().dae +
-                        " or the Baumgarte "
-                        "RK; default " +
-                        StepSensitivityOptions().dae + ")");
+      ->capture_default_str()
+      ->needs(step);
+  solve
+      ->add_option("--dae", solve_.dae,
+                   "--step-derivative: explicit fixed-step RK4 integrator, "
+                   "the projection or the Baumgarte one (default " +
+                       StepSensitivityOptions().dae + ")")
+      ->needs(step);
   solve
       ->add_option("--substeps", solve_.substeps,
                    "--step-derivative: RK4 steps per interval")
       ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(step);
   solve->callback([this] { selected_ = [this] { return RunSolve(solve_); }; });
 
   RegisterRun(app, nlps, daes);
