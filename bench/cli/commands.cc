@@ -24,6 +24,7 @@
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/sensitivity.h"
 #include "quasiroll/core/simulator.h"
+#include "quasiroll/core/step_sensitivity.h"
 
 namespace quasiroll::cli {
 
@@ -199,6 +200,36 @@ void Commands::Register(CLI::App& app) {
   solve->add_flag("--sensitivities", solve_.sensitivities,
                   "Also compute the derivatives of the solution w.r.t. the "
                   "state, mu, eps and the commanded rates (docs/cli.md)");
+  CLI::Option* step = solve->add_flag(
+      "--step-derivative", solve_.step_derivative,
+      "Also integrate one interval from the initial configuration and "
+      "compute its derivative w.r.t. the state, mu, eps and the rates "
+      "(docs/cli.md)");
+  // The interval's flags mean nothing without --step-derivative.
+  solve
+      ->add_option("--dt", solve_.dt,
+                   "--step-derivative: interval [s] (default: the scene's "
+                   "dt)")
+      ->check(PositiveNumber())
+      ->needs(step);
+  solve
+      ->add_option("--coupling", solve_.coupling,
+                   "--step-derivative: zoh | coupled")
+      ->check(OneOf({"zoh", "coupled"}))
+      ->capture_default_str()
+      ->needs(step);
+  solve
+      ->add_option("--dae", solve_.dae,
+                   "--step-derivative: explicit fixed-step RK4 integrator, "
+                   "the projection or the Baumgarte one (default " +
+                       StepSensitivityOptions().dae + ")")
+      ->needs(step);
+  solve
+      ->add_option("--substeps", solve_.substeps,
+                   "--step-derivative: RK4 steps per interval")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str()
+      ->needs(step);
   solve->callback([this] { selected_ = [this] { return RunSolve(solve_); }; });
 
   RegisterRun(app, nlps, daes);
@@ -422,6 +453,89 @@ void PrintSensitivities(const QuasiStaticSensitivities& s) {
       s.twist.rightCols(6).cwiseAbs().maxCoeff());
 }
 
+// `solve --step-derivative`: one interval from theta and its derivative.
+StepSensitivityResult StepDerivative(const SolveArgs& args,
+                                     const bench::ResolvedSolve& resolved,
+                                     const KinematicModel& model,
+                                     const Configuration& theta,
+                                     StepSensitivityOptions* o) {
+  o->nlp = resolved.nlp;
+  o->nlp_options = resolved.nlp_options;
+  o->quasi_static = resolved.quasi_static;
+  o->dt = args.dt ? *args.dt : resolved.scene.dt;
+  o->coupling = CouplingFromString(args.coupling);
+  if (!args.dae.empty()) o->dae = args.dae;
+  o->substeps = args.substeps;
+  StepSensitivity step(model, QuasiStaticParameters::FromScene(resolved.scene),
+                       *o);
+  StepSensitivityResult r;
+  step.Compute(theta, &r);
+  return r;
+}
+
+// The `step_sensitivities` object (docs/formats.md): the interval's setup,
+// status, Theta_k and Theta_{k+1}, and the entries d<output>_d<input>
+// while the derivative exists (OK, ONE_SIDED).
+std::string StepSensitivityJson(const StepSensitivityOptions& o,
+                                const Configuration& theta,
+                                const StepSensitivityResult& r) {
+  JsonWriter w;
+  w.BeginObject();
+  w.Key("status").Value(ToString(r.status));
+  w.Key("message").Value(r.message);
+  w.Key("method").Value(StepSensitivityResult::kMethod);
+  w.Key("dae").Value(o.dae);
+  w.Key("coupling").Value(ToString(o.coupling));
+  w.Key("dt").Value(o.dt);
+  w.Key("substeps").Value(o.substeps);
+  w.Key("one_sided").Value(!r.one_sided.empty());
+  w.Key("one_sided_constraints").BeginArray();
+  for (const std::string& name : r.one_sided) w.Value(name);
+  w.EndArray();
+  w.Key("state_names").BeginArray();
+  for (const char* name : StateNames()) w.Value(name);
+  w.EndArray();
+  w.Key("rate_names").BeginArray();
+  for (const char* name : JointNames()) w.Value(name);
+  w.EndArray();
+  w.Key("state").Array(theta);
+  w.Key("state_next").Array(r.theta_next);
+  w.Key("drift").Value(r.drift);
+  if (r.jacobian.allFinite()) {
+    for (const SensitivityEntry& e : StepSensitivityEntries(r)) {
+      w.Key(e.name);
+      if (e.vector) {
+        w.Array(Eigen::VectorXd(e.value.col(0)));
+        continue;
+      }
+      w.BeginArray();
+      for (Eigen::Index i = 0; i < e.value.rows(); ++i)
+        w.Array(Eigen::VectorXd(e.value.row(i).transpose()));
+      w.EndArray();
+    }
+  }
+  w.EndObject();
+  return w.str();
+}
+
+void PrintStepSensitivities(const StepSensitivityOptions& o,
+                            const StepSensitivityResult& r) {
+  std::printf("step derivative %s (%s, %s, dt %g, %d substep(s), %s)%s%s\n",
+              ToString(r.status), o.dae.c_str(), ToString(o.coupling), o.dt,
+              o.substeps, StepSensitivityResult::kMethod,
+              r.message.empty() ? "" : ": ", r.message.c_str());
+  for (const std::string& name : r.one_sided)
+    std::printf("  one-sided at %s\n", name.c_str());
+  if (!r.jacobian.allFinite()) return;
+  std::printf(
+      "  |dstate_next/dstate - I|max %.6g, |dstate_next/dmu|max %.6g, "
+      "|dstate_next/drates|max %.6g, drift %.3g\n",
+      (r.dstate() - Eigen::Matrix<double, 21, 21>::Identity())
+          .cwiseAbs()
+          .maxCoeff(),
+      r.dmu().cwiseAbs().maxCoeff(), r.drates().cwiseAbs().maxCoeff(), r.drift);
+}
+
 }  // namespace
 
 int RunSolve(const SolveArgs& args) {
@@ -449,13 +563,24 @@ int RunSolve(const SolveArgs& args) {
   QuasiStaticSensitivities sens;
   if (ok && args.sensitivities)
     SensitivityAnalyzer().Compute(solver.problem(), sol.z, &sens);
+  StepSensitivityOptions step_options;
+  StepSensitivityResult step;
+  if (ok && args.step_derivative)
+    step = StepDerivative(args, resolved, model, theta, &step_options);
   // 1-based wheel, or none (docs/cli.md, "No wheel").
   const int critical_wheel =
       sol.critical_contact >= 0 ? sol.critical_contact + 1 : 0;
   if (args.json) {
-    std::cout << SolveJson(scene, args.nlp, status, sol,
-                           args.sensitivities ? &sens : nullptr)
-              << "\n";
+    std::string json = SolveJson(scene, args.nlp, status, sol,
+                                 args.sensitivities ? &sens : nullptr);
+    if (args.step_derivative) {  // additive: one more key at the end
+      json.pop_back();           // the document's closing '}'
+      json += ",\"step_sensitivities\":" +
+              (ok ? StepSensitivityJson(step_options, theta, step)
+                  : std::string("null")) +
+              "}";
+    }
+    std::cout << json << "\n";
     return ok ? kExitOk : kExitNotOk;
   }
   std::printf("status       %s%s%s\n", ToString(status),
@@ -492,6 +617,7 @@ int RunSolve(const SolveArgs& args) {
   for (double t : sol.actuator_torques) std::printf("%.6f ", t);
   std::printf("N m (nan = passive)\ngap G = %.3e W\n", sol.gap);
   if (args.sensitivities) PrintSensitivities(sens);
+  if (args.step_derivative) PrintStepSensitivities(step_options, step);
   return kExitOk;
 }
 

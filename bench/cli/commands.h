@@ -38,6 +38,14 @@ struct SolveArgs {
   std::vector<std::string> nlp_opts;  // --nlp-opt key=value
   bool json = false;
   bool sensitivities = false;  // --sensitivities (core/sensitivity.h)
+  // --step-derivative (core/step_sensitivity.h): one interval from the
+  // initial configuration and its derivative; --dt (default: the scene's),
+  // --coupling, --dae ("": the step derivative's default), --substeps.
+  bool step_derivative = false;
+  std::optional<double> dt;
+  std::string coupling = "zoh";
+  std::string dae;
+  int substeps = 1;
 };
 
 struct RunArgs {

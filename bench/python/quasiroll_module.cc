@@ -7,6 +7,7 @@
 // The GIL is released while C++ computes; a run gives it back every 0.1 s
 // of wall time to let Ctrl-C (KeyboardInterrupt) through.
 #include <dlfcn.h>
+#include <pybind11/eigen.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
@@ -28,6 +29,7 @@
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/sensitivity.h"
 #include "quasiroll/core/simulator.h"
+#include "quasiroll/core/step_sensitivity.h"
 
 namespace py = pybind11;
 
@@ -124,6 +126,83 @@ std::string SolveText(const Scene& scene_in, const std::string& nlp,
                      sensitivities ? &sens : nullptr);
   }
   return json;
+}
+
+// One interval and its derivative (core/step_sensitivity.h; docs/python.md
+// `step`), as a dict of numpy arrays with the keys of the CLI's
+// `step_sensitivities` object (docs/formats.md); derivatives None when
+// they were not computed or do not exist (status SINGULAR or a failure).
+py::dict StepDict(const Scene& scene_in,
+                  const std::optional<std::vector<double>>& state,
+                  std::optional<double> dt, const std::string& coupling,
+                  const std::string& dae, int substeps, const std::string& nlp,
+                  std::optional<double> mu, std::optional<double> eps,
+                  std::optional<std::string> mode,
+                  std::optional<double> nlp_tol,
+                  std::optional<int> nlp_max_iter,
+                  const GivenOptions& nlp_options, bool derivatives) {
+  RequirePositive("dt", dt);
+  if (state && state->size() != static_cast<std::size_t>(kConfigSize))
+    throw std::invalid_argument(
+        "state: must have 21 entries (state_names), "
+        "got " +
+        std::to_string(state->size()));
+  const bench::RunRequest request =
+      SolveRequest(nlp, mu, eps, mode, nlp_tol, nlp_max_iter, nlp_options);
+  const bench::ResolvedSolve resolved = bench::ResolveSolveRequest(
+      scene_in, request, [](const std::string& key) { return key; });
+  const Scene& scene = resolved.scene;
+  StepSensitivityOptions o;
+  o.nlp = resolved.nlp;
+  o.nlp_options = resolved.nlp_options;
+  o.quasi_static = resolved.quasi_static;
+  o.dt = dt ? *dt : scene.dt;
+  o.coupling = CouplingFromString(coupling);
+  if (!dae.empty()) o.dae = dae;
+  o.substeps = substeps;
+  o.derivatives = derivatives;
+  RegisterBuiltinNlpSolvers();
+  Configuration theta;
+  StepSensitivityResult r;
+  {
+    py::gil_scoped_release release;
+    const KinematicModel model(scene.geometry, scene.terrain);
+    theta = state
+                ? Configuration(Eigen::Map<const Configuration>(state->data()))
+                : SolveInitialConfiguration(model, scene);
+    StepSensitivity step(model, QuasiStaticParameters::FromScene(scene), o);
+    step.Compute(theta, &r);
+  }
+  py::dict d;
+  d["status"] = ToString(r.status);
+  d["message"] = r.message;
+  d["method"] = StepSensitivityResult::kMethod;
+  d["dae"] = o.dae;
+  d["coupling"] = ToString(o.coupling);
+  d["dt"] = o.dt;
+  d["substeps"] = o.substeps;
+  d["one_sided"] = !r.one_sided.empty();
+  d["one_sided_constraints"] = r.one_sided;
+  std::vector<std::string> names(StateNames().begin(), StateNames().end());
+  std::vector<std::string> rates(JointNames().begin(), JointNames().end());
+  d["state_names"] = names;
+  d["rate_names"] = rates;
+  d["state"] = Eigen::VectorXd(theta);
+  d["state_next"] = r.theta_next.allFinite()
+                        ? py::object(py::cast(Eigen::VectorXd(r.theta_next)))
+                        : py::object(py::none());
+  d["drift"] = r.drift;
+  const bool have = derivatives && r.jacobian.allFinite();
+  for (const SensitivityEntry& e : StepSensitivityEntries(r)) {
+    if (!have) {
+      d[e.name.c_str()] = py::none();
+    } else if (e.vector) {
+      d[e.name.c_str()] = Eigen::VectorXd(e.value.col(0));
+    } else {
+      d[e.name.c_str()] = Eigen::MatrixXd(e.value);
+    }
+  }
+  return d;
 }
 
 // (trajectory.csv text, run.json text) of one simulation.
@@ -275,6 +354,11 @@ PYBIND11_MODULE(_quasiroll, m) {
         py::arg("mu"), py::arg("eps"), py::arg("mode"), py::arg("nlp_tol"),
         py::arg("nlp_max_iter"), py::arg("nlp_options"),
         py::arg("sensitivities") = false);
+  m.def("_step", &StepDict, py::arg("scene"), py::arg("state"), py::arg("dt"),
+        py::arg("coupling"), py::arg("dae"), py::arg("substeps"),
+        py::arg("nlp"), py::arg("mu"), py::arg("eps"), py::arg("mode"),
+        py::arg("nlp_tol"), py::arg("nlp_max_iter"), py::arg("nlp_options"),
+        py::arg("derivatives"));
   m.def("_run_text", &RunText, py::arg("scene"), py::arg("nlp"), py::arg("dae"),
         py::arg("coupling"), py::arg("dt"), py::arg("t_end"), py::arg("mu"),
         py::arg("eps"), py::arg("mode"), py::arg("rk_method"), py::arg("sigma"),

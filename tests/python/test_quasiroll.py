@@ -108,6 +108,55 @@ def test_solve_sensitivities_match_resolves_and_cli():
     assert "sensitivities" not in quasiroll.solve(scene("paper"), "newton")
 
 
+def test_step_derivative_matches_resimulation_and_cli():
+    # step(): one interval and its derivative (docs/python.md, model.md
+    # §7.9), numpy arrays named as the CLI's step_sensitivities keys.
+    inc = scene("incline10")
+    r = quasiroll.step(inc, dt=0.05, nlp="newton")
+    assert r["status"] == "OK" and not r["one_sided"]
+    assert r["method"] == "rk4-chain-rule+ift-kkt+central-fd"
+    assert r["state_names"][2] == "x_g1" and r["rate_names"][1] == "alpha1"
+    assert r["dstate_next_dstate"].shape == (21, 21)
+    assert r["dstate_next_dmu"].shape == (21,)
+    assert r["dstate_next_deps"].shape == (21,)
+    assert r["dstate_next_drates"].shape == (21, 6)
+    # Independent reference: central differences of re-simulated intervals
+    # (value-only steps) in x_g1 and in mu, h = 1e-5 (pvc is
+    # smooth there: truncation ~h^2, re-solve noise ~1e-15 / h; the C++
+    # test measures 3e-9), to 1e-6 relative.
+    h = 1e-5
+    x = [quasiroll.step(inc, state=r["state"] + d * np.eye(21)[2], dt=0.05,
+                        nlp="newton", derivatives=False)["state_next"]
+         for d in (h, -h)]
+    fd = (x[0] - x[1]) / (2 * h)
+    col = r["dstate_next_dstate"][:, 2]
+    assert np.max(np.abs(col - fd)) <= 1e-6 * np.max(np.abs(fd))
+    # mu (relative to max(|fd|, dt), as the C++ test).
+    m = [quasiroll.step(inc, dt=0.05, nlp="newton", mu=0.5 + d,
+                        derivatives=False)["state_next"] for d in (h, -h)]
+    fd = (m[0] - m[1]) / (2 * h)
+    scale = max(np.max(np.abs(fd)), 0.05)
+    assert np.max(np.abs(r["dstate_next_dmu"] - fd)) <= 1e-6 * scale
+    # The CLI prints the same numbers (the same computation).
+    c = cli_json("solve", "--scene", os.path.join(SCENES, "incline10.yaml"),
+                 "--nlp", "newton", "--step-derivative", "--dt", "0.05")
+    cs = c["step_sensitivities"]
+    np.testing.assert_array_equal(np.array(cs["dstate_next_dstate"]),
+                                  r["dstate_next_dstate"])
+    np.testing.assert_array_equal(np.array(cs["state_next"]), r["state_next"])
+    # Without derivatives: the value, derivatives None; misuse: ValueError
+    # naming the keyword.
+    v = quasiroll.step(inc, dt=0.05, nlp="newton", derivatives=False)
+    np.testing.assert_array_equal(v["state_next"], r["state_next"])
+    assert v["dstate_next_dstate"] is None
+    with pytest.raises(ValueError, match="state: must have 21"):
+        quasiroll.step(inc, state=[0.0, 1.0])
+    with pytest.raises(ValueError, match="dae: must be"):
+        quasiroll.step(inc, dae="no-such-integrator")
+    with pytest.raises(ValueError, match="dt"):
+        quasiroll.step(inc, dt=-1.0)
+
+
 @pytest.mark.skipif(not BIN, reason="QUASIROLL_BINARY not set")
 def test_failed_solve_has_none_not_zeros_and_equals_cli():
     # 10 degree incline, pvc: rolling needs mu > 0.318914 (docs/model.md).

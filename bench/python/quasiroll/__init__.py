@@ -24,7 +24,7 @@ from ._quasiroll import load_scene as _load_scene
 from . import _quasiroll
 
 __all__ = ["Scene", "SceneError", "GeometryError", "load_scene", "pose",
-           "solve", "run", "backends", "load_runs", "commit"]
+           "solve", "step", "run", "backends", "load_runs", "commit"]
 
 
 def load_scene(path):
@@ -98,6 +98,31 @@ def solve(scene, nlp=None, *, mu=None, eps=None, mode=None, nlp_tol=None,
         d["sensitivities"] = sens
     d["ok"] = d["status"] == "OK"
     return d
+
+
+def step(scene, state=None, *, dt=None, coupling="zoh", dae=None,
+         substeps=1, derivatives=True, nlp=None, mu=None, eps=None,
+         mode=None, nlp_tol=None, nlp_max_iter=None, nlp_options=None):
+    """One hold interval from `state` (21 values in the order of
+    state_names; None: the scene's initial configuration) and its
+    derivative: what a planner or an optimiser calls (docs/python.md,
+    docs/model.md §7.9; `quasiroll solve --step-derivative --json`).
+    dt: the interval (the scene's); coupling "zoh" (twist solved at the
+    state and held) or "coupled" (re-solved at every RK stage); dae: the
+    explicit fixed-step integrator (None: the projection RK, or the
+    Baumgarte RK by its registry name); substeps: RK4 steps per interval.
+    Returns a dict: status ("OK", "ONE_SIDED", "SINGULAR", ...), message,
+    one_sided_constraints, state_names, rate_names, state, state_next
+    (numpy; None without a value), drift, and the derivatives
+    dstate_next_dstate (21 x 21), dstate_next_dmu, dstate_next_deps (21),
+    dstate_next_drates (21 x 6) as numpy arrays (rows: state_next, columns:
+    the input), None when derivatives=False or when they do not exist."""
+    if state is not None:
+        state = [float(v) for v in np.asarray(state, dtype=float).ravel()]
+    return _quasiroll._step(
+        scene, state, dt, coupling, dae or "", int(substeps), nlp or "", mu,
+        eps, mode, nlp_tol, nlp_max_iter,
+        _given_options("nlp_options", nlp_options), bool(derivatives))
 
 
 def run(scene, nlp=None, dae=None, *, coupling="zoh", dt=None,
