@@ -242,9 +242,9 @@ OptionTable CvodeProjectionIntegrator::option_table() const {
   table.push_back(OptionSpec::Choice(
       "jacobian", "ift", {"ift", "fd"},
       "dF/dy in the Newton matrix: ift = the ODE's RhsJacobian where it "
-      "gives one (robot: exact kinematics + implicit-function-theorem "
-      "sensitivities, model.md §8.9), else differences; fd = always "
-      "CVODE's difference quotients"));
+      "gives one (robot: central differences of the kinematics + "
+      "implicit-function-theorem sensitivities of the solve, model.md §8.9), "
+      "else differences; fd = always CVODE's difference quotients"));
   return table;
 }
 

@@ -394,8 +394,9 @@ OptionTable IdaIntegrator::option_table() const {
   table.push_back(OptionSpec::Choice(
       "jacobian", "ift", {"ift", "fd"},
       "dF/dx in the iteration matrix: ift = the ODE's RhsJacobian where it "
-      "gives one (robot: exact kinematics + implicit-function-theorem "
-      "sensitivities, model.md §8.9), else differences; fd = always forward "
+      "gives one (robot: central differences of the kinematics + "
+      "implicit-function-theorem sensitivities of the solve, model.md §8.9), "
+      "else differences; fd = always forward "
       "differences of Rhs"));
   return table;
 }
