@@ -125,7 +125,7 @@ class Simulator::RobotOde final : public ConstrainedOde {
   bool RhsJacobian(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::MatrixXd> dfdy) override {
     const Configuration q = y;
-    if (!q.allFinite()) return false;
+    if (!q.allFinite()) return Fallback();
     Vec12 w = w_;
     if (coupling_ == Coupling::kCoupled) {
       if (!have_solved_ || q != solved_q_ ||

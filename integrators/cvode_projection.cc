@@ -307,8 +307,8 @@ int CvodeProjectionIntegrator::Impl::Configure(
   if (flag == CV_SUCCESS) {
     bool install = ode_jacobian && jac_installed && jac_ode == ode;
     if (ode_jacobian && !install) {
-      ++result->jacobian_evaluations;
       install = ode->RhsJacobian(t0, y0, jac_probe);
+      if (install) ++result->jacobian_evaluations;
     }
     if (install != jac_installed)
       flag = CVodeSetJacFn(mem, install ? &Impl::Jacobian : nullptr);
