@@ -8,6 +8,7 @@
 
 #include "quasiroll/core/checkpoints.h"
 #include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/sensitivity.h"
 #include "quasiroll/core/slip_regimes.h"
 
 namespace quasiroll {
@@ -103,7 +104,77 @@ class Simulator::RobotOde final : public ConstrainedOde {
     Configuration qd;
     if (!model_.Rhs(q, w, &qd)) return false;
     ydot = qd;
+    if (coupling_ == Coupling::kCoupled) {
+      solved_q_ = q;
+      have_solved_ = true;
+    }
     return true;
+  }
+
+  // dF/dTheta (model.md §8.9). zoh: the held twist does not depend on the
+  // state, dF/dTheta = dF/dTheta|_w by central differences of the
+  // kinematics (no solve). coupled: F(Theta, w(Theta)) with w from the
+  // quasi-static solve, dF/dTheta = dF/dTheta|_w + dF/dw dw/dTheta, dw/dTheta
+  // by the implicit function theorem (SensitivityAnalyzer) at the solve at
+  // Theta (the last Rhs's when Theta is its point, else one solve). F is
+  // linear in w (twist = L w, Montana's rates linear in the twist), so dF/dw
+  // is exact from 12 unit evaluations. Returns false (the integrator then
+  // differences Rhs for this Jacobian) where the derivative does not exist
+  // or is one-sided (SINGULAR J_E, an inequality about to become active) or
+  // F cannot be evaluated.
+  bool RhsJacobian(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::MatrixXd> dfdy) override {
+    const Configuration q = y;
+    if (!q.allFinite()) return Fallback();
+    Vec12 w = w_;
+    if (coupling_ == Coupling::kCoupled) {
+      if (!have_solved_ || q != solved_q_ ||
+          solver_->problem().configuration() != q ||
+          sol_.status != QuasiStaticStatus::kOk) {
+        have_solved_ = false;
+        solver_->Solve(q, &sol_);
+        nlp_solves_ += sol_.nlp_solves;
+        nlp_iterations_ += sol_.nlp_iterations;
+        nlp_iterations_native_ += sol_.nlp_iterations_native;
+        if (sol_.status != QuasiStaticStatus::kOk) return Fallback();
+        kkt_residual_ = std::fmax(kkt_residual_, sol_.kkt_residual);
+        solved_q_ = q;
+        have_solved_ = true;
+      }
+      if (analyzer_.Compute(solver_->problem(), sol_.z, &sens_) !=
+              SensitivityStatus::kOk ||
+          sens_.one_sided)
+        return Fallback();
+      w = solver_->problem().JointSpaceVelocity(sol_.z);
+    }
+    if (!StateDerivative(q, w)) return Fallback();
+    if (coupling_ == Coupling::kCoupled) {
+      // dF/dw: F(q, e_j) (linear in w), then the chain rule.
+      Configuration col;
+      for (int j = 0; j < 12; ++j) {
+        if (!model_.Rhs(q, Vec12::Unit(j), &col)) return Fallback();
+        dfdw_.col(j) = col;
+      }
+      constexpr int kState = SensitivityParameter::kState;
+      constexpr int kNumState = SensitivityParameter::kNumState;
+      dwdq_.topRows<6>() = sens_.twist.middleCols<kNumState>(kState);
+      dwdq_.bottomRows<6>() = sens_.joint_rates.middleCols<kNumState>(kState);
+      dfdq_.noalias() += dfdw_ * dwdq_;
+    }
+    dfdy = dfdq_;
+    return true;
+  }
+  // RhsJacobian calls that returned false (the integrator differenced).
+  int jacobian_fallbacks() const { return jacobian_fallbacks_; }
+  // Rhs then RhsJacobian at theta, as an integrator calls them, into *out
+  // (preallocated workspaces: no allocation once warmed up).
+  void Probe(const Configuration& theta, RobotOdeProbe* out) {
+    probe_y_ = theta;
+    out->rhs_ok = Rhs(0.0, probe_y_, probe_f_);
+    if (out->rhs_ok) out->rhs = probe_f_;
+    out->jacobian_ok = RhsJacobian(0.0, probe_y_, probe_jac_);
+    if (out->jacobian_ok) out->jacobian = probe_jac_;
+    out->jacobian_fallbacks = jacobian_fallbacks_;
   }
 
   void Constraints(const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -125,6 +196,53 @@ class Simulator::RobotOde final : public ConstrainedOde {
   }
 
  private:
+  bool Fallback() {
+    ++jacobian_fallbacks_;
+    return false;
+  }
+  // dfdq_ = dF/dTheta at fixed w: central differences, h_k = cbrt(eps_mach)
+  // max(1, |q_k|) (truncation h^2 F_3/6 and round-off eps F/h balance,
+  // ~eps^(2/3) relative; core/sensitivity.h). eta_i' depends only on chain
+  // i's inputs (eta_i and its two joint angles) and the joint rates not on
+  // Theta at all, so each column differences one chain's rates and the
+  // other entries are exactly zero.
+  bool StateDerivative(const Configuration& q, const Vec12& w) {
+    const double root = std::cbrt(std::numeric_limits<double>::epsilon());
+    dfdq_.setZero();
+    Configuration qp = q;
+    for (int i = 0; i < kNumWheels; ++i) {
+      const int columns[7] = {ConfigIndex::Eta(i),
+                              ConfigIndex::Eta(i) + 1,
+                              ConfigIndex::Eta(i) + 2,
+                              ConfigIndex::Eta(i) + 3,
+                              ConfigIndex::Eta(i) + 4,
+                              ConfigIndex::kTheta + 2 * i,
+                              ConfigIndex::kTheta + 2 * i + 1};
+      for (int k : columns) {
+        const double h = root * std::max(1.0, std::abs(q(k)));
+        EtaRates fp, fm;
+        qp(k) = q(k) + h;
+        const double hp = qp(k) - q(k);  // exactly representable steps
+        if (!ChainRates(qp, i, w, &fp)) return false;
+        qp(k) = q(k) - h;
+        const double hm = q(k) - qp(k);
+        if (!ChainRates(qp, i, w, &fm)) return false;
+        qp(k) = q(k);
+        dfdq_.block<5, 1>(ConfigIndex::Eta(i), k) = (fp - fm) / (hp + hm);
+      }
+    }
+    return true;
+  }
+  // eta_i' = Montana_i(L_i w) at theta (model.md §8.1).
+  bool ChainRates(const Configuration& theta, int chain, const Vec12& w,
+                  EtaRates* rates) const {
+    ChainState cs;
+    ContactVelocityMap L;
+    model_.EvaluateChain(theta, chain, &cs);
+    model_.ContactVelocities(cs, chain, &L);
+    return model_.ContactRates(cs, L * w, rates);
+  }
+
   const KinematicModel& model_;
   Coupling coupling_;
   QuasiStaticSolver* solver_;
@@ -136,6 +254,23 @@ class Simulator::RobotOde final : public ConstrainedOde {
   long long nlp_iterations_ = 0;
   long long nlp_iterations_native_ = 0;
   double kkt_residual_ = std::numeric_limits<double>::quiet_NaN();
+  // RhsJacobian: the point of the last successful coupled solve, the
+  // analyzer (cheap path: no multipliers' derivatives) and workspaces.
+  Configuration solved_q_ = Configuration::Zero();
+  bool have_solved_ = false;
+  SensitivityAnalyzer analyzer_{[] {
+    SensitivityOptions o;
+    o.multipliers = false;
+    return o;
+  }()};
+  QuasiStaticSensitivities sens_;
+  Eigen::Matrix<double, kConfigSize, kConfigSize> dfdq_;
+  Eigen::Matrix<double, kConfigSize, 12> dfdw_;
+  Eigen::Matrix<double, 12, kConfigSize> dwdq_;
+  int jacobian_fallbacks_ = 0;
+  Eigen::VectorXd probe_y_ = Eigen::VectorXd::Zero(kConfigSize),
+                  probe_f_ = Eigen::VectorXd::Zero(kConfigSize);
+  Eigen::MatrixXd probe_jac_ = Eigen::MatrixXd::Zero(kConfigSize, kConfigSize);
 };
 
 double GeometricGap(const KinematicModel& model, const Configuration& theta) {
@@ -376,6 +511,24 @@ const OptionValues& Simulator::nlp_options_used() const {
 }
 const OptionValues& Simulator::dae_options_used() const {
   return session_->dae_options;
+}
+
+RobotOdeProbe Simulator::ProbeOde(const Configuration& theta,
+                                  const Configuration& hold) {
+  Session& s = *session_;
+  RobotOdeProbe probe;
+  const int solves = s.ode.nlp_solves();
+  if (options_.coupling == Coupling::kZoh) {
+    QuasiStaticSolution& sol = s.sol_event;
+    s.solver.Solve(hold, &sol);
+    probe.nlp_solves += sol.nlp_solves;
+    if (sol.status != QuasiStaticStatus::kOk) return probe;
+    s.ode.Hold(s.solver.problem().JointSpaceVelocity(sol.z));
+  }
+  s.ode.Probe(theta, &probe);
+  probe.nlp_solves += s.ode.nlp_solves() - solves;
+  probe.jacobian_fallbacks = s.ode.jacobian_fallbacks();
+  return probe;
 }
 
 void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {

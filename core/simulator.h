@@ -189,6 +189,19 @@ struct SimulationResult {
 // the contact kinematics (0 for exact contact).
 double GeometricGap(const KinematicModel& model, const Configuration& theta);
 
+// The robot ODE as the integrators see it (core/dae.h), evaluated at one
+// state by Simulator::ProbeOde (tests, diagnostics): F = Theta' and
+// dF/dTheta (ConstrainedOde::RhsJacobian, model.md §8.9).
+struct RobotOdeProbe {
+  bool rhs_ok = false;       // Rhs returned true
+  bool jacobian_ok = false;  // RhsJacobian returned true (false: fallback)
+  Configuration rhs = Configuration::Zero();
+  Eigen::Matrix<double, kConfigSize, kConfigSize> jacobian =
+      Eigen::Matrix<double, kConfigSize, kConfigSize>::Zero();
+  int nlp_solves = 0;          // solves made by the probe
+  int jacobian_fallbacks = 0;  // RhsJacobian calls so far that returned false
+};
+
 class Simulator {
  public:
   // Backends are looked up by name in the registries: call
@@ -220,6 +233,12 @@ class Simulator {
   // Advance() does not allocate (tests/core/test_simulator.cc checks it).
   void Begin(const Configuration& theta0, SimulationResult* result);
   bool Advance(SimulationResult* result);
+
+  // Evaluates the run's ODE at theta: zoh with the twist held at the
+  // quasi-static solve at `hold`, coupled re-solving at theta (`hold`
+  // unused). Uses the run's solver (its warm start moves), so call it
+  // between runs, not inside one.
+  RobotOdeProbe ProbeOde(const Configuration& theta, const Configuration& hold);
 
  private:
   class RobotOde;

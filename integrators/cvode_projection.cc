@@ -4,6 +4,9 @@
 #include <cvode/cvode_ls.h>
 #include <cvode/cvode_proj.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -56,7 +59,8 @@ struct CvodeProjectionIntegrator::Impl {
     sundials_internal::DestroyVector(&yy);
     n = -1;
     roots.registered = 0;
-    jac_fn_set = false;
+    jac_installed = false;
+    jac_ode = nullptr;
   }
 
   // Per-call state, D and the workspaces (sized when n changes).
@@ -71,6 +75,9 @@ struct CvodeProjectionIntegrator::Impl {
     if (z.size() != n_new) {
       z.resize(n_new);
       delta.resize(n_new);
+      y_pert.resize(n_new);
+      f_pert.resize(n_new);
+      jac_probe.resize(n_new, n_new);
     }
   }
   // CVodeReInit when the size is unchanged, else a new CVODE memory; y0 is
@@ -106,14 +113,31 @@ struct CvodeProjectionIntegrator::Impl {
     return s.rhs.Call(*s.ode, t, ym, out, s.result) && out.allFinite() ? 0 : 1;
   }
 
-  static int Jacobian(double t, N_Vector y, N_Vector /*fy*/, SUNMatrix jm,
+  // Installed with jacobian=ift (Configure): the ODE's dF/dy where
+  // RhsJacobian returns one, else forward differences of Rhs about fy =
+  // F(t, y) for this evaluation (increment sqrt(eps) max(1, |y_j|), as ida;
+  // a failing difference is recoverable like a failing Rhs).
+  static int Jacobian(double t, N_Vector y, N_Vector fy, SUNMatrix jm,
                       void* user_data, N_Vector /*tmp1*/, N_Vector /*tmp2*/,
                       N_Vector /*tmp3*/) {
     Impl& s = *static_cast<Impl*>(user_data);
-    Map<const VectorXd> ym(NV_DATA_S(y), s.n);
+    Map<const VectorXd> ym(NV_DATA_S(y), s.n), f0(NV_DATA_S(fy), s.n);
     Map<MatrixXd> out(SUNDenseMatrix_Data(jm), s.n, s.n);
     ++s.result->jacobian_evaluations;
-    return s.ode->RhsJacobian(t, ym, out) && out.allFinite() ? 0 : 1;
+    if (s.ode->RhsJacobian(t, ym, out) && out.allFinite()) return 0;
+    const double sqrt_eps = std::sqrt(std::numeric_limits<double>::epsilon());
+    s.y_pert = ym;
+    for (int j = 0; j < s.n; ++j) {
+      const double yj = s.y_pert(j);
+      s.y_pert(j) = yj + sqrt_eps * std::max(1.0, std::abs(yj));
+      const double step = s.y_pert(j) - yj;  // exactly representable
+      if (!s.rhs.Call(*s.ode, t, s.y_pert, s.f_pert, s.result) ||
+          !s.f_pert.allFinite())
+        return 1;
+      out.col(j) = (s.f_pert - f0) / step;
+      s.y_pert(j) = yj;
+    }
+    return 0;
   }
 
   // CVODE's projection callback: corr with ycur + corr on H = 0, and the
@@ -157,6 +181,7 @@ struct CvodeProjectionIntegrator::Impl {
   long proj_frequency = 1;
   int max_proj_fails = 10;
   double proj_fail_eta = 0.25;
+  bool ode_jacobian = true;  // jacobian=ift
 
   // SUNDIALS objects.
   sundials_internal::Context context;
@@ -165,7 +190,10 @@ struct CvodeProjectionIntegrator::Impl {
   sundials_internal::DenseLinearSolver dense;
   int n = -1;
   sundials_internal::RootSlots roots;
-  bool jac_fn_set = false;
+  // Impl::Jacobian is installed (else CVODE's own difference quotients),
+  // for the ODE jac_ode.
+  bool jac_installed = false;
+  const ConstrainedOde* jac_ode = nullptr;
 
   // Per call.
   ConstrainedOde* ode = nullptr;
@@ -176,7 +204,8 @@ struct CvodeProjectionIntegrator::Impl {
 
   // Workspaces.
   WeightedProjection projection;
-  VectorXd z, delta;
+  VectorXd z, delta, y_pert, f_pert;
+  MatrixXd jac_probe;
 };
 
 CvodeProjectionIntegrator::CvodeProjectionIntegrator()
@@ -210,6 +239,12 @@ OptionTable CvodeProjectionIntegrator::option_table() const {
   table.insert(table.end(), controls.begin(), controls.end());
   table.insert(table.end(), projection_controls.begin(),
                projection_controls.end());
+  table.push_back(OptionSpec::Choice(
+      "jacobian", "ift", {"ift", "fd"},
+      "dF/dy in the Newton matrix: ift = the ODE's RhsJacobian where it "
+      "gives one (robot: central differences of the kinematics + "
+      "implicit-function-theorem sensitivities of the solve, model.md §8.9), "
+      "else differences; fd = always CVODE's difference quotients"));
   return table;
 }
 
@@ -222,6 +257,7 @@ void CvodeProjectionIntegrator::ApplyBackendOptions(
   s.proj_frequency = static_cast<long>(values.GetInt("proj_frequency"));
   s.max_proj_fails = static_cast<int>(values.GetInt("max_proj_fails"));
   s.proj_fail_eta = values.GetDouble("proj_fail_eta");
+  s.ode_jacobian = values.GetString("jacobian") == "ift";
 }
 
 namespace {
@@ -264,15 +300,20 @@ int CvodeProjectionIntegrator::Impl::CreateOrReInit(
 int CvodeProjectionIntegrator::Impl::Configure(
     int flag, double t0, double t1, const Eigen::Ref<const VectorXd>& y0,
     const IntegratorOptions& options) {
-  // dF/dy: the problem's own if it has one (probed once per size), else
-  // CVODE's difference quotients.
-  if (flag == CV_SUCCESS && !jac_fn_set) {
-    Eigen::MatrixXd probe(n, n);
-    if (ode->RhsJacobian(t0, y0, probe)) {
-      flag = CVodeSetJacFn(mem, &Impl::Jacobian);
-      ++result->jacobian_evaluations;
+  // dF/dy (option jacobian): with ift, Impl::Jacobian once the ODE has
+  // given one (probed at each call's start until it does: an ODE without
+  // RhsJacobian returns false at once, and the robot's may fail at a
+  // one-sided point); CVODE's difference quotients otherwise.
+  if (flag == CV_SUCCESS) {
+    bool install = ode_jacobian && jac_installed && jac_ode == ode;
+    if (ode_jacobian && !install) {
+      install = ode->RhsJacobian(t0, y0, jac_probe);
+      if (install) ++result->jacobian_evaluations;
     }
-    jac_fn_set = true;
+    if (install != jac_installed)
+      flag = CVodeSetJacFn(mem, install ? &Impl::Jacobian : nullptr);
+    jac_installed = install;
+    jac_ode = ode;
   }
   if (flag == CV_SUCCESS)
     flag = CVodeSStolerances(mem, options.rtol, options.atol);
@@ -329,7 +370,8 @@ void CvodeProjectionIntegrator::Impl::Solve(double t0, double t1,
   CVodeGetNumJacEvals(mem, &jac_evals);
   result->steps += static_cast<int>(steps);
   result->rejected_steps += static_cast<int>(error_test_failures);
-  if (!jac_fn_set || jac_evals > 0)
+  // Impl::Jacobian counts itself; CVODE's own difference quotients here.
+  if (!jac_installed)
     result->jacobian_evaluations += static_cast<int>(jac_evals);
   y = Map<VectorXd>(NV_DATA_S(yy), n);
   result->t_reached = t_ret;

@@ -21,15 +21,17 @@
 // CVodeSetMaxNumSteps (per call), t1 -> CVodeSetStopTime (the last step ends
 // on t1, whose state is the projected step state), ode.Roots -> CVodeRootInit
 // (events). The initial state is projected before the first step and the
-// returned state again (a no-op unless CVODE interpolated). dF/dy: the ODE's
-// RhsJacobian() when it has one, else CVODE's difference quotients.
+// returned state again (a no-op unless CVODE interpolated). dF/dy (backend
+// option jacobian): ift (default) the ODE's RhsJacobian() when it has one,
+// and forward differences of Rhs for an evaluation where it returns false;
+// fd, or an ODE without one, CVODE's difference quotients.
 // Backend options (option_table()): projection_tolerance,
 // max_projection_iterations, max_order (CVodeSetMaxOrd), max_nonlin_iters
 // (CVodeSetMaxNonlinIters), max_conv_fails (CVodeSetMaxConvFails),
 // max_err_test_fails (CVodeSetMaxErrTestFails), proj_err_est
 // (CVodeSetProjErrEst), proj_frequency (CVodeSetProjFrequency),
 // max_proj_fails (CVodeSetMaxNumProjFails), proj_fail_eta
-// (CVodeSetProjFailEta); defaults are CVODE's own.
+// (CVodeSetProjFailEta); defaults are CVODE's own; jacobian (ift | fd).
 //
 // Status mapping: CV_TOO_MUCH_WORK / CV_TOO_MUCH_ACC / CV_ERR_FAILURE ->
 // kStepSizeTooSmall; CV_CONV_FAILURE / linear solver failures ->

@@ -131,6 +131,7 @@ struct IdaIntegrator::Impl {
     double multiplier_atol = 1e3;
     sundials_internal::StepControls controls = kIdaStepControls;
     bool suppress_alg = true;
+    bool ode_jacobian = true;  // jacobian=ift: ask ode.RhsJacobian first
   } settings;
 
   // Per-call data.
@@ -232,8 +233,10 @@ int IdaIntegrator::Impl::Residual(double t, N_Vector yy, N_Vector yp,
 // d(D J^T nu)/dx and d(J x')/dx (second derivatives of H) are neglected:
 // both vanish on the constraint-consistent solution with nu = 0 and only
 // affect the convergence rate of IDA's (already modified) Newton iteration,
-// never the converged solution. dF/dx comes from ode.RhsJacobian, or from
-// forward differences of Rhs with increment sqrt(eps) * max(1, |x_j|).
+// never the converged solution. dF/dx comes from ode.RhsJacobian (option
+// jacobian=ift, the default) where it returns true, else (per call, and
+// always with jacobian=fd) from forward differences of Rhs with increment
+// sqrt(eps) * max(1, |x_j|).
 int IdaIntegrator::Impl::Jacobian(double t, double cj, N_Vector yy, N_Vector yp,
                                   N_Vector /*rr*/, SUNMatrix jac_matrix,
                                   void* user_data, N_Vector /*tmp1*/,
@@ -268,7 +271,8 @@ int IdaIntegrator::Impl::Jacobian(double t, double cj, N_Vector yy, N_Vector yp,
     }
     return 0;
   }
-  if (!s.ode->RhsJacobian(t, y.head(n), s.dfdx)) {
+  if (!(s.settings.ode_jacobian && s.ode->RhsJacobian(t, y.head(n), s.dfdx) &&
+        s.dfdx.allFinite())) {
     if (!s.CallRhs(t, y.head(n), s.f)) return 1;
     const double sqrt_eps = std::sqrt(std::numeric_limits<double>::epsilon());
     s.x_pert = y.head(n);
@@ -387,6 +391,13 @@ OptionTable IdaIntegrator::option_table() const {
       OptionSpec::Bool("suppress_alg", true,
                        "exclude the algebraic variables from the error test "
                        "(IDASetSuppressAlg)"));
+  table.push_back(OptionSpec::Choice(
+      "jacobian", "ift", {"ift", "fd"},
+      "dF/dx in the iteration matrix: ift = the ODE's RhsJacobian where it "
+      "gives one (robot: central differences of the kinematics + "
+      "implicit-function-theorem sensitivities of the solve, model.md §8.9), "
+      "else differences; fd = always forward "
+      "differences of Rhs"));
   return table;
 }
 
@@ -398,6 +409,7 @@ void IdaIntegrator::ApplyBackendOptions(const OptionValues& values) {
   s.multiplier_atol = values.GetDouble("multiplier_atol");
   s.controls = sundials_internal::StepControlsFrom(values);
   s.suppress_alg = values.GetBool("suppress_alg");
+  s.ode_jacobian = values.GetString("jacobian") == "ift";
 }
 IdaIntegrator::~IdaIntegrator() = default;
 

@@ -17,14 +17,16 @@
 // projection), multiplier_atol, and IDA's max_order (IDASetMaxOrd),
 // max_nonlin_iters (IDASetMaxNonlinIters), max_conv_fails
 // (IDASetMaxConvFails), max_err_test_fails (IDASetMaxErrTestFails),
-// suppress_alg (IDASetSuppressAlg); defaults are IDA's own.
+// suppress_alg (IDASetSuppressAlg); defaults are IDA's own; jacobian (ift:
+// dF/dx from ode.RhsJacobian where it returns true, else differences for
+// that evaluation; fd: always differences).
 // Options: rtol / atol -> IDASVtolerances on x (nu gets a loose atol of 1e3:
 // it only has to converge through D J^T nu, see ida_integrator.cc), step ->
 // IDASetInitStep (0 = IDA's estimate), min_step -> IDASetMinStep, max_steps
 // -> IDASetMaxNumSteps (per call), t1 -> IDASetStopTime, ode.Roots ->
 // IDARootInit. Iteration matrix: analytic except the second-derivative terms
 // d(D J^T nu)/dx and d(J x')/dx (see Jacobian in the .cc); dF/dx from
-// ode.RhsJacobian or forward differences.
+// ode.RhsJacobian (jacobian=ift) or forward differences.
 // Status mapping: IDA_TOO_MUCH_WORK / IDA_TOO_MUCH_ACC / IDA_ERR_FAIL ->
 // kStepSizeTooSmall; corrector / linear solver / residual failures ->
 // kConvergenceFailure, or kRhsFailure when the last Rhs call returned false;
