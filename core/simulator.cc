@@ -1124,7 +1124,8 @@ double Simulator::SwitchStepTolerance() const {
   return IntegratorRegistry::Info(options_.dae)
                  .IsAdaptive(session_->dae_options)
              ? std::numeric_limits<double>::infinity()
-             : SwitchResolutionTolerance(dt_, options_.switch_step_tolerance);
+             : SwitchResolutionTolerance(session_->iopts.step,
+                                         options_.switch_step_tolerance);
 }
 
 SegmentAdvance Simulator::Advance() {

@@ -81,10 +81,10 @@ struct SimulationOptions {
   // Coupled mode, fixed-step integrators: those segments, and every
   // interval starting within kSwitchResolveWindow after a located switch,
   // are integrated with step doubling until one step and two half steps
-  // agree to max(switch_step_tolerance, kSwitchToleranceRate dt^4)
+  // agree to max(switch_step_tolerance, kSwitchToleranceRate h^4), h the step
   // (infinity norm of Theta; SwitchResolutionTolerance), down to pieces of
   // kSwitchMinStep (core/switch_events.h, "Resolution"). This is the floor,
-  // reached at dt <= 0.13 s.
+  // reached at h <= 0.13 s.
   double switch_step_tolerance = 1e-12;
   bool IsValid(std::string* why) const;
 };

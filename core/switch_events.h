@@ -163,19 +163,19 @@ bool IntegrateSlipRegimes(double t0, double t1,
                           int* evaluations);
 
 // The step-doubling tolerance of a resolved piece:
-// max(floor, kSwitchToleranceRate dt^4) in ||.||_inf of Theta, dt the
-// output interval. RK4's fixed
-// step errs by ~K dt^4 over the run anyway (paper scene, coupled: K = 4e-8
-// m/s^4 from the dt ladder 1.6, 0.8, 0.4 s); resolving a switch to a tenth
-// of that keeps the order and does not change the result (measured: the
-// errors at dt 1.6 ... 0.4 equal those at 1e-13 to 3 %, at 1/22 to 1/5 of
-// the steps), while a fixed 1e-13 made a coupled RK4 run cost 10-50x a
-// plain one whatever dt. The floor (SimulationOptions::switch_step_tolerance,
-// 1e-12) stays above the noise of the quasi-static solves (residual 1e-12).
+// max(floor, kSwitchToleranceRate h^4) in ||.||_inf of Theta, h the fixed
+// step (the output interval / substeps). RK4's fixed step errs by ~K dt^4 over
+// the run anyway (paper scene, coupled: K = 4e-8 m/s^4 from the dt ladder 1.6,
+// 0.8, 0.4 s); resolving a switch to a tenth of that keeps the order and does
+// not change the result (measured: the errors at dt 1.6 ... 0.4 equal those at
+// 1e-13 to 3 %, at 1/22 to 1/5 of the steps), while a fixed 1e-13 made a
+// coupled RK4 run cost 10-50x a plain one whatever dt. The floor
+// (SimulationOptions::switch_step_tolerance, 1e-12) stays above the noise of
+// the quasi-static solves (residual 1e-12).
 inline constexpr double kSwitchToleranceRate = 4e-9;  // [1/s^4]
-inline double SwitchResolutionTolerance(double dt, double floor) {
-  const double dt2 = dt * dt;
-  return std::max(floor, kSwitchToleranceRate * dt2 * dt2);
+inline double SwitchResolutionTolerance(double step, double floor) {
+  const double h2 = step * step;
+  return std::max(floor, kSwitchToleranceRate * h2 * h2);
 }
 
 // The creep band: a sticking wheel whose creep |s| lies in
