@@ -52,19 +52,26 @@ void KinematicModel::EvaluateChain(const Configuration& theta, int chain,
                                    ChainState* s) const {
   const int e = ConfigIndex::Eta(chain);
   const int j = ConfigIndex::kTheta + 2 * chain;
-  CacheEntry& entry = cache_[chain];
+  std::array<CacheEntry, kCacheWays>& ways = cache_[chain];
+  int& next = cache_next_[chain];
   Eigen::Matrix<double, 7, 1> key;
   key << theta.segment<5>(e), theta.segment<2>(j);
   // Bitwise comparison: NaNs never hit, -0.0 vs 0.0 only costs a recompute.
-  if (entry.valid &&
-      std::memcmp(key.data(), entry.key.data(), sizeof(double) * 7) == 0) {
-    *s = entry.state;
-    return;
+  // Most recent first.
+  for (int w = 1; w <= kCacheWays; ++w) {
+    const CacheEntry& entry = ways[(next + kCacheWays - w) % kCacheWays];
+    if (entry.valid &&
+        std::memcmp(key.data(), entry.key.data(), sizeof(double) * 7) == 0) {
+      *s = entry.state;
+      return;
+    }
   }
+  CacheEntry& entry = ways[next];
+  next = (next + 1) % kCacheWays;
   const double u = theta(e), v = theta(e + 1), xg = theta(e + 2),
                yg = theta(e + 3), psi = theta(e + 4);
   s->wheel = TorusForms(geometry_.major_radius, geometry_.tube_radius, u, v);
-  s->ground = TerrainForms(terrain_->Evaluate(xg, yg), xg, yg);
+  s->ground = TerrainForms(terrain_->EvaluateSecondOrder(xg, yg), xg, yg);
   s->r_psi = ContactRotation2(psi);
   s->R_GCW = s->ground.frame * ContactRotation(psi);
   s->R_GW = s->R_GCW * s->wheel.frame.transpose();

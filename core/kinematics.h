@@ -100,10 +100,13 @@ class KinematicModel {
   void Mount(int chain, double q0, double q1, Mat3* R_PW, Vec3* p_PW,
              std::array<Vec3, 2>* axes, std::array<Vec3, 2>* points) const;
 
-  // Evaluates chain i. The last evaluation of each chain is cached (keyed
-  // bitwise on its 7 inputs eta_i, theta_i): integrators evaluate H, J and F
-  // at the same state several times. Because of this cache a KinematicModel
-  // must not be used from several threads at once; use one per thread.
+  // Evaluates chain i. The last kCacheWays evaluations of each chain are
+  // cached (keyed bitwise on its 7 inputs eta_i, theta_i): integrators
+  // evaluate H, J and F at the same state several times, and the simulator
+  // returns to an interval's start state (the dense output's slope) after
+  // the RK stages and the projection (5-6 states) have been evaluated.
+  // Because of this cache a KinematicModel must not be used from several
+  // threads at once; use one per thread.
   void EvaluateChain(const Configuration& theta, int chain,
                      ChainState* out) const;
 
@@ -147,7 +150,10 @@ class KinematicModel {
     ChainState state;
     bool valid = false;
   };
-  mutable std::array<CacheEntry, 3> cache_;
+  static constexpr int kCacheWays = 8;
+  // Per chain, filled round-robin; cache_next_ is the slot written next.
+  mutable std::array<std::array<CacheEntry, kCacheWays>, 3> cache_;
+  mutable std::array<int, 3> cache_next_ = {0, 0, 0};
 };
 
 }  // namespace quasiroll

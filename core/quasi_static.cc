@@ -171,10 +171,21 @@ void QuasiStaticProblem::ObjectiveGradient(
     grad.segment<2>(nm + 3 * i) = z.segment<2>(nm + 3 * i);
 }
 
+// The two small products of every constraint evaluation (the Newton line
+// search evaluates the constraints ~10 times per iteration) written out in
+// the summation order of Eigen's column-major gemv, which they replace bit
+// for bit: per row c = sum over the columns in order of a_ij x_j, starting
+// from 0, added to the destination's previous value (0 for an assignment).
 Eigen::Matrix<double, 9, 1> QuasiStaticProblem::ContactLinearVelocities(
     const Eigen::Ref<const Eigen::VectorXd>& z) const {
-  Eigen::Matrix<double, 9, 1> vel = vel_0_;
-  vel.noalias() += vel_m_ * z.head(num_motion());
+  const int nm = num_motion();
+  double c[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  for (int j = 0; j < nm; ++j) {
+    const double zj = z(j);
+    for (int i = 0; i < 9; ++i) c[i] += vel_m_(i, j) * zj;
+  }
+  Eigen::Matrix<double, 9, 1> vel;
+  for (int i = 0; i < 9; ++i) vel(i) = vel_0_(i) + c[i];
   return vel;
 }
 
@@ -208,8 +219,13 @@ void QuasiStaticProblem::ConstraintsAtVelocities(
     Eigen::Ref<Eigen::VectorXd> g) const {
   const auto [nm, ns, f, vel, inv_v0, mu, eps2] = Terms(z, velocities);
   for (int i = 0; i < 3; ++i) g(i) = vel(3 * i + 2) * inv_v0;  // E1
-  g.segment(3, ns).noalias() = statics_f_ * f;                 // E2, E3
-  g.segment(3, ns) += statics_0_;
+  // E2, E3: statics_f_ f (as ContactLinearVelocities) + statics_0_.
+  double c[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  for (int j = 0; j < 9; ++j) {
+    const double fj = f(j);
+    for (int r = 0; r < ns; ++r) c[r] += statics_f_(r, j) * fj;
+  }
+  for (int r = 0; r < ns; ++r) g(3 + r) = (0.0 + c[r]) + statics_0_(r);
   const int c0 = 3 + ns;
   for (int i = 0; i < 3; ++i) {  // C
     const Vec2 s = vel.segment<2>(3 * i);

@@ -247,6 +247,13 @@ class QuasiStaticSolver {
   QuasiStaticStatus Solve(const Configuration& theta, QuasiStaticSolution* out);
   // Forget the warm start.
   void Reset() { have_warm_ = have_previous_ = false; }
+  // Start the next Solve() from z (scaled unknowns, num_variables() rows),
+  // as if the last solve had returned it (no extrapolation from it).
+  void SetWarmStart(const Eigen::VectorXd& z) {
+    warm_z_ = z;
+    have_warm_ = true;
+    have_previous_ = false;
+  }
 
   QuasiStaticProblem& problem() { return problem_; }
   const NlpSolver& nlp() const { return *nlp_; }

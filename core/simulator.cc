@@ -297,7 +297,7 @@ double GeometricGap(const KinematicModel& model, const Configuration& theta) {
       const double su = std::sin(u), cu = std::cos(u), sv = std::sin(v),
                    cv = std::cos(v), rr = R0 + r0 * cv;
       const Vec3 pt = p_W + R_GW * Vec3(rr * cu, rr * su, r0 * sv);
-      const TerrainJet jet = terrain.Evaluate(pt.x(), pt.y());
+      const TerrainJet jet = terrain.EvaluateSecondOrder(pt.x(), pt.y());
       if (grad) {
         const Vec3 pu = R_GW * Vec3(-rr * su, rr * cu, 0);
         const Vec3 pv = R_GW * Vec3(-r0 * sv * cu, -r0 * sv * su, r0 * cv);
@@ -474,6 +474,9 @@ struct Simulator::Session {
   // Switches: a second solver for the probes of the location (created on
   // the first switch), so that locating leaves the run's warm starts alone.
   std::unique_ptr<QuasiStaticSolver> probe_solver;
+  // The accepted solution at the previous sample (probe warm starts).
+  Eigen::VectorXd z_prev;
+  bool have_z_prev = false;
   // Intervals starting before this time are integrated resolved.
   double resolve_until = -std::numeric_limits<double>::infinity();
   // The last interval was integrated resolved (step doubling).
@@ -609,6 +612,8 @@ bool Simulator::Interval(SimulationResult* result) {
   const bool pending = !std::isnan(s.t_stop);
   double t = pending ? s.t_stop : k == s.n ? t_end_ : k * dt_;
   const double t_next = k + 1 == s.n ? t_end_ : (k + 1) * dt_;
+  s.have_z_prev = s.have_prev && s.sol.status == QuasiStaticStatus::kOk;
+  if (s.have_z_prev) s.z_prev = s.sol.z;
   s.solver.Solve(s.theta, &s.sol);
   QuasiStaticSolution& sol = s.sol;
   result->nlp_solves += sol.nlp_solves;
@@ -1037,12 +1042,23 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
         CreateNlp(options_, &unused), options_.quasi_static);
   }
   QuasiStaticSolution& probe = s.sol_event;
+  // Each probe starts from the nearest (in time) of the interval's end
+  // solutions and the last probe's: the probe solver's own warm start is
+  // otherwise the last probe of an earlier switch, seconds away.
+  const bool ends = s.have_z_prev && s.sol.status == QuasiStaticStatus::kOk;
+  double t_last = std::numeric_limits<double>::quiet_NaN();
   auto evaluate = [&](double tm, std::array<Eigen::Vector2d, 3>* slip) {
     const double frac = (tm - s.t_prev) / h;
     const Configuration q = dense
                                 ? HermiteState(th0, f0, th1, f1, h, frac)
                                 : Configuration((1 - frac) * th0 + frac * th1);
+    if (ends) {
+      const double da = tm - s.t_prev, db = t - tm;
+      if (!(std::abs(tm - t_last) <= std::min(da, db)))
+        s.probe_solver->SetWarmStart(da <= db ? s.z_prev : s.sol.z);
+    }
     s.probe_solver->Solve(q, &probe);
+    if (probe.status == QuasiStaticStatus::kOk) t_last = tm;
     result->nlp_solves += probe.nlp_solves;
     result->nlp_iterations += probe.nlp_iterations;
     result->nlp_iterations_native += probe.nlp_iterations_native;

@@ -26,6 +26,13 @@ class Terrain {
   // All derivatives up to third order at (x, y). For (x, y) outside the
   // domain (heightmaps only) the result is unspecified: check Contains().
   virtual TerrainJet Evaluate(double x, double y) const = 0;
+  // h and its derivatives up to second order, bit for bit those of
+  // Evaluate() (what the contact kinematics and the gap search use); the
+  // third-order members are unspecified. Terrains whose third derivatives
+  // cost extra override it (gaussians).
+  virtual TerrainJet EvaluateSecondOrder(double x, double y) const {
+    return Evaluate(x, y);
+  }
   virtual double Height(double x, double y) const { return Evaluate(x, y).h; }
   // False outside a bounded domain (heightmap); true everywhere otherwise.
   virtual bool Contains(double /*x*/, double /*y*/) const { return true; }

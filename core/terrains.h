@@ -70,6 +70,7 @@ class GaussianTerrain final : public Terrain {
                                 Interval y);
 
   TerrainJet Evaluate(double x, double y) const override;
+  TerrainJet EvaluateSecondOrder(double x, double y) const override;
   double Height(double x, double y) const override;
   std::string Describe() const override;
   const std::vector<GaussianBump>& bumps() const { return bumps_; }

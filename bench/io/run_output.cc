@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -84,14 +85,18 @@ void AtomicWriteFile(const std::string& path, const std::string& content) {
 }
 
 namespace {
+// printf's "%.17g" (std::to_chars with a precision is specified as printf
+// with that conversion, so the bytes are the same), "nan" for every NaN;
+// ~10x faster than snprintf, which dominated writing trajectory.csv.
 void AppendNumber(std::string* out, double v) {
-  char buf[32];
   if (std::isnan(v)) {
     *out += "nan";
     return;
   }
-  std::snprintf(buf, sizeof(buf), "%.17g", v);
-  *out += buf;
+  char buf[32];
+  const std::to_chars_result res =
+      std::to_chars(buf, buf + sizeof(buf), v, std::chars_format::general, 17);
+  out->append(buf, res.ptr);
 }
 }  // namespace
 
@@ -120,11 +125,14 @@ std::string TrajectoryCsv(const SimulationResult& result) {
 std::string TrajectoryCsv(const std::vector<TrajectorySample>& samples) {
   std::string out = TrajectoryCsvHeader();
   out += '\n';
+  // 66 fields of at most 24 characters each.
+  out.reserve(out.size() + samples.size() * 66 * 25);
   for (const TrajectorySample& s : samples) {
-    std::string row;
-    auto add = [&row](double v) {
-      if (!row.empty()) row += ',';
-      AppendNumber(&row, v);
+    bool first = true;
+    auto add = [&out, &first](double v) {
+      if (!first) out += ',';
+      first = false;
+      AppendNumber(&out, v);
     };
     add(s.t);
     for (int k = 0; k < 3; ++k) add(s.position(k));
@@ -142,12 +150,16 @@ std::string TrajectoryCsv(const std::vector<TrajectorySample>& samples) {
     }
     add(s.drift);
     add(s.gap_max);
-    row += ',' + s.nlp_status + ',' + std::to_string(s.nlp_iterations);
+    out += ',';
+    out += s.nlp_status;
+    out += ',';
+    char buf[16];
+    out.append(buf,
+               std::to_chars(buf, buf + sizeof(buf), s.nlp_iterations).ptr);
     for (const ContactSample& c : s.contacts) {
       add(c.sliding_distance);
       add(c.creep_distance);
     }
-    out += row;
     out += '\n';
   }
   return out;
