@@ -8,6 +8,7 @@
 
 #include "quasiroll/core/checkpoints.h"
 #include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/loop_closure_ode.h"
 #include "quasiroll/core/sensitivity.h"
 #include "quasiroll/core/slip_regimes.h"
 
@@ -58,14 +59,14 @@ bool SimulationOptions::IsValid(std::string* why) const {
 
 // The robot as a constrained ODE: Theta' = F(Theta, w) with w held (zoh) or
 // re-solved at every evaluation (coupled); H and J from the kinematic model.
-class Simulator::RobotOde final : public ConstrainedOde {
+class Simulator::RobotOde final : public LoopClosureOde {
  public:
   RobotOde(const KinematicModel& model, Coupling coupling,
            QuasiStaticSolver* solver)
-      : model_(model),
+      : LoopClosureOde(model),
+        model_(model),
         coupling_(coupling),
-        solver_(solver),
-        weights_(model.CorrectionWeights()) {}
+        solver_(solver) {}
 
   void Hold(const Vec12& w) { w_ = w; }
   void ClearFailure() { nlp_failed_ = false; }
@@ -77,9 +78,6 @@ class Simulator::RobotOde final : public ConstrainedOde {
   void ResetKkt() { kkt_residual_ = std::numeric_limits<double>::quiet_NaN(); }
   long long nlp_iterations() const { return nlp_iterations_; }
   long long nlp_iterations_native() const { return nlp_iterations_native_; }
-
-  int state_size() const override { return kConfigSize; }
-  int num_constraints() const override { return kNumConstraints; }
 
   bool Rhs(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y,
            Eigen::Ref<Eigen::VectorXd> ydot) override {
@@ -177,24 +175,6 @@ class Simulator::RobotOde final : public ConstrainedOde {
     out->jacobian_fallbacks = jacobian_fallbacks_;
   }
 
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& y,
-                   Eigen::Ref<Eigen::VectorXd> h) const override {
-    LoopClosure hh;
-    model_.Constraints(y, &hh);
-    h = hh;
-  }
-
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& y,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
-    LoopClosureJacobian j;
-    model_.ConstraintJacobian(y, &j);
-    jac = j;
-  }
-
-  void CorrectionWeights(Eigen::Ref<Eigen::VectorXd> d) const override {
-    d = weights_;
-  }
-
  private:
   bool Fallback() {
     ++jacobian_fallbacks_;
@@ -246,7 +226,6 @@ class Simulator::RobotOde final : public ConstrainedOde {
   const KinematicModel& model_;
   Coupling coupling_;
   QuasiStaticSolver* solver_;
-  Configuration weights_;
   Vec12 w_ = Vec12::Zero();
   QuasiStaticSolution sol_;
   bool nlp_failed_ = false;

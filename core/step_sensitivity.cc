@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/loop_closure_ode.h"
 
 namespace quasiroll {
 
@@ -83,35 +84,9 @@ std::vector<SensitivityEntry> StepSensitivityEntries(
 
 // The robot's H, J and D for WeightedProjection (the simulator's RobotOde
 // without the right-hand side, which is evaluated here directly).
-class StepSensitivity::FieldOde final : public ConstrainedOde {
+class StepSensitivity::FieldOde final : public LoopClosureOde {
  public:
-  explicit FieldOde(const KinematicModel& model)
-      : model_(model), weights_(model.CorrectionWeights()) {}
-  int state_size() const override { return kConfigSize; }
-  int num_constraints() const override { return kNumConstraints; }
-  bool Rhs(double, const Eigen::Ref<const Eigen::VectorXd>&,
-           Eigen::Ref<Eigen::VectorXd>) override {
-    return false;  // not used: fields are evaluated by StepSensitivity
-  }
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& y,
-                   Eigen::Ref<Eigen::VectorXd> h) const override {
-    LoopClosure hh;
-    model_.Constraints(y, &hh);
-    h = hh;
-  }
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& y,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
-    LoopClosureJacobian j;
-    model_.ConstraintJacobian(y, &j);
-    jac = j;
-  }
-  void CorrectionWeights(Eigen::Ref<Eigen::VectorXd> d) const override {
-    d = weights_;
-  }
-
- private:
-  const KinematicModel& model_;
-  Configuration weights_;
+  using LoopClosureOde::LoopClosureOde;
 };
 
 StepSensitivity::StepSensitivity(const KinematicModel& model,

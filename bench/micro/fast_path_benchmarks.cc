@@ -20,6 +20,7 @@
 #include <string>
 
 #include "quasiroll/bench/io/run_output.h"
+#include "quasiroll/bench/micro/benchmark_support.h"
 #include "quasiroll/core/simulator.h"
 
 namespace quasiroll {
@@ -50,21 +51,18 @@ void BM_ZohInterval(benchmark::State& state, bool switches, bool events) {
   long long steps = 0, solves = 0, iterations = 0;
   long long solves_seen = result.nlp_solves,
             iterations_seen = result.nlp_iterations;
+  const auto bank = [&] {
+    solves += result.nlp_solves - solves_seen;
+    iterations += result.nlp_iterations - iterations_seen;
+  };
+  const auto reset = [&] {
+    solves_seen = result.nlp_solves;
+    iterations_seen = result.nlp_iterations;
+  };
   for (auto _ : state) {
-    if (!sim.Advance(&result)) {
-      if (!result.success()) {
-        state.SkipWithError(result.stop_reason.c_str());
-        break;
-      }
-      state.PauseTiming();
-      solves += result.nlp_solves - solves_seen;
-      iterations += result.nlp_iterations - iterations_seen;
-      sim.Begin(sim.initial_configuration(), &result);
-      sim.Advance(&result);
-      solves_seen = result.nlp_solves;
-      iterations_seen = result.nlp_iterations;
-      state.ResumeTiming();
-    }
+    if (AdvanceOrRestart(state, sim, &result, bank, reset) ==
+        AdvanceOutcome::kFailed)
+      break;
     ++steps;
   }
   solves += result.nlp_solves - solves_seen;

@@ -18,6 +18,7 @@
 #include <memory>
 #include <string>
 
+#include "quasiroll/bench/micro/benchmark_support.h"
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/simulator.h"
@@ -115,21 +116,16 @@ void BM_CoupledInterval(benchmark::State& state, const std::string& dae,
   long long intervals = 0, rhs = 0, jacobians = 0, steps = 0;
   long long rhs_seen = result.rhs_evaluations,
             jac_seen = result.jacobian_evaluations, steps_seen = result.steps;
+  const auto reset = [&] {
+    rhs_seen = result.rhs_evaluations;
+    jac_seen = result.jacobian_evaluations;
+    steps_seen = result.steps;
+  };
   for (auto _ : state) {
-    if (!sim.Advance(&result)) {
-      if (!result.success()) {
-        state.SkipWithError(result.stop_reason.c_str());
-        break;
-      }
-      state.PauseTiming();
-      sim.Begin(sim.initial_configuration(), &result);
-      sim.Advance(&result);
-      rhs_seen = result.rhs_evaluations;
-      jac_seen = result.jacobian_evaluations;
-      steps_seen = result.steps;
-      state.ResumeTiming();
-      continue;
-    }
+    const quasiroll::AdvanceOutcome outcome =
+        quasiroll::AdvanceOrRestart(state, sim, &result, {}, reset);
+    if (outcome == quasiroll::AdvanceOutcome::kFailed) break;
+    if (outcome == quasiroll::AdvanceOutcome::kRestarted) continue;
     ++intervals;
     rhs += result.rhs_evaluations - rhs_seen;
     jacobians += result.jacobian_evaluations - jac_seen;

@@ -16,6 +16,7 @@
 #include <memory>
 #include <string>
 
+#include "quasiroll/bench/micro/benchmark_support.h"
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/simulator.h"
@@ -115,16 +116,7 @@ void BM_Step(benchmark::State& state, std::string dae, Coupling coupling) {
   sim.Advance(&result);  // warm up: the first solve is cold
   long long steps = 0;
   for (auto _ : state) {
-    if (!sim.Advance(&result)) {
-      if (!result.success()) {
-        state.SkipWithError(result.stop_reason.c_str());
-        break;
-      }
-      state.PauseTiming();
-      sim.Begin(sim.initial_configuration(), &result);
-      sim.Advance(&result);
-      state.ResumeTiming();
-    }
+    if (AdvanceOrRestart(state, sim, &result) == AdvanceOutcome::kFailed) break;
     ++steps;
   }
   state.SetLabel("solve + record + one 0.05 s interval");

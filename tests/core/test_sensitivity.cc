@@ -14,35 +14,12 @@
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/sensitivity.h"
+#include "simulation_support.h"
 #include "tests/heap_counter.h"
 #include "tests/test_names.h"
 
 namespace quasiroll {
 namespace {
-
-Scene SceneFile(const std::string& name) {
-  return LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/" + name +
-                   ".yaml");
-}
-
-// The default suite's `bumpy` problem (bench/suites/default.yaml): flat.yaml
-// with mu 1 on a random Gaussian terrain (seed 1).
-Scene BumpyScene() {
-  return LoadSceneFromString(R"(name: bumpy
-mode: paper
-mass: 5.0
-gravity: 9.8
-mu: 1.0
-epsilon: 1.0e-8
-joint_rates: [0, 0.6, 0, 0.6, 0, 0.6]
-robot: {a: 0.25, b: 0.25, track: 0.4, z_h: 0.05, major_radius: 0.08, tube_radius: 0.02, camber_offset: 0.0}
-initial: {x: 0, y: 0, yaw: 0, joint_angles: [0, 0, 0, 0, 0, 0]}
-terrain:
-  type: gaussians
-  random: {seed: 1, count: 80, amplitude: [-0.01, 0.01], sigma: [0.06, 0.12],
-           x: [-0.5, 2.0], y: [-0.8, 0.8]}
-)");
-}
 
 // Outputs the sensitivities cover, from a solution: twist, joint rates,
 // world forces (21), and the equality multipliers of J_E^T l = -grad f
@@ -51,29 +28,6 @@ struct Point {
   Eigen::Matrix<double, 21, 1> y;
   Eigen::VectorXd lambda;
 };
-
-// A few Newton steps on the square equality system E (model.md §7.3) take
-// the re-solve from the solver's residual tolerance to round-off, so that
-// the solve error does not dominate the differences (it enters divided by
-// the step).
-Eigen::VectorXd Polish(const QuasiStaticProblem& p, Eigen::VectorXd z) {
-  const int ne = p.num_equalities();
-  Eigen::VectorXd g(p.num_constraints());
-  Eigen::MatrixXd jac(p.num_constraints(), p.num_variables());
-  p.Constraints(z, g);
-  double best = g.head(ne).lpNorm<Eigen::Infinity>();
-  for (int it = 0; it < 3; ++it) {
-    p.ConstraintJacobian(z, jac);
-    const Eigen::VectorXd trial =
-        z - jac.topRows(ne).fullPivLu().solve(g.head(ne));
-    p.Constraints(trial, g);
-    const double r = g.head(ne).lpNorm<Eigen::Infinity>();
-    if (!(r < best)) break;
-    best = r;
-    z = trial;
-  }
-  return z;
-}
 
 Point Observe(const QuasiStaticProblem& p, QuasiStaticSolution sol) {
   sol.z = Polish(p, sol.z);

@@ -17,10 +17,12 @@
 
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/kinematics.h"
+#include "quasiroll/core/loop_closure_ode.h"
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/simulator.h"
 #include "quasiroll/core/step_sensitivity.h"
 #include "quasiroll/core/weighted_projection.h"
+#include "simulation_support.h"
 #include "tests/heap_counter.h"
 #include "tests/test_names.h"
 
@@ -28,11 +30,6 @@ namespace quasiroll {
 namespace {
 
 using P = SensitivityParameter;
-
-Scene SceneFile(const std::string& name) {
-  return LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/" + name +
-                   ".yaml");
-}
 
 struct Case {
   std::string scene;
@@ -226,36 +223,6 @@ INSTANTIATE_TEST_SUITE_P(Scenes, StepSensitivityTest,
                               2}}),
                          [](const auto& info) { return CaseName(info.param); });
 
-// The robot's H, J, D for WeightedProjection (as the simulator's).
-class Manifold final : public ConstrainedOde {
- public:
-  explicit Manifold(const KinematicModel& m) : model_(m) {}
-  int state_size() const override { return kConfigSize; }
-  int num_constraints() const override { return kNumConstraints; }
-  bool Rhs(double, const Eigen::Ref<const Eigen::VectorXd>&,
-           Eigen::Ref<Eigen::VectorXd>) override {
-    return false;
-  }
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& y,
-                   Eigen::Ref<Eigen::VectorXd> h) const override {
-    LoopClosure hh;
-    model_.Constraints(y, &hh);
-    h = hh;
-  }
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& y,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
-    LoopClosureJacobian j;
-    model_.ConstraintJacobian(y, &j);
-    jac = j;
-  }
-  void CorrectionWeights(Eigen::Ref<Eigen::VectorXd> d) const override {
-    d = model_.CorrectionWeights();
-  }
-
- private:
-  const KinematicModel& model_;
-};
-
 // The header's projector: at a point y* on H = 0, the derivative of the
 // converged Newton projection is P = I - D J^T (J D J^T)^{-1} J. Checked
 // against central differences of WeightedProjection::Project (tolerance
@@ -265,7 +232,7 @@ TEST(StepSensitivityProjection, ProjectorIsTheProjectionsDerivative) {
   const Scene scene = SceneFile("paper");
   const KinematicModel model(scene.geometry, scene.terrain);
   const Configuration theta = SolveInitialConfiguration(model, scene);
-  Manifold ode(model);
+  LoopClosureOde ode(model);  // H, J, D as the simulator's
   WeightedProjection proj;
   proj.Begin(ode);
   IntegratorResult counters;
