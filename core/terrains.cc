@@ -137,6 +137,21 @@ GaussianTerrain GaussianTerrain::Random(std::uint64_t seed, int count,
   return GaussianTerrain(std::move(bumps));
 }
 
+namespace {
+// One bump's terms up to second order, added to *j (Evaluate and
+// EvaluateSecondOrder sum the same terms in the same order: bit-identical).
+inline void AddSecondOrder(double q, double dx, double dy, double g,
+                           TerrainJet* j) {
+  const double q2 = q * q;
+  j->h += g;
+  j->hx += -q * dx * g;
+  j->hy += -q * dy * g;
+  j->hxx += (q2 * dx * dx - q) * g;
+  j->hxy += q2 * dx * dy * g;
+  j->hyy += (q2 * dy * dy - q) * g;
+}
+}  // namespace
+
 TerrainJet GaussianTerrain::Evaluate(double x, double y) const {
   TerrainJet j;
   for (std::size_t k = 0; k < bumps_.size(); ++k) {
@@ -144,13 +159,8 @@ TerrainJet GaussianTerrain::Evaluate(double x, double y) const {
     const double dx = x - b.x, dy = y - b.y;
     const double q = inv_var_[k];
     const double g = b.amplitude * std::exp(-0.5 * q * (dx * dx + dy * dy));
+    AddSecondOrder(q, dx, dy, g, &j);
     const double q2 = q * q, q3 = q2 * q;
-    j.h += g;
-    j.hx += -q * dx * g;
-    j.hy += -q * dy * g;
-    j.hxx += (q2 * dx * dx - q) * g;
-    j.hxy += q2 * dx * dy * g;
-    j.hyy += (q2 * dy * dy - q) * g;
     j.hxxx += (3.0 * q2 * dx - q3 * dx * dx * dx) * g;
     j.hxxy += (q2 * dy - q3 * dx * dx * dy) * g;
     j.hxyy += (q2 * dx - q3 * dx * dy * dy) * g;
@@ -159,21 +169,15 @@ TerrainJet GaussianTerrain::Evaluate(double x, double y) const {
   return j;
 }
 
-// Evaluate()'s sums without the third-order ones (same terms, same order).
+// Evaluate()'s sums without the third-order ones.
 TerrainJet GaussianTerrain::EvaluateSecondOrder(double x, double y) const {
   TerrainJet j;
   for (std::size_t k = 0; k < bumps_.size(); ++k) {
     const GaussianBump& b = bumps_[k];
     const double dx = x - b.x, dy = y - b.y;
     const double q = inv_var_[k];
-    const double g = b.amplitude * std::exp(-0.5 * q * (dx * dx + dy * dy));
-    const double q2 = q * q;
-    j.h += g;
-    j.hx += -q * dx * g;
-    j.hy += -q * dy * g;
-    j.hxx += (q2 * dx * dx - q) * g;
-    j.hxy += q2 * dx * dy * g;
-    j.hyy += (q2 * dy * dy - q) * g;
+    AddSecondOrder(q, dx, dy,
+                   b.amplitude * std::exp(-0.5 * q * (dx * dx + dy * dy)), &j);
   }
   return j;
 }
