@@ -63,10 +63,7 @@ class Simulator::RobotOde final : public LoopClosureOde {
  public:
   RobotOde(const KinematicModel& model, Coupling coupling,
            QuasiStaticSolver* solver)
-      : LoopClosureOde(model),
-        model_(model),
-        coupling_(coupling),
-        solver_(solver) {}
+      : LoopClosureOde(model), coupling_(coupling), solver_(solver) {}
 
   void Hold(const Vec12& w) { w_ = w; }
   void ClearFailure() { nlp_failed_ = false; }
@@ -100,7 +97,7 @@ class Simulator::RobotOde final : public LoopClosureOde {
       w = solver_->problem().JointSpaceVelocity(sol_.z);
     }
     Configuration qd;
-    if (!model_.Rhs(q, w, &qd)) return false;
+    if (!model().Rhs(q, w, &qd)) return false;
     ydot = qd;
     if (coupling_ == Coupling::kCoupled) {
       solved_q_ = q;
@@ -150,7 +147,7 @@ class Simulator::RobotOde final : public LoopClosureOde {
       // dF/dw: F(q, e_j) (linear in w), then the chain rule.
       Configuration col;
       for (int j = 0; j < 12; ++j) {
-        if (!model_.Rhs(q, Vec12::Unit(j), &col)) return Fallback();
+        if (!model().Rhs(q, Vec12::Unit(j), &col)) return Fallback();
         dfdw_.col(j) = col;
       }
       constexpr int kState = SensitivityParameter::kState;
@@ -218,12 +215,11 @@ class Simulator::RobotOde final : public LoopClosureOde {
                   EtaRates* rates) const {
     ChainState cs;
     ContactVelocityMap L;
-    model_.EvaluateChain(theta, chain, &cs);
-    model_.ContactVelocities(cs, chain, &L);
-    return model_.ContactRates(cs, L * w, rates);
+    model().EvaluateChain(theta, chain, &cs);
+    model().ContactVelocities(cs, chain, &L);
+    return model().ContactRates(cs, L * w, rates);
   }
 
-  const KinematicModel& model_;
   Coupling coupling_;
   QuasiStaticSolver* solver_;
   Vec12 w_ = Vec12::Zero();
@@ -1082,11 +1078,9 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
 
 // The interval's slip integrals split at its located switches (all of
 // them located, else the trapezoid stays) for Record.
-void Simulator::IntegrateSlipAcrossSwitches(
-    double t, std::size_t first,
-    const std::function<bool(double, std::array<Eigen::Vector2d, 3>*)>&
-        evaluate,
-    SimulationResult* result) {
+void Simulator::IntegrateSlipAcrossSwitches(double t, std::size_t first,
+                                            const SlipVectorEvaluator& evaluate,
+                                            SimulationResult* result) {
   Session& s = *session_;
   std::vector<double>& breaks = s.slip_breaks;
   breaks.clear();

@@ -10,7 +10,6 @@
 // sample computed before it is kept and the reason recorded.
 #pragma once
 
-#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -256,11 +255,9 @@ class Simulator {
   // Switches (core/switch_events.h): locates class changes between the last
   // sample and s.sol at t; in coupled mode restarts the interval there.
   void RestartAtSwitches(double t, SimulationResult* result);
-  void IntegrateSlipAcrossSwitches(
-      double t, std::size_t first,
-      const std::function<bool(double, std::array<Eigen::Vector2d, 3>*)>&
-          evaluate,
-      SimulationResult* result);
+  void IntegrateSlipAcrossSwitches(double t, std::size_t first,
+                                   const SlipVectorEvaluator& evaluate,
+                                   SimulationResult* result);
   double SwitchStepTolerance() const;
   SegmentAdvance Advance();
   IntegratorStatus IntegrateInterval(double t, double t_next);
