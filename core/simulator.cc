@@ -461,7 +461,8 @@ struct Simulator::Session {
   // The slip vectors of the last sample (reversals).
   std::array<Eigen::Vector2d, 3> slip_prev;
   // The slip integrals of the interval ending at slip_increments_t, split
-  // at its located switches (RestartAtSwitches); NaN: none.
+  // at its located switches and sliding-level crossings
+  // (RestartAtSwitches); NaN: none.
   SlipIncrements slip_increments;
   std::vector<double> slip_breaks;
   double slip_increments_t = std::numeric_limits<double>::quiet_NaN();
@@ -509,10 +510,21 @@ RobotOdeProbe Simulator::ProbeOde(const Configuration& theta,
   return probe;
 }
 
+// The solver of the switch probes (RestartAtSwitches): its own warm starts.
+void Simulator::CreateProbeSolver() {
+  OptionValues unused;
+  session_->probe_solver = std::make_unique<QuasiStaticSolver>(
+      *model_, QuasiStaticParameters::FromScene(scene_),
+      CreateNlp(options_, &unused), options_.quasi_static);
+}
+
 void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   const auto start = std::chrono::steady_clock::now();
   if (!session_) session_ = std::make_unique<Session>(*this);
   Session& s = *session_;
+  // Created here (and sized at the first sample), not at the first switch:
+  // a warmed-up step does not allocate.
+  if (options_.locate_switches && !s.probe_solver) CreateProbeSolver();
   s.solver.Reset();
   s.ode.ClearFailure();
   s.ires = IntegratorResult{};
@@ -594,6 +606,15 @@ bool Simulator::Interval(SimulationResult* result) {
   result->nlp_solves += sol.nlp_solves;
   result->nlp_iterations += sol.nlp_iterations;
   result->nlp_iterations_native += sol.nlp_iterations_native;
+  if (s.probe_solver && s.sol_event.z.size() == 0 &&
+      sol.status == QuasiStaticStatus::kOk) {
+    // Sizes the probe solver's workspaces: one solve from the answer.
+    s.probe_solver->SetWarmStart(sol.z);
+    s.probe_solver->Solve(s.theta, &s.sol_event);
+    result->nlp_solves += s.sol_event.nlp_solves;
+    result->nlp_iterations += s.sol_event.nlp_iterations;
+    result->nlp_iterations_native += s.sol_event.nlp_iterations_native;
+  }
   if (options_.locate_switches && !pending && s.have_prev &&
       sol.status == QuasiStaticStatus::kOk)
     RestartAtSwitches(t, result);
@@ -977,7 +998,9 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
 // (core/switch_events.h) differs from the last recorded sample's is
 // located on the interval's cubic Hermite dense output (F at both ends from
 // the twists solved there; zoh: the held twist), solving the quasi-static
-// problem at each probe state with a separate solver. Coupled mode then
+// problem at each probe state with a separate solver; the interval's slip
+// integrals are then split at the switches and where a wheel crosses the
+// sliding/creep level (IntegrateSlipAcrossSwitches). Coupled mode then
 // integrates the interval again from s.theta_prev with a restart at every
 // located switch and re-solves at t; zoh keeps its trajectory.
 void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
@@ -985,16 +1008,20 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   if (result->samples.empty() || !(t > s.t_prev)) return;
   const std::array<Eigen::Vector2d, 3> slip0 = s.slip_prev;
   std::array<Eigen::Vector2d, 3> slip1;
-  bool change = false, band = false;
+  bool change = false, band = false, regime = false;
   const double eps = scene_.epsilon;
   for (int i = 0; i < 3; ++i) {
     slip1[i] = s.sol.contacts[i].slip;
-    const double g0 = SwitchIndicator(slip0[i].norm(), eps);
-    const double g1 = SwitchIndicator(slip1[i].norm(), eps);
+    const double s0 = slip0[i].norm(), s1 = slip1[i].norm();
+    const double g0 = SwitchIndicator(s0, eps);
+    const double g1 = SwitchIndicator(s1, eps);
     change = change || (g0 >= 0) != (g1 >= 0);  // false for a NaN
     // A sliding wheel whose slip reverses (LocateSwitchesAndReversals).
     change = change || (g0 >= 0 && g1 >= 0 && slip0[i].dot(slip1[i]) < 0);
-    band = band || InSwitchBand(slip1[i].norm(), eps);
+    band = band || InSwitchBand(s1, eps);
+    // The sliding/creep split's level (below the switches') crossed.
+    regime = regime || (std::isfinite(s0) && std::isfinite(s1) &&
+                        IsSliding(s0, eps) != IsSliding(s1, eps));
   }
   const bool coupled = options_.coupling == Coupling::kCoupled;
   const double tolerance = s.switch_tolerance;
@@ -1002,7 +1029,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   // integrated again, resolved (core/switch_events.h).
   const bool redo =
       coupled && band && !s.resolved_last && std::isfinite(tolerance);
-  if (!change && !redo) return;
+  if (!change && !redo && !regime) return;
   const Configuration th0 = s.theta_prev, th1 = s.theta;
   const double h = t - s.t_prev;
   const Vec12 w1 =
@@ -1010,19 +1037,14 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   Configuration f0, f1;
   const bool dense =
       model_->Rhs(th0, s.w_held, &f0) && model_->Rhs(th1, w1, &f1);
-  if (change && !s.probe_solver) {
-    OptionValues unused;
-    s.probe_solver = std::make_unique<QuasiStaticSolver>(
-        *model_, QuasiStaticParameters::FromScene(scene_),
-        CreateNlp(options_, &unused), options_.quasi_static);
-  }
+  if (!s.probe_solver) CreateProbeSolver();
   QuasiStaticSolution& probe = s.sol_event;
   // Each probe starts from the nearest (in time) of the interval's end
   // solutions and the last probe's: the probe solver's own warm start is
   // otherwise the last probe of an earlier switch, seconds away.
   const bool ends = s.have_z_prev && s.sol.status == QuasiStaticStatus::kOk;
   double t_last = std::numeric_limits<double>::quiet_NaN();
-  auto evaluate = [&](double tm, std::array<Eigen::Vector2d, 3>* slip) {
+  auto probe_at = [&](double tm, std::array<Eigen::Vector2d, 3>* slip) {
     const double frac = (tm - s.t_prev) / h;
     const Configuration q = dense
                                 ? HermiteState(th0, f0, th1, f1, h, frac)
@@ -1041,14 +1063,18 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     for (int i = 0; i < 3; ++i) (*slip)[i] = probe.contacts[i].slip;
     return true;
   };
+  // One captured reference: std::function keeps it without allocating.
+  const SlipVectorEvaluator evaluate =
+      [&probe_at](double tm, std::array<Eigen::Vector2d, 3>* slip) {
+        return probe_at(tm, slip);
+      };
   const std::size_t first = result->switches.size();
-  if (change) {
+  if (change)
     LocateSwitchesAndReversals(s.t_prev, t, slip0, slip1, eps,
                                options_.event_tolerance, evaluate,
                                &result->switches);
-    IntegrateSlipAcrossSwitches(t, first, evaluate, result);
-  }
-  if (!coupled) return;
+  if (change || regime) IntegrateSlipAcrossSwitches(t, first, evaluate, result);
+  if (!coupled || !(change || redo)) return;
   Eigen::VectorXd& y = s.y_event;
   y = th0;
   double ta = s.t_prev;
@@ -1094,8 +1120,10 @@ void Simulator::IntegrateSlipAcrossSwitches(double t, std::size_t first,
     slip0[i] = s.slip_prev[i].norm();
     slip1[i] = s.sol.contacts[i].slip.norm();
   }
-  std::array<Eigen::Vector2d, 3> v;
-  auto speeds = [&](double tm, std::array<double, 3>* f) {
+  // Captures one reference: no allocation (see RestartAtSwitches).
+  const SlipEvaluator speeds = [&evaluate](double tm,
+                                           std::array<double, 3>* f) {
+    std::array<Eigen::Vector2d, 3> v;
     if (!evaluate(tm, &v)) return false;
     for (int i = 0; i < 3; ++i) (*f)[i] = v[i].norm();
     return true;

@@ -254,6 +254,7 @@ class Simulator {
   void SetStopEvent(double t, SimulationResult* result) const;
   // Switches (core/switch_events.h): locates class changes between the last
   // sample and s.sol at t; in coupled mode restarts the interval there.
+  void CreateProbeSolver();
   void RestartAtSwitches(double t, SimulationResult* result);
   void IntegrateSlipAcrossSwitches(double t, std::size_t first,
                                    const SlipVectorEvaluator& evaluate,

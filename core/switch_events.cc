@@ -8,8 +8,8 @@
 
 namespace quasiroll {
 
-static_assert(kSwitchSlipOverEpsilon == kSlidingSlipOverEpsilon,
-              "switches and the sliding/creep split classify alike");
+static_assert(kSwitchSlipOverEpsilon > kSlidingSlipOverEpsilon,
+              "a switch lies inside the sliding regime of the split");
 
 double SwitchIndicator(double slip_speed, double epsilon) {
   if (std::isnan(slip_speed)) return SwitchEvent::kNaN;
@@ -90,8 +90,9 @@ int LocateSwitchesAndReversals(double t0, double t1,
                           tolerance, norms, out);  // throws
   // The first reversing wheel splits the interval; the pieces recurse.
   for (int i = 0; i < 3; ++i) {
-    if (!IsSliding(slip0[i].norm(), epsilon) ||
-        !IsSliding(slip1[i].norm(), epsilon) || !(slip0[i].dot(slip1[i]) < 0))
+    if (!(SwitchIndicator(slip0[i].norm(), epsilon) >= 0) ||
+        !(SwitchIndicator(slip1[i].norm(), epsilon) >= 0) ||
+        !(slip0[i].dot(slip1[i]) < 0))
       continue;
     double a = t0, b = t1;
     std::array<Eigen::Vector2d, 3> at_b = slip1, v;
@@ -197,6 +198,119 @@ bool SimpsonSlips(double a, const Slips& fa, double m, const Slips& fm,
          SimpsonSlips(m, fm, rm, frm, b, fb, right, half, depth - 1, evaluate,
                       sum, evaluations);
 }
+
+// The time in (a, b) at which wheel i's slip speed crosses `level`, its
+// class (IsSliding) differing at a and b: Illinois (regula falsi that halves
+// the retained end's weight) on the bounded h = (|s| - level)/(|s| + level),
+// stopped when |h| <= 1e-4 (the slip within 2e-4 of the level) or the
+// bracket is <= 1e-9 (b - a). A mislocation by dt moves ~level dt between
+// the regimes: 2e-4 level^2 / |ds/dt|, 4e-4 of the (already O(eps^2))
+// slide tail below the level. *at receives the slips there. False if an
+// evaluation fails.
+bool LocateSlipLevel(double a, double ha, double b, double hb, int i,
+                     double level, const SlipEvaluator& evaluate, double* t,
+                     Slips* at, int* evaluations) {
+  const double width = 1e-9 * (b - a);
+  int side = 0;
+  for (int k = 0; k < 60; ++k) {
+    double m = (a * hb - b * ha) / (hb - ha);
+    if (!(m > a && m < b)) m = 0.5 * (a + b);
+    ++*evaluations;
+    if (!evaluate(m, at)) return false;
+    const double h = ((*at)[i] - level) / ((*at)[i] + level);
+    if (std::isnan(h)) return false;
+    *t = m;
+    if (std::abs(h) <= 1e-4 || b - a <= width) return true;
+    if ((h >= 0) == (hb >= 0)) {
+      b = m;
+      hb = h;
+      if (side == 1) ha *= 0.5;
+      side = 1;
+    } else {
+      a = m;
+      ha = h;
+      if (side == -1) hb *= 0.5;
+      side = -1;
+    }
+  }
+  return true;
+}
+
+// Adaptive Simpson on [a, b] (slips fa, fb and, if not null, those at the
+// midpoint known) credited per wheel to the regime at the midpoint; adds to
+// *out.
+bool IntegratePiece(double a, const Slips& fa, double b, const Slips& fb,
+                    const Slips* midpoint, double epsilon,
+                    const SlipEvaluator& evaluate, SlipIncrements* out,
+                    int* evaluations) {
+  constexpr int kMaxDepth = 8;
+  const double m = 0.5 * (a + b);
+  Slips fm, whole, tol, sum{};
+  if (midpoint) {
+    fm = *midpoint;
+  } else {
+    ++*evaluations;
+    if (!evaluate(m, &fm)) return false;
+  }
+  for (int i = 0; i < 3; ++i) {
+    whole[i] = (b - a) / 6 * (fa[i] + 4 * fm[i] + fb[i]);
+    tol[i] = std::max(1e-4 * std::abs(whole[i]), 1e-3 * epsilon * (b - a));
+  }
+  if (!SimpsonSlips(a, fa, m, fm, b, fb, whole, tol, kMaxDepth, evaluate, &sum,
+                    evaluations))
+    return false;
+  for (int i = 0; i < 3; ++i)
+    (IsSliding(fm[i], epsilon) ? (*out)[i].sliding : (*out)[i].creep) += sum[i];
+  return true;
+}
+
+// One piece between two kinks: split further where a wheel's slip crosses
+// the sliding level (its class differs between a, the midpoint and b:
+// one crossing per half, e.g. both sides of a reversal's stick window).
+bool IntegrateBetweenKinks(double a, const Slips& fa, double b, const Slips& fb,
+                           double epsilon, const SlipEvaluator& evaluate,
+                           SlipIncrements* out, int* evaluations) {
+  const double m = 0.5 * (a + b);
+  Slips fm;
+  ++*evaluations;
+  if (!evaluate(m, &fm)) return false;
+  const double level = kSlidingSlipOverEpsilon * epsilon;
+  auto h = [level](double s) { return (s - level) / (s + level); };
+  // At most two crossings per wheel; their times and slips, unsorted.
+  std::array<double, 6> cuts;
+  std::array<Slips, 6> at;
+  int n = 0;
+  for (int i = 0; i < 3; ++i) {
+    const std::array<std::array<double, 2>, 2> halves{{{a, m}, {m, b}}};
+    const std::array<std::array<double, 2>, 2> ends{
+        {{fa[i], fm[i]}, {fm[i], fb[i]}}};
+    for (int k = 0; k < 2; ++k) {
+      const double h0 = h(ends[k][0]), h1 = h(ends[k][1]);
+      if (std::isnan(h0) || std::isnan(h1) || (h0 >= 0) == (h1 >= 0)) continue;
+      if (!LocateSlipLevel(halves[k][0], h0, halves[k][1], h1, i, level,
+                           evaluate, &cuts[n], &at[n], evaluations))
+        return false;
+      ++n;
+    }
+  }
+  std::array<int, 6> order{0, 1, 2, 3, 4, 5};
+  for (int k = 1; k < n; ++k)  // insertion sort by time
+    for (int j = k; j > 0 && cuts[order[j]] < cuts[order[j - 1]]; --j)
+      std::swap(order[j], order[j - 1]);
+  double ta = a;
+  Slips sa = fa;
+  for (int k = 0; k <= n; ++k) {
+    const double tb = k < n ? cuts[order[k]] : b;
+    const Slips& sb = k < n ? at[order[k]] : fb;
+    if (!(tb > ta)) continue;
+    if (!IntegratePiece(ta, sa, tb, sb, n == 0 ? &fm : nullptr, epsilon,
+                        evaluate, out, evaluations))
+      return false;
+    ta = tb;
+    sa = sb;
+  }
+  return true;
+}
 }  // namespace
 
 bool IntegrateSlipRegimes(double t0, double t1, const Slips& slip0,
@@ -205,7 +319,6 @@ bool IntegrateSlipRegimes(double t0, double t1, const Slips& slip0,
                           SlipIncrements* out, int* evaluations) {
   if (!(t1 > t0))
     throw std::invalid_argument("IntegrateSlipRegimes: t1 must be > t0");
-  constexpr int kMaxDepth = 8;
   *out = SlipIncrements{};
   *evaluations = 0;
   double a = t0;
@@ -213,22 +326,14 @@ bool IntegrateSlipRegimes(double t0, double t1, const Slips& slip0,
   for (std::size_t j = 0; j <= breaks.size(); ++j) {
     const double b = j < breaks.size() ? breaks[j] : t1;
     if (!(b > a) || b > t1) continue;
-    Slips fb = slip1, fm;
-    const double m = 0.5 * (a + b);
-    *evaluations += j < breaks.size() ? 2 : 1;
-    if ((j < breaks.size() && !evaluate(b, &fb)) || !evaluate(m, &fm))
-      return false;
-    Slips whole, tol, sum{};
-    for (int i = 0; i < 3; ++i) {
-      whole[i] = (b - a) / 6 * (fa[i] + 4 * fm[i] + fb[i]);
-      tol[i] = std::max(1e-4 * std::abs(whole[i]), 1e-3 * epsilon * (b - a));
+    Slips fb = slip1;
+    if (j < breaks.size()) {
+      ++*evaluations;
+      if (!evaluate(b, &fb)) return false;
     }
-    if (!SimpsonSlips(a, fa, m, fm, b, fb, whole, tol, kMaxDepth, evaluate,
-                      &sum, evaluations))
+    if (!IntegrateBetweenKinks(a, fa, b, fb, epsilon, evaluate, out,
+                               evaluations))
       return false;
-    for (int i = 0; i < 3; ++i)
-      (IsSliding(fm[i], epsilon) ? (*out)[i].sliding : (*out)[i].creep) +=
-          sum[i];
     a = b;
     fa = fb;
   }

@@ -3,10 +3,12 @@
 // so that an integrator can be restarted there instead of stepping across
 // the kink of the right-hand side.
 //
-// Classification (the same as core/slip_regimes.h, so that a recorded
-// switch and the sliding/creep split agree): with the regularised Coulomb
-// law C, sigma_i f_ti + mu f_ni s_i = 0, sigma_i = sqrt(|s_i|^2 + eps^2),
-// a wheel's friction use is u_i = |f_ti|/(mu f_ni) = |s_i|/sigma_i and
+// Classification (a switch is a kink of the slip, so it is placed where
+// the slip leaves the regularisation's scale; the sliding/creep split of
+// core/slip_regimes.h counts from the lower 10 eps, see there): with the
+// regularised Coulomb law C, sigma_i f_ti + mu f_ni s_i = 0,
+// sigma_i = sqrt(|s_i|^2 + eps^2), a wheel's friction use is
+// u_i = |f_ti|/(mu f_ni) = |s_i|/sigma_i and
 //   wheel i slides  <=>  |s_i| >= kappa eps  <=>  u_i >= u* = kappa /
 //   sqrt(1 + kappa^2),                          kappa = 100 (u* = 0.99995),
 // and sticks (creeps at a speed proportional to eps) otherwise. The two
@@ -60,8 +62,8 @@
 
 namespace quasiroll {
 
-// |s| / eps at the stick/slide boundary (= kSlidingSlipOverEpsilon of
-// core/slip_regimes.h).
+// |s| / eps at a switch between stick and slide (above the sliding/creep
+// split's kSlidingSlipOverEpsilon of core/slip_regimes.h).
 inline constexpr double kSwitchSlipOverEpsilon = 100.0;
 
 // g = (|s| - kappa eps)/(|s| + kappa eps); NaN for a NaN slip.
@@ -144,17 +146,21 @@ using SlipIncrements = std::array<SlipIncrement, 3>;
 
 // The slip integrals over [t0, t1] of an interval in which a wheel changes
 // class, split at `breaks` (the located switch times inside (t0, t1),
-// sorted): on each piece int |s_i| dt by adaptive Simpson on `evaluate`
-// (error estimate <= 1e-4 of the piece's integral or 1e-3 eps (b - a), at
-// most 2^8 subdivisions), credited to the regime of the slip at the
-// piece's midpoint. The trapezoid over the two samples instead gives the
-// sample next to a switch, where creep peaks (|s| = eps / sqrt(2 r D), D
-// from the cone) or a short stick window opens (its length proportional
-// to eps), the weight (t1 - t0) / 2 whatever its distance to the switch,
-// so the creep of a run was not proportional to eps (paper scene, 20 s:
-// 13.1x and 11.2x per decade of eps). False if an evaluation fails (*out
-// then unspecified; the caller keeps the trapezoid). *evaluations
-// receives the count. Throws std::invalid_argument for t1 <= t0.
+// sorted: kinks of the slip) and, between them, where a wheel's slip
+// crosses the sliding level kSlidingSlipOverEpsilon eps (located by
+// Illinois to |s| within 2e-4 of the level; at most one crossing per half
+// of a piece, which covers a reversal's stick window), on each piece
+// int |s_i| dt by adaptive Simpson on `evaluate` (error estimate <= 1e-4 of
+// the piece's integral or 1e-3 eps (b - a), at most 2^8 subdivisions),
+// credited to the regime of the slip at the piece's midpoint. The
+// trapezoid over the two samples instead gives the sample next to a switch,
+// where creep peaks (|s| = eps / sqrt(2 r D), D from the cone) or a short
+// stick window opens (its length proportional to eps), the weight
+// (t1 - t0) / 2 whatever its distance to the switch, so the creep of a run
+// was not proportional to eps (paper scene, 20 s: 13.1x and 11.2x per
+// decade of eps). False if an evaluation fails (*out then unspecified; the
+// caller keeps the trapezoid). *evaluations receives the count. Throws
+// std::invalid_argument for t1 <= t0.
 bool IntegrateSlipRegimes(double t0, double t1,
                           const std::array<double, 3>& slip0,
                           const std::array<double, 3>& slip1,

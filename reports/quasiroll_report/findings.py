@@ -205,7 +205,7 @@ def epsilon_findings(runs):
         else:
             values = ", ".join(fmt(r["sliding_distance"], 5) for r in slides)
             text = (f"ε ladder on {scene} ({eps_text}): sliding distance {values} m "
-                    f"as ε falls (slides count once ‖s‖ ≥ 100 ε)")
+                    f"as ε falls (slides count once ‖s‖ ≥ 10 ε)")
         if creep_per_eps:
             tail = creep_per_eps[-2:] if slides else creep_per_eps
             spread = max(tail) / min(tail) - 1
@@ -215,7 +215,7 @@ def epsilon_findings(runs):
                      "regularisation, not physics")
             if slides and spread > 0.05:
                 text += ("; the excess is of order ε²: a slide that slows to a stick "
-                         "spends its last 100 ε/a seconds below the sliding threshold "
+                         "spends its last 10 ε/a seconds below the sliding level "
                          "(docs/model.md §7.5)")
         out.append(text + ".")
     return out

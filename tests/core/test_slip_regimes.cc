@@ -47,8 +47,8 @@ TEST(SlipRegimes, TrapezoidSplitByRegime) {
   EXPECT_DOUBLE_EQ(
       c.contacts[1].sliding_distance - b.contacts[1].sliding_distance,
       0.25 * 2e-6);
-  EXPECT_TRUE(IsSliding(100 * eps, eps));
-  EXPECT_FALSE(IsSliding(99 * eps, eps));
+  EXPECT_TRUE(IsSliding(10 * eps, eps));
+  EXPECT_FALSE(IsSliding(9.99 * eps, eps));
   const SlipDistances total = TotalSlipDistances({a, b, c});
   EXPECT_DOUBLE_EQ(total.sliding, c.contacts[0].sliding_distance +
                                       c.contacts[1].sliding_distance +
@@ -84,19 +84,20 @@ TEST(SlipRegimes, PvcCreepsInProportionToEpsilonAndNeverSlides) {
 }
 
 // Paper mode slides (the over-actuated chains' incompatibility, ~1e-5 m/s):
-// the sliding distance converges as eps -> 0 (model.md §7.5's table of the
-// total slip over the first 5 s) while the creep falls in proportion to eps
-// once the slides are resolved (eps <= 1e-3 of the slip speeds, §7.2).
-// Measured 2026-11-26: sliding 2.0892e-4, 2.2049e-4, 2.2097e-4 m and creep
-// 1.09e-5, 4.02e-7, 3.90e-8 m at eps 1e-7, 1e-8, 1e-9: each decade of eps
-// moves the sliding distance 25x less than the one before.
+// the sliding distance converges as eps -> 0 while the creep falls in
+// proportion to eps (model.md §7.5). Measured 2026-11-26 (first 5 s, zoh,
+// dt 0.05): sliding 2.1726e-4, 2.2017e-4, 2.2098e-4 m and creep / eps 22.96,
+// 22.54, 22.38 s at eps 1e-7, 1e-8, 1e-9 (22.37 s at 1e-10). Asserted: the
+// sliding distance's distance to eps = 1e-9 at least halves per decade
+// (measured: to 0.22) and is within 0.5 % at 1e-8 (0.37 %); creep
+// proportional to eps within the issue's 5 % (0.7 %).
 TEST(SlipRegimes, PaperSlidingConvergesAsEpsilonFalls) {
   const SlipDistances e7 = Simulate(ActuationMode::kPaper, 1e-7);
   const SlipDistances e8 = Simulate(ActuationMode::kPaper, 1e-8);
   const SlipDistances e9 = Simulate(ActuationMode::kPaper, 1e-9);
   ASSERT_GT(e9.sliding, 0.0);
   EXPECT_LT(std::abs(e8.sliding - e9.sliding),
-            0.1 * std::abs(e7.sliding - e9.sliding));
+            0.5 * std::abs(e7.sliding - e9.sliding));
   EXPECT_NEAR(e8.sliding / e9.sliding, 1.0, 5e-3);
   // Creep proportional to eps within the issue's 5 %.
   EXPECT_NEAR(e8.creep / e9.creep, 10.0, 0.5);
@@ -104,14 +105,21 @@ TEST(SlipRegimes, PaperSlidingConvergesAsEpsilonFalls) {
 
 // An interval with a located stick -> slide switch of wheel 1 at ts: before
 // it the creep precursor |s| = eps / sqrt(2 r (tc - t)) (a wheel heading for
-// its cone, switch_events.h), |s(ts)| = 100 eps; after it a slide ramping
-// linearly to 1e-5 m/s. Wheel 2 creeps at 5 eps, wheel 3 slides at 1e-5.
-// Analytic: creep int = eps sqrt(2 / r) (sqrt(tc - t0) - sqrt(tc - ts)),
-// sliding = the ramp's trapezoid. Tolerance 1e-3: the quadrature's
-// requested 1e-4 of the piece, with room for Simpson's error estimate
-// being an estimate. The two-sample trapezoid errs by 40 % here.
+// its cone, switch_events.h), |s(ts)| = 100 eps (the switch: a kink); after
+// it a slide ramping linearly to 1e-5 m/s. The precursor crosses the
+// sliding level 10 eps at tx = tc - 1 / (200 r) inside the interval (r is
+// chosen for tx = 0.02), which IntegrateSlipRegimes must locate by itself:
+// creep before tx, sliding after. Wheel 2 creeps at 5 eps, wheel 3 slides
+// at 1e-5. Analytic: the precursor's integral eps sqrt(2 / r) (sqrt(tc -
+// ta) - sqrt(tc - tb)) over [t0, tx] (creep) and [tx, ts] (sliding, plus
+// the ramp's trapezoid). Tolerance 1e-3: the quadrature's requested 1e-4
+// of the piece, with room for Simpson's error estimate being an estimate
+// and for tx located to |s| within 2e-4 of the level (<= 3e-4 here). The
+// two-sample trapezoid's sliding errs by more than 100 % here.
 TEST(SlipRegimes, SwitchIntervalIsIntegratedPiecewise) {
-  const double eps = 1e-8, r = 0.0116, t0 = 0.0, t1 = 0.05, ts = 0.03;
+  const double eps = 1e-8, t0 = 0.0, t1 = 0.05, ts = 0.03, tx = 0.02;
+  // tc - tx = 1 / (200 r) and tc - ts = 1 / (2e4 r).
+  const double r = (0.005 - 0.00005) / (ts - tx);
   const double tc = ts + 1.0 / (2 * r * 1e4);
   auto slip = [&](double t) -> std::array<double, 3> {
     const double w1 =
@@ -119,6 +127,7 @@ TEST(SlipRegimes, SwitchIntervalIsIntegratedPiecewise) {
                : 100 * eps + (1e-5 - 100 * eps) * (t - ts) / (t1 - ts);
     return {w1, 5 * eps, 1e-5};
   };
+  ASSERT_NEAR(slip(tx)[0], 10 * eps, 1e-12 * eps);
   int calls = 0;
   const SlipEvaluator evaluate = [&](double t, std::array<double, 3>* f) {
     ++calls;
@@ -130,11 +139,14 @@ TEST(SlipRegimes, SwitchIntervalIsIntegratedPiecewise) {
   ASSERT_TRUE(IntegrateSlipRegimes(t0, t1, slip(t0), slip(t1), {ts}, eps,
                                    evaluate, &inc, &evaluations));
   EXPECT_EQ(evaluations, calls);
-  const double creep =
-      eps * std::sqrt(2 / r) * (std::sqrt(tc - t0) - std::sqrt(tc - ts));
+  auto precursor = [&](double ta, double tb) {
+    return eps * std::sqrt(2 / r) * (std::sqrt(tc - ta) - std::sqrt(tc - tb));
+  };
+  const double creep = precursor(t0, tx);
   EXPECT_NEAR(inc[0].creep, creep, 1e-3 * creep);
-  const double ramp = 0.5 * (100 * eps + 1e-5) * (t1 - ts);
-  EXPECT_NEAR(inc[0].sliding, ramp, 1e-9 * ramp);
+  const double sliding =
+      precursor(tx, ts) + 0.5 * (100 * eps + 1e-5) * (t1 - ts);
+  EXPECT_NEAR(inc[0].sliding, sliding, 1e-3 * precursor(tx, ts));
   EXPECT_NEAR(inc[1].creep, 5 * eps * (t1 - t0), 1e-9 * eps);
   EXPECT_EQ(inc[1].sliding, 0.0);
   EXPECT_NEAR(inc[2].sliding, 1e-5 * (t1 - t0), 1e-15);
@@ -142,7 +154,7 @@ TEST(SlipRegimes, SwitchIntervalIsIntegratedPiecewise) {
   // What the trapezoid over the two samples gives wheel 1 instead.
   TrajectorySample a = At(t0, slip(t0)[0], 0, 0), b = At(t1, slip(t1)[0], 0, 0);
   AccumulateSlipDistances(a, eps, &b);
-  EXPECT_GT(std::abs(b.contacts[0].creep_distance - creep), 0.4 * creep);
+  EXPECT_GT(std::abs(b.contacts[0].sliding_distance - sliding), sliding);
   // A failed evaluation: false (the caller keeps the trapezoid).
   const SlipEvaluator failing = [](double, std::array<double, 3>*) {
     return false;
@@ -152,6 +164,33 @@ TEST(SlipRegimes, SwitchIntervalIsIntegratedPiecewise) {
   EXPECT_THROW(IntegrateSlipRegimes(t1, t0, slip(t0), slip(t1), {}, eps,
                                     evaluate, &inc, &evaluations),
                std::invalid_argument);
+}
+
+// A reversal: a sliding wheel whose slip passes through zero at tr at a
+// rate a, |s| = a |t - tr|, with its switches (100 eps) located on both
+// sides. Between them, both ends slide by the split's 10 eps level, so the
+// stick window below 10 eps (length 20 eps / a) is found from the piece's
+// midpoint: creep (10 eps)^2 / a, the rest sliding. Relative tolerance
+// 1e-3 as above (the window is located to 2e-4 of the level).
+TEST(SlipRegimes, ReversalWindowCreepsOnlyBelowTheSlidingLevel) {
+  const double eps = 1e-8, a = 1.4e-5, tr = 0.021, t0 = 0.0, t1 = 0.05;
+  auto slip = [&](double t) -> std::array<double, 3> {
+    return {a * std::abs(t - tr), 1e-5, 1e-5};
+  };
+  const SlipEvaluator evaluate = [&](double t, std::array<double, 3>* f) {
+    *f = slip(t);
+    return true;
+  };
+  const double w = 100 * eps / a;  // switch times tr -+ w
+  SlipIncrements inc;
+  int evaluations = 0;
+  ASSERT_TRUE(IntegrateSlipRegimes(t0, t1, slip(t0), slip(t1), {tr - w, tr + w},
+                                   eps, evaluate, &inc, &evaluations));
+  const double creep = (10 * eps) * (10 * eps) / a;
+  const double total =
+      0.5 * a * (tr - t0) * (tr - t0) + 0.5 * a * (t1 - tr) * (t1 - tr);
+  EXPECT_NEAR(inc[0].creep, creep, 1e-3 * creep);
+  EXPECT_NEAR(inc[0].sliding, total - creep, 1e-3 * creep);
 }
 
 // Creep does not depend on the output grid (issue #21, "errors independent
