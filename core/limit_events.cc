@@ -19,7 +19,8 @@ Mat2 RelativeCurvature(const KinematicModel& model, const Configuration& theta,
   const SurfaceForms w =
       TorusForms(g.major_radius, g.tube_radius, theta(e), theta(e + 1));
   const double xg = theta(e + 2), yg = theta(e + 3);
-  const SurfaceForms t = TerrainForms(model.terrain().Evaluate(xg, yg), xg, yg);
+  const SurfaceForms t =
+      TerrainForms(model.terrain().EvaluateSecondOrder(xg, yg), xg, yg);
   const Mat2 r = ContactRotation2(theta(e + 4));
   return w.K + r * t.K * r;
 }
@@ -49,7 +50,8 @@ double SecondContactClearance(const KinematicModel& model,
   // KinematicModel::EvaluateChain computes it.
   const SurfaceForms w =
       TorusForms(g.major_radius, g.tube_radius, theta(e), theta(e + 1));
-  const SurfaceForms t = TerrainForms(terrain.Evaluate(xg, yg), xg, yg);
+  const SurfaceForms t =
+      TerrainForms(terrain.EvaluateSecondOrder(xg, yg), xg, yg);
   const Mat3 R_GW =
       t.frame * ContactRotation(theta(e + 4)) * w.frame.transpose();
   const Vec3 p_W = t.point - R_GW * w.point;

@@ -26,15 +26,20 @@
 // regularisation scale (>= 0: sliding) and, written with the cone margin,
 // g_i < 0 <=> m_i > 1 - u* (the sticking wheel's distance from its cone).
 //
-// Location: LocateSwitches bisects each wheel whose class differs at the two
-// ends of [t0, t1] on a caller-supplied evaluation of the slips at interior
-// times (the simulator: the quasi-static solve at states of the interval's
-// cubic Hermite dense output, core/limit_events.h), keeping the invariant
-// "class at t_lower = class at t0, class at t_upper = class at t1" until
-// t_upper - t_lower <= tolerance. The switch time is t_upper (the first
-// state found in the new class). A wheel that changes class twice within
-// [t0, t1] has the same class at both ends and is not seen (the samples
-// bound the resolution, as for any sampled detection).
+// Location: LocateSwitches narrows, for each wheel whose class differs at
+// the two ends of [t0, t1], a bracket on a caller-supplied evaluation of the
+// slips at interior times (the simulator: the quasi-static solve at states
+// of the interval's cubic Hermite dense output, core/limit_events.h),
+// keeping the invariant "class at t_lower = class at t0, class at t_upper =
+// class at t1" until t_upper - t_lower <= tolerance. The bracket is the one
+// bisection ends with: bisection down to 1e-6 s, then Illinois steps on g_i
+// to a bracket of width <= tolerance, then bisection's remaining halvings
+// replayed against it, and the ends of the result that were not evaluated
+// checked (a failed check or evaluation: plain bisection on); paper scene:
+// ~21 instead of 26 evaluations per switch. The switch time is t_upper (the
+// first state found in the new class). A wheel that changes class twice
+// within [t0, t1] has the same class at both ends and is not seen (the
+// samples bound the resolution, as for any sampled detection).
 //
 // Resolution (coupled mode, fixed-step methods): with eps > 0 a switch is
 // not a kink but a steep, smooth transition whose width scales with eps
@@ -92,9 +97,10 @@ struct SwitchEvent {
 using SlipEvaluator = std::function<bool(double t, std::array<double, 3>*)>;
 
 // Appends to *out one event per wheel whose class (slip0 at t0, slip1 at t1)
-// differs, located by bisection of `evaluate` to `tolerance` seconds,
-// sorted by time. Returns the number appended. Throws std::invalid_argument
-// for t1 <= t0, tolerance <= 0 or epsilon <= 0.
+// differs, located on `evaluate` to `tolerance` seconds (the bracket of
+// bisection, see "Location" above), sorted by time. Returns the number
+// appended. Throws std::invalid_argument for t1 <= t0, tolerance <= 0 or
+// epsilon <= 0.
 int LocateSwitches(double t0, double t1, const std::array<double, 3>& slip0,
                    const std::array<double, 3>& slip1, double epsilon,
                    double tolerance, const SlipEvaluator& evaluate,
@@ -112,11 +118,12 @@ using SlipVectorEvaluator =
 // Delta t >= 0.2 s and so invisible to the class test), and its traction
 // -mu f_n s / sqrt(|s|^2 + eps^2) flips within ~ eps / |s'|: a jump of the
 // right-hand side as eps -> 0. Such an interval is split at the reversal,
-// located by bisection of the sign of s(t) . s(t0) to `tolerance`, and the
+// located on the sign of s(t) . s(t0) to `tolerance`, and the
 // class changes of every piece are located as by LocateSwitches (slips at
-// the split from `evaluate`). Without a reversal this is LocateSwitches.
-// Returns the number of events appended (in time order); *reversed (if not
-// null) receives whether a reversal was found. Throws as LocateSwitches.
+// the split from `evaluate`; the reversal's bracket narrowed as there). Without
+// a reversal this is LocateSwitches. Returns the number of events appended (in
+// time order); *reversed (if not null) receives whether a reversal was found.
+// Throws as LocateSwitches.
 int LocateSwitchesAndReversals(double t0, double t1,
                                const std::array<Eigen::Vector2d, 3>& slip0,
                                const std::array<Eigen::Vector2d, 3>& slip1,
