@@ -100,11 +100,13 @@ struct CvodeProjectionIntegrator::Impl {
 
   // Newton projection of state onto H = 0 (model.md §8.4); false (message
   // in last_message) on failure.
-  bool Project(Eigen::Ref<VectorXd> state) {
+  bool Project(Eigen::Ref<VectorXd> state, bool* moved_out = nullptr) {
     bool moved = false;
-    if (projection.Project(*ode, state, projection_settings, result, &moved) ==
-        IntegratorStatus::kSuccess)
-      return true;
+    if (moved_out != nullptr) *moved_out = false;
+    const IntegratorStatus status =
+        projection.Project(*ode, state, projection_settings, result, &moved);
+    if (moved_out != nullptr) *moved_out = moved;
+    if (status == IntegratorStatus::kSuccess) return true;
     last_message = projection.message();
     return false;
   }
@@ -175,12 +177,16 @@ struct CvodeProjectionIntegrator::Impl {
     Map<const VectorXd> y(NV_DATA_S(ycur), s.n);
     Map<VectorXd> c(NV_DATA_S(corr), s.n);
     s.z = y;
-    if (!s.Project(s.z)) return 1;  // recoverable: CVODE shrinks the step
+    bool moved = false;
+    if (!s.Project(s.z, &moved)) return 1;  // recoverable: CVODE shrinks h
     c = s.z - y;
     if (err != nullptr && s.projection.m() > 0) {
-      // Tangent part of the error estimate: e <- e - D J^T A^{-1} J e.
+      // Tangent part of the error estimate: e <- e - D J^T A^{-1} J e, with
+      // the projection's last factorisation when it moved (at its last
+      // iterate, within the final correction ~ the step's drift of z: the
+      // tangent space is the same to that order), else one at z.
       Map<VectorXd> e(NV_DATA_S(err), s.n);
-      if (!s.projection.Factorize(*s.ode, s.z, s.result)) {
+      if (!moved && !s.projection.Factorize(*s.ode, s.z, s.result)) {
         s.last_message = s.projection.message();
         return 1;
       }
