@@ -61,6 +61,7 @@ struct CvodeProjectionIntegrator::Impl {
     roots.registered = 0;
     jac_installed = false;
     jac_ode = nullptr;
+    jac_valid = false;
   }
 
   // Per-call state, D and the workspaces (sized when n changes).
@@ -78,6 +79,10 @@ struct CvodeProjectionIntegrator::Impl {
       y_pert.resize(n_new);
       f_pert.resize(n_new);
       jac_probe.resize(n_new, n_new);
+      jac_saved.resize(n_new, n_new);
+      jac_y.resize(n_new);
+      last_y.resize(n_new);
+      jac_valid = false;
     }
   }
   // CVodeReInit when the size is unchanged, else a new CVODE memory; y0 is
@@ -95,11 +100,13 @@ struct CvodeProjectionIntegrator::Impl {
 
   // Newton projection of state onto H = 0 (model.md §8.4); false (message
   // in last_message) on failure.
-  bool Project(Eigen::Ref<VectorXd> state) {
+  bool Project(Eigen::Ref<VectorXd> state, bool* moved_out = nullptr) {
     bool moved = false;
-    if (projection.Project(*ode, state, projection_settings, result, &moved) ==
-        IntegratorStatus::kSuccess)
-      return true;
+    if (moved_out != nullptr) *moved_out = false;
+    const IntegratorStatus status =
+        projection.Project(*ode, state, projection_settings, result, &moved);
+    if (moved_out != nullptr) *moved_out = moved;
+    if (status == IntegratorStatus::kSuccess) return true;
     last_message = projection.message();
     return false;
   }
@@ -123,8 +130,30 @@ struct CvodeProjectionIntegrator::Impl {
     Impl& s = *static_cast<Impl*>(user_data);
     Map<const VectorXd> ym(NV_DATA_S(y), s.n), f0(NV_DATA_S(fy), s.n);
     Map<MatrixXd> out(SUNDenseMatrix_Data(jm), s.n, s.n);
+    // Reuse (option jacobian_reuse, as ida): CVODE keeps its J between
+    // steps but re-evaluates it at every CVodeReInit (each call: each zoh
+    // hold interval); the last J is kept while y is within jacobian_reuse
+    // (relative, max norm) of where it was evaluated and CVODE has had no
+    // convergence failure since (a failure asks for a fresh J).
+    long conv_fails = 0;
+    CVodeGetNumNonlinSolvConvFails(s.mem, &conv_fails);
+    if (s.jacobian_reuse > 0.0 && s.jac_valid &&
+        conv_fails == s.jac_conv_fails &&
+        (ym - s.jac_y).lpNorm<Eigen::Infinity>() <=
+            s.jacobian_reuse *
+                std::max(1.0, s.jac_y.lpNorm<Eigen::Infinity>())) {
+      out = s.jac_saved;
+      return 0;
+    }
     ++s.result->jacobian_evaluations;
-    if (s.ode->RhsJacobian(t, ym, out) && out.allFinite()) return 0;
+    s.jac_valid = false;
+    if (s.ode->RhsJacobian(t, ym, out) && out.allFinite()) {
+      s.jac_valid = true;
+      s.jac_saved = out;
+      s.jac_y = ym;
+      s.jac_conv_fails = conv_fails;
+      return 0;
+    }
     const double sqrt_eps = std::sqrt(std::numeric_limits<double>::epsilon());
     s.y_pert = ym;
     for (int j = 0; j < s.n; ++j) {
@@ -148,12 +177,16 @@ struct CvodeProjectionIntegrator::Impl {
     Map<const VectorXd> y(NV_DATA_S(ycur), s.n);
     Map<VectorXd> c(NV_DATA_S(corr), s.n);
     s.z = y;
-    if (!s.Project(s.z)) return 1;  // recoverable: CVODE shrinks the step
+    bool moved = false;
+    if (!s.Project(s.z, &moved)) return 1;  // recoverable: CVODE shrinks h
     c = s.z - y;
     if (err != nullptr && s.projection.m() > 0) {
-      // Tangent part of the error estimate: e <- e - D J^T A^{-1} J e.
+      // Tangent part of the error estimate: e <- e - D J^T A^{-1} J e, with
+      // the projection's last factorisation when it moved (at its last
+      // iterate, within the final correction ~ the step's drift of z: the
+      // tangent space is the same to that order), else one at z.
       Map<VectorXd> e(NV_DATA_S(err), s.n);
-      if (!s.projection.Factorize(*s.ode, s.z, s.result)) {
+      if (!moved && !s.projection.Factorize(*s.ode, s.z, s.result)) {
         s.last_message = s.projection.message();
         return 1;
       }
@@ -182,6 +215,7 @@ struct CvodeProjectionIntegrator::Impl {
   int max_proj_fails = 10;
   double proj_fail_eta = 0.25;
   bool ode_jacobian = true;  // jacobian=ift
+  double jacobian_reuse = 0.01;
 
   // SUNDIALS objects.
   sundials_internal::Context context;
@@ -194,6 +228,15 @@ struct CvodeProjectionIntegrator::Impl {
   // for the ODE jac_ode.
   bool jac_installed = false;
   const ConstrainedOde* jac_ode = nullptr;
+  // The last RhsJacobian (jacobian_reuse): value, point, CVODE's
+  // convergence failure count then. Kept only for a call of the same ODE
+  // that starts where the last successful one ended.
+  bool jac_valid = false;
+  MatrixXd jac_saved;
+  VectorXd jac_y;
+  long jac_conv_fails = 0;
+  double last_t = 0.0;
+  VectorXd last_y;  // the state the last successful call returned
 
   // Per call.
   ConstrainedOde* ode = nullptr;
@@ -245,6 +288,14 @@ OptionTable CvodeProjectionIntegrator::option_table() const {
       "gives one (robot: central differences of the kinematics + "
       "implicit-function-theorem sensitivities of the solve, model.md §8.9), "
       "else differences; fd = always CVODE's difference quotients"));
+  table.push_back(
+      OptionSpec::Double("jacobian_reuse", 0.01,
+                         "jacobian=ift: keep dF/dy across calls (CVODE "
+                         "re-initialises at each) while y is within this "
+                         "relative distance (max norm) of where it was "
+                         "evaluated, the call starts where the last ended and "
+                         "Newton has not failed; 0 = re-evaluate")
+          .AtLeast(0));
   return table;
 }
 
@@ -258,6 +309,7 @@ void CvodeProjectionIntegrator::ApplyBackendOptions(
   s.max_proj_fails = static_cast<int>(values.GetInt("max_proj_fails"));
   s.proj_fail_eta = values.GetDouble("proj_fail_eta");
   s.ode_jacobian = values.GetString("jacobian") == "ift";
+  s.jacobian_reuse = values.GetDouble("jacobian_reuse");
 }
 
 namespace {
@@ -272,6 +324,11 @@ std::string FlagName(int flag) {
 int CvodeProjectionIntegrator::Impl::CreateOrReInit(
     double t0, const Eigen::Ref<const VectorXd>& y0) {
   const int n_new = static_cast<int>(y0.size());
+  // CVodeReInit resets CVODE's count: a failure since J was saved drops it.
+  long conv_fails = 0;
+  if (mem != nullptr) CVodeGetNumNonlinSolvConvFails(mem, &conv_fails);
+  if (conv_fails != jac_conv_fails) jac_valid = false;
+  jac_conv_fails = 0;
   if (mem != nullptr && n == n_new) {
     Map<VectorXd>(NV_DATA_S(yy), n_new) = y0;
     return CVodeReInit(mem, t0, yy);
@@ -397,6 +454,12 @@ void CvodeProjectionIntegrator::Impl::Solve(double t0, double t1,
     result->message = "final projection: " + last_message;
   }
   result->status = status;
+  if (status == IntegratorStatus::kSuccess) {
+    last_t = result->t_reached;
+    last_y = y;
+  } else {
+    jac_valid = false;
+  }
 }
 
 void CvodeProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
@@ -406,6 +469,9 @@ void CvodeProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
                                             IntegratorResult* result) {
   Impl& s = *impl_;
   s.Begin(ode, result);
+  // A call from elsewhere (a re-integration, a new run) computes as on a
+  // fresh integrator.
+  if (&ode != s.jac_ode || t0 != s.last_t || y != s.last_y) s.jac_valid = false;
   auto fail = [&](IntegratorStatus status, const std::string& message) {
     result->status = status;
     result->t_reached = t0;

@@ -2,6 +2,7 @@
 
 #include <ida/ida.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -56,6 +57,8 @@ using Eigen::VectorXd;
 namespace {
 // IDA's own defaults of the step controls.
 constexpr sundials_internal::StepControls kIdaStepControls{5, 4, 10, 10};
+// Initial step of a restart (option restart_step).
+enum class RestartStep { kGiven, kEstimate, kCarry };
 }  // namespace
 
 struct IdaIntegrator::Impl {
@@ -67,11 +70,13 @@ struct IdaIntegrator::Impl {
   void Free() {
     if (mem != nullptr) IDAFree(&mem);
     dense.Free();
-    for (N_Vector* v : {&yy, &yp, &id, &atol, &ewt})
+    for (N_Vector* v : {&yy, &yp, &id, &atol, &ewt, &ele})
       sundials_internal::DestroyVector(v);
     n = m = -1;
     roots.registered = 0;
     last.valid = false;
+    carried_ode = nullptr;
+    dfdx_valid = false;
   }
 
   // Whether this call continues the last one (see ContinuesLastCall in the
@@ -99,6 +104,7 @@ struct IdaIntegrator::Impl {
     return rhs.Call(*ode, t, x, f, result);
   }
   bool Track(double t, bool ok) { return rhs.Track(t, ok); }
+  bool ComputeDfdx(double t, const Eigen::Ref<const VectorXd>& x);
 
   // SUNDIALS objects.
   sundials_internal::Context context;
@@ -132,7 +138,24 @@ struct IdaIntegrator::Impl {
     sundials_internal::StepControls controls = kIdaStepControls;
     bool suppress_alg = true;
     bool ode_jacobian = true;  // jacobian=ift: ask ode.RhsJacobian first
+    double jacobian_reuse = 0.01;
+    RestartStep restart_step = RestartStep::kCarry;
   } settings;
+
+  // restart_step=carry: after a restart's first step (IDA_ONE_STEP), the
+  // order-1 step that its error estimate predicts; the next restart of the
+  // same problem starts with it (capped by IntegratorOptions::step).
+  void CarryFirstStep(const ConstrainedOde& problem);
+  double carried_step = 0.0;
+  const ConstrainedOde* carried_ode = nullptr;
+  bool probe_first_step = false;  // this call restarts with restart_step=carry
+  // The last dF/dx (in dfdx), where it was evaluated and IDA's convergence
+  // failure count then (see Jacobian).
+  bool dfdx_valid = false;
+  VectorXd dfdx_x;
+  long dfdx_conv_fails = 0;
+  bool from_last_end = false;  // this call starts where the last one ended
+  N_Vector ele = nullptr;      // IDA's local error estimate (workspace)
 
   // Per-call data.
   ConstrainedOde* ode = nullptr;
@@ -152,6 +175,11 @@ struct IdaIntegrator::Impl {
 
 int IdaIntegrator::Impl::Prepare(int n_new, int m_new, double t0) {
   steps_seen = fails_seen = 0;
+  // IDAReInit resets IDA's count: a failure since dfdx was saved drops it.
+  long conv_fails = 0;
+  if (mem != nullptr) IDAGetNumNonlinSolvConvFails(mem, &conv_fails);
+  if (conv_fails != dfdx_conv_fails) dfdx_valid = false;
+  dfdx_conv_fails = 0;
   if (mem != nullptr && n_new == n && m_new == m)
     return IDAReInit(mem, t0, yy, yp);
   // Sizes changed (or first call): the vectors, matrix and linear solver
@@ -191,6 +219,39 @@ int IdaIntegrator::Impl::Prepare(int n_new, int m_new, double t0) {
   return flag;
 }
 
+// The first step after a restart is BDF1 from the predictor y0 + h y0', so
+// IDA's correction ee = y1 - y0 - h y0' ~ h^2 y'' and the local error
+// ~ ee / 2 ~ h^2. IDA's step rule for order 1 (error 1/2 of the test's
+// bound) then gives h_new = h / sqrt(||ee||_wrms) (its masked norm: the
+// algebraic nu excluded, divided by the full length). A zoh hold interval
+// restarts with a new F of similar curvature, so this is the next restart's
+// h0 instead of the sample interval (which fails the error test 2-3 times at
+// rtol 1e-8). The ratio is clamped (one step says little about the next) and
+// scaled by a safety factor (paper scene, zoh: 0.5 / 0.7 / 1 / 1.5 give
+// 3906 / 3725 / 4626 / 4925 steps, all with 1 rejection per restart, the
+// one ending IDA's order-raising start).
+void IdaIntegrator::Impl::CarryFirstStep(const ConstrainedOde& problem) {
+  constexpr double kMinRatio = 0.2, kMaxRatio = 5.0, kSafety = 0.7;
+  carried_ode = nullptr;
+  double h = 0.0;
+  int order = 0;
+  if (ele == nullptr) ele = N_VClone(yy);
+  if (ewt == nullptr) ewt = N_VClone(yy);
+  if (ele == nullptr || ewt == nullptr ||
+      IDAGetLastStep(mem, &h) != IDA_SUCCESS ||
+      IDAGetLastOrder(mem, &order) != IDA_SUCCESS || order != 1 ||
+      IDAGetEstLocalErrors(mem, ele) != IDA_SUCCESS ||
+      IDAGetErrWeights(mem, ewt) != IDA_SUCCESS || !(h > 0.0))
+    return;
+  Map<const VectorXd> e(NV_DATA_S(ele), n + m), w(NV_DATA_S(ewt), n + m);
+  const double norm =
+      std::sqrt(e.head(n).cwiseProduct(w.head(n)).squaredNorm() / (n + m));
+  const double ratio =
+      std::clamp(1.0 / std::sqrt(norm + 1e-4), kMinRatio, kMaxRatio);
+  carried_step = kSafety * h * ratio;
+  carried_ode = &problem;
+}
+
 int IdaIntegrator::Impl::Residual(double t, N_Vector yy, N_Vector yp,
                                   N_Vector rr, void* user_data) {
   Impl& s = *static_cast<Impl*>(user_data);
@@ -222,6 +283,28 @@ int IdaIntegrator::Impl::Residual(double t, N_Vector yy, N_Vector yp,
     r.tail(m) += s.sigma * s.h;
   }
   return 0;
+}
+
+// dF/dx at (t, x) into dfdx: ode.RhsJacobian with jacobian=ift where it
+// gives one, else forward differences of Rhs with increment
+// sqrt(eps) * max(1, |x_j|). False if Rhs fails.
+bool IdaIntegrator::Impl::ComputeDfdx(double t,
+                                      const Eigen::Ref<const VectorXd>& x) {
+  if (settings.ode_jacobian && ode->RhsJacobian(t, x, dfdx) && dfdx.allFinite())
+    return true;
+  if (!CallRhs(t, x, f)) return false;
+  const double sqrt_eps = std::sqrt(std::numeric_limits<double>::epsilon());
+  x_pert = x;
+  for (int j = 0; j < n; ++j) {
+    const double xj = x_pert(j);
+    const double dx = sqrt_eps * std::max(1.0, std::abs(xj));
+    x_pert(j) = xj + dx;
+    const double step = x_pert(j) - xj;  // exactly representable increment
+    if (!CallRhs(t, x_pert, f_pert)) return false;
+    dfdx.col(j) = (f_pert - f) / step;
+    x_pert(j) = xj;
+  }
+  return true;
 }
 
 // Iteration matrix dr/dy + cj dr/dy' for the dense linear solver:
@@ -271,20 +354,24 @@ int IdaIntegrator::Impl::Jacobian(double t, double cj, N_Vector yy, N_Vector yp,
     }
     return 0;
   }
-  if (!(s.settings.ode_jacobian && s.ode->RhsJacobian(t, y.head(n), s.dfdx) &&
-        s.dfdx.allFinite())) {
-    if (!s.CallRhs(t, y.head(n), s.f)) return 1;
-    const double sqrt_eps = std::sqrt(std::numeric_limits<double>::epsilon());
-    s.x_pert = y.head(n);
-    for (int j = 0; j < n; ++j) {
-      const double xj = s.x_pert(j);
-      const double dx = sqrt_eps * std::max(1.0, std::abs(xj));
-      s.x_pert(j) = xj + dx;
-      const double step = s.x_pert(j) - xj;  // exactly representable increment
-      if (!s.CallRhs(t, s.x_pert, s.f_pert)) return 1;
-      s.dfdx.col(j) = (s.f_pert - s.f) / step;
-      s.x_pert(j) = xj;
-    }
+  // Reuse of dF/dx (modified Newton: only the residual must be exact):
+  // while x is within jacobian_reuse (relative, max norm) of where dfdx was
+  // evaluated and IDA has had no convergence failure since, dfdx is kept and
+  // only cj and the constraint blocks are renewed. IDA calls this at every
+  // change of cj beyond its threshold, e.g. at each step of its doubling
+  // start after a restart, where x has barely moved.
+  long conv_fails = 0;
+  IDAGetNumNonlinSolvConvFails(s.mem, &conv_fails);
+  const double reuse = s.settings.jacobian_reuse;
+  const bool reused =
+      reuse > 0.0 && s.dfdx_valid && conv_fails == s.dfdx_conv_fails &&
+      (y.head(n) - s.dfdx_x).lpNorm<Eigen::Infinity>() <=
+          reuse * std::max(1.0, s.dfdx_x.lpNorm<Eigen::Infinity>());
+  if (!reused) {
+    if (!s.ComputeDfdx(t, y.head(n))) return 1;
+    s.dfdx_valid = true;
+    s.dfdx_x = y.head(n);
+    s.dfdx_conv_fails = conv_fails;
   }
   a.setZero();
   a.topLeftCorner(n, n) = -s.dfdx;
@@ -339,6 +426,7 @@ bool IdaIntegrator::Impl::ContinuesLastCall(ConstrainedOde& ode_now, double t0,
       o.min_step != options.min_step || o.max_steps != options.max_steps)
     return false;
   last.valid = false;
+  from_last_end = true;
   // F at the given y (IDA's point up to the final projection), reused by a
   // restart from the same y.
   if (!CallRhs(t0, y, f)) return false;
@@ -398,6 +486,20 @@ OptionTable IdaIntegrator::option_table() const {
       "implicit-function-theorem sensitivities of the solve, model.md §8.9), "
       "else differences; fd = always forward "
       "differences of Rhs"));
+  table.push_back(OptionSpec::Choice(
+      "restart_step", "carry", {"carry", "given", "estimate"},
+      "initial step after a re-initialisation: carry = predicted from the "
+      "previous restart's first step (its error estimate; model.md §8.5), "
+      "capped by the sample interval; given = the sample interval; estimate "
+      "= IDA's own estimate"));
+  table.push_back(
+      OptionSpec::Double("jacobian_reuse", 0.01,
+                         "keep dF/dx in the iteration matrix while x is "
+                         "within this relative distance (max norm) of where "
+                         "it was evaluated, the call starts where the last "
+                         "ended and Newton has not failed; 0 = re-evaluate at "
+                         "every matrix update")
+          .AtLeast(0));
   return table;
 }
 
@@ -410,6 +512,11 @@ void IdaIntegrator::ApplyBackendOptions(const OptionValues& values) {
   s.controls = sundials_internal::StepControlsFrom(values);
   s.suppress_alg = values.GetBool("suppress_alg");
   s.ode_jacobian = values.GetString("jacobian") == "ift";
+  s.jacobian_reuse = values.GetDouble("jacobian_reuse");
+  const std::string restart = values.GetString("restart_step");
+  s.restart_step = restart == "given"      ? RestartStep::kGiven
+                   : restart == "estimate" ? RestartStep::kEstimate
+                                           : RestartStep::kCarry;
 }
 IdaIntegrator::~IdaIntegrator() = default;
 
@@ -433,7 +540,13 @@ void IdaIntegrator::Finish(Impl& s, ConstrainedOde& ode, double t1,
   // --- integrate ---
   double t_ret = 0.0;
   IDAGetCurrentTime(s.mem, &t_ret);
-  int flag = IDASolve(s.mem, t1, &t_ret, s.yy, s.yp, IDA_NORMAL);
+  int flag = IDA_SUCCESS;
+  if (s.probe_first_step) {
+    flag = IDASolve(s.mem, t1, &t_ret, s.yy, s.yp, IDA_ONE_STEP);
+    if (flag == IDA_SUCCESS || flag == IDA_TSTOP_RETURN) s.CarryFirstStep(ode);
+  }
+  if (flag == IDA_SUCCESS && t_ret < t1)
+    flag = IDASolve(s.mem, t1, &t_ret, s.yy, s.yp, IDA_NORMAL);
   long steps = 0, error_test_failures = 0;
   IDAGetNumSteps(s.mem, &steps);
   IDAGetNumErrTestFails(s.mem, &error_test_failures);
@@ -564,6 +677,8 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
     s.x_pert.resize(n);
     s.jt_nu.resize(n);
     s.dfdx.resize(n, n);
+    s.dfdx_x.resize(n);
+    s.dfdx_valid = false;
   }
   if (s.h.size() != m || s.jac.cols() != n) {
     s.h.resize(m);
@@ -581,10 +696,14 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
   }
   // --- continuation: no re-initialisation (see ContinuesLastCall) ---
   s.f_at_t0 = false;
+  s.from_last_end = false;
   s.continuing = s.ContinuesLastCall(ode, t0, y, options);
   if (s.continuing)
     return ConfigureAndSolve(s, ode, IDA_SUCCESS, t0, t1, y, options, result);
 
+  // A restart from another state (re-integration at switches / stops):
+  // dF/dx is re-evaluated (see Jacobian).
+  if (!s.from_last_end) s.dfdx_valid = false;
   // --- consistent initial values (x, nu, x') ---
   bool moved = false;
   if (s.settings.dae_index == 2 && m > 0) {
@@ -660,7 +779,28 @@ void IdaIntegrator::ConfigureAndSolve(Impl& s, ConstrainedOde& ode, int flag,
       &IDASetMaxNumSteps,  &IDASetMinStep,        &IDASetInitStep,
       &IDASetStopTime,     &IDASetMaxOrd,         &IDASetMaxNonlinIters,
       &IDASetMaxConvFails, &IDASetMaxErrTestFails};
-  flag = sundials_internal::ApplyStepControls(kSetters, s.mem, options, t1,
+  // Initial step of a restart (option restart_step; continuing ignores it).
+  IntegratorOptions step_options = options;
+  s.probe_first_step = false;
+  if (!s.continuing && !s.residual_form) {
+    switch (s.settings.restart_step) {
+      case RestartStep::kGiven:
+        break;
+      case RestartStep::kEstimate:
+        step_options.step = 0.0;
+        break;
+      case RestartStep::kCarry:
+        // Only for a call that starts where the last one ended (the next
+        // hold interval), so a call from elsewhere (a re-integration, a new
+        // run) computes as it would on a fresh integrator.
+        s.probe_first_step = true;
+        if (s.from_last_end && s.carried_ode == &ode && s.carried_step > 0.0 &&
+            (step_options.step <= 0.0 || s.carried_step < step_options.step))
+          step_options.step = s.carried_step;
+        break;
+    }
+  }
+  flag = sundials_internal::ApplyStepControls(kSetters, s.mem, step_options, t1,
                                               s.settings.controls, flag);
   if (flag == IDA_SUCCESS && !s.residual_form)
     flag =

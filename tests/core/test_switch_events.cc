@@ -366,7 +366,9 @@ TEST(SwitchEvents, PaperSceneCoupledRk4LadderHasOrderFourAboveTheFloor) {
 // issue #21: at least halved is the goal, asserted < 10 %) and is more
 // accurate against the dp54 reference (1.3e-8 m; 8.3e-8 m before: asserted
 // < 3e-8 m). zoh re-initialises at every hold interval (the held twist
-// jumps): its rejections stay (28.2 %, asserted > 20 %).
+// jumps): 28.2 % rejections when each restart tried h0 = dt; with the carried
+// initial step (model.md §8.5) one per restart remains, the one ending IDA's
+// order-raising start (10.8 %, asserted in [5 %, 20 %]).
 TEST(SwitchEvents, PaperSceneIdaKeepsItsHistoryInCoupledMode) {
   RegisterBuiltinIntegrators();
   if (!IntegratorRegistry::Has("ida")) GTEST_SKIP() << "built without SUNDIALS";
@@ -386,7 +388,8 @@ TEST(SwitchEvents, PaperSceneIdaKeepsItsHistoryInCoupledMode) {
       EXPECT_LT(rejected, 0.10);
       EXPECT_LT(LadderError(r, ref), 3e-8);
     } else {
-      EXPECT_GT(rejected, 0.20);
+      EXPECT_GT(rejected, 0.05);
+      EXPECT_LT(rejected, 0.20);
     }
   }
 }
