@@ -358,7 +358,7 @@ bool IntegratePiece(double a, const Slips& fa, double b, const Slips& fb,
   }
   for (int i = 0; i < 3; ++i) {
     whole[i] = (b - a) / 6 * (fa[i] + 4 * fm[i] + fb[i]);
-    tol[i] = std::max(1e-4 * std::abs(whole[i]), 1e-3 * epsilon * (b - a));
+    tol[i] = std::max(1e-3 * std::abs(whole[i]), 1e-3 * epsilon * (b - a));
   }
   if (!SimpsonSlips(a, fa, m, fm, b, fb, whole, tol, kMaxDepth, evaluate, &sum,
                     evaluations))

@@ -157,7 +157,7 @@ using SlipIncrements = std::array<SlipIncrement, 3>;
 // crosses the sliding level kSlidingSlipOverEpsilon eps (located by
 // Illinois to |s| within 2e-4 of the level; at most one crossing per half
 // of a piece, which covers a reversal's stick window), on each piece
-// int |s_i| dt by adaptive Simpson on `evaluate` (error estimate <= 1e-4 of
+// int |s_i| dt by adaptive Simpson on `evaluate` (error estimate <= 1e-3 of
 // the piece's integral or 1e-3 eps (b - a), at most 2^8 subdivisions),
 // credited to the regime of the slip at the piece's midpoint. The
 // trapezoid over the two samples instead gives the sample next to a switch,

@@ -112,9 +112,9 @@ TEST(SlipRegimes, PaperSlidingConvergesAsEpsilonFalls) {
 // creep before tx, sliding after. Wheel 2 creeps at 5 eps, wheel 3 slides
 // at 1e-5. Analytic: the precursor's integral eps sqrt(2 / r) (sqrt(tc -
 // ta) - sqrt(tc - tb)) over [t0, tx] (creep) and [tx, ts] (sliding, plus
-// the ramp's trapezoid). Tolerance 1e-3: the quadrature's requested 1e-4
-// of the piece, with room for Simpson's error estimate being an estimate
-// and for tx located to |s| within 2e-4 of the level (<= 3e-4 here). The
+// the ramp's trapezoid). Tolerance 1e-3: the quadrature's requested 1e-3
+// of the piece (its extrapolated sum is far better than the estimate) and
+// tx located to |s| within 2e-4 of the level (<= 3e-4 of the creep). The
 // two-sample trapezoid's sliding errs by more than 100 % here.
 TEST(SlipRegimes, SwitchIntervalIsIntegratedPiecewise) {
   const double eps = 1e-8, t0 = 0.0, t1 = 0.05, ts = 0.03, tx = 0.02;
