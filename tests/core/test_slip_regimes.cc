@@ -161,6 +161,21 @@ TEST(SlipRegimes, SwitchIntervalIsIntegratedPiecewise) {
   };
   EXPECT_FALSE(IntegrateSlipRegimes(t0, t1, slip(t0), slip(t1), {ts}, eps,
                                     failing, &inc, &evaluations));
+  // One failing probe (a stalled solve) is retried next to it: the same
+  // integrals, not the trapezoid.
+  const double bad = 0.5 * (ts + t1);
+  int failed = 0;
+  const SlipEvaluator once = [&](double t, std::array<double, 3>* f) {
+    if (t == bad) return ++failed, false;
+    *f = slip(t);
+    return true;
+  };
+  SlipIncrements retried;
+  ASSERT_TRUE(IntegrateSlipRegimes(t0, t1, slip(t0), slip(t1), {ts}, eps, once,
+                                   &retried, &evaluations));
+  EXPECT_EQ(failed, 1);
+  EXPECT_NEAR(retried[0].sliding, sliding, 1e-3 * precursor(tx, ts));
+  EXPECT_NEAR(retried[0].creep, creep, 1e-3 * creep);
   EXPECT_THROW(IntegrateSlipRegimes(t1, t0, slip(t0), slip(t1), {}, eps,
                                     evaluate, &inc, &evaluations),
                std::invalid_argument);
