@@ -21,6 +21,26 @@ namespace {
 // Bisection down to this bracket width, then the secant (below) [s].
 constexpr double kSecantBracket = 1e-6;
 
+// One Illinois step on the bracket [lo, hi] (values flo, fhi of opposite
+// signs): the point m (value f) replaces lo if replaces_lo, else hi; the
+// other end, if it was kept the step before too, has its value halved
+// (what keeps regula falsi from converging from one side only). *kept:
+// +1 after lo was replaced, -1 after hi, 0 to start afresh.
+void IllinoisUpdate(bool replaces_lo, double m, double f, double* lo,
+                    double* flo, double* hi, double* fhi, int* kept) {
+  if (replaces_lo) {
+    *lo = m;
+    *flo = f;
+    if (*kept == 1) *fhi *= 0.5;
+    *kept = 1;
+  } else {
+    *hi = m;
+    *fhi = f;
+    if (*kept == -1) *flo *= 0.5;
+    *kept = -1;
+  }
+}
+
 // Narrows [*a, *b] around a sign change of a continuous f (*a on t0's
 // side, *b not) to *b - *a <= tolerance, ending with the bracket that
 // bisection to `tolerance` ends with, at fewer evaluations:
@@ -82,17 +102,7 @@ bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
         fast = false;
         break;
       }
-      if (start) {
-        lo = m;
-        flo = f;
-        if (kept == 1) fhi *= 0.5;
-        kept = 1;
-      } else {
-        hi = m;
-        fhi = f;
-        if (kept == -1) flo *= 0.5;
-        kept = -1;
-      }
+      IllinoisUpdate(start, m, f, &lo, &flo, &hi, &fhi, &kept);
     }
     // 3. Bisection's halvings, replayed.
     bool a_seen = true, b_seen = true;  // the end is an evaluated point
@@ -325,17 +335,7 @@ bool LocateSlipLevel(double a, double ha, double b, double hb, int i,
     if (std::isnan(h)) return false;
     *t = m;
     if (std::abs(h) <= 1e-4 || b - a <= width) return true;
-    if ((h >= 0) == (hb >= 0)) {
-      b = m;
-      hb = h;
-      if (side == 1) ha *= 0.5;
-      side = 1;
-    } else {
-      a = m;
-      ha = h;
-      if (side == -1) hb *= 0.5;
-      side = -1;
-    }
+    IllinoisUpdate((h >= 0) != (hb >= 0), m, h, &a, &ha, &b, &hb, &side);
   }
   return true;
 }
