@@ -6,6 +6,8 @@
 #include <string>
 
 #include "quasiroll/core/dae.h"
+#include "quasiroll/core/initial_configuration.h"
+#include "quasiroll/core/kinematics.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/scene.h"
@@ -53,6 +55,26 @@ terrain:
            x: [-0.5, 2.0], y: [-0.8, 0.8]}
 )");
 }
+
+// The pvc robot on the 10 degree incline (bench/scenes/incline10.yaml) at
+// its initial configuration, and mu_min there: the friction at which the
+// `critical` wheel's cone becomes active (statically determinate, model.md
+// §7.5, §7.7). `params` holds the scene's parameters.
+struct InclineAtFrictionLimit {
+  Scene scene = SceneFile("incline10");
+  KinematicModel model{scene.geometry, scene.terrain};
+  Configuration theta = SolveInitialConfiguration(model, scene);
+  QuasiStaticParameters params = QuasiStaticParameters::FromScene(scene);
+  int critical = -1;
+  double mu_min = MinimumFriction();
+
+ private:
+  double MinimumFriction() {
+    QuasiStaticProblem probe(model, params);
+    probe.SetConfiguration(theta);
+    return probe.MinimumFriction(&critical, nullptr);
+  }
+};
 
 // A few Newton steps on the square equality system E (model.md §7.3) take a
 // re-solve from the solver's residual tolerance to round-off, so that the

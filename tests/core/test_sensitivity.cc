@@ -228,14 +228,12 @@ TEST_P(Sensitivity, AgreesWithReSolveCentralDifferences) {
 // mu_min (1 + 1e-9) the scaled slack is ~1e-11 < activity_tolerance 1e-10;
 // at mu_min (1 + 1e-2) it is ~1e-4 and the derivative is two-sided.
 TEST_P(Sensitivity, OneSidedAtFrictionConeLimit) {
-  const Scene scene = SceneFile("incline10");
-  const KinematicModel model(scene.geometry, scene.terrain);
-  const Configuration theta = SolveInitialConfiguration(model, scene);
-  QuasiStaticParameters params = QuasiStaticParameters::FromScene(scene);
-  QuasiStaticProblem probe(model, params);
-  probe.SetConfiguration(theta);
-  int critical = -1;
-  const double mu_min = probe.MinimumFriction(&critical, nullptr);
+  InclineAtFrictionLimit incline;
+  const KinematicModel& model = incline.model;
+  const Configuration& theta = incline.theta;
+  QuasiStaticParameters& params = incline.params;
+  const int critical = incline.critical;
+  const double mu_min = incline.mu_min;
   ASSERT_GT(mu_min, 0.3);  // 0.318914 or 0.394378 (model.md §7.7)
   for (double margin : {1e-9, 1e-2}) {
     params.mu = mu_min * (1 + margin);

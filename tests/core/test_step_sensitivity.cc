@@ -286,14 +286,11 @@ TEST(StepSensitivityField, RhsIsLinearInTheTwist) {
 // ONE_SIDED and names it with the stage, value and derivative finite.
 TEST(StepSensitivityStatusTest, OneSidedAtTheFrictionConeIsReported) {
   RegisterBuiltinNlpSolvers();
-  const Scene scene = SceneFile("incline10");
-  const KinematicModel model(scene.geometry, scene.terrain);
-  const Configuration theta = SolveInitialConfiguration(model, scene);
-  QuasiStaticParameters params = QuasiStaticParameters::FromScene(scene);
-  QuasiStaticProblem probe(model, params);
-  probe.SetConfiguration(theta);
-  int critical = -1;
-  params.mu = probe.MinimumFriction(&critical, nullptr) * (1 + 1e-9);
+  InclineAtFrictionLimit incline;
+  const KinematicModel& model = incline.model;
+  const Configuration& theta = incline.theta;
+  QuasiStaticParameters& params = incline.params;
+  params.mu = incline.mu_min * (1 + 1e-9);
   for (Coupling coupling : {Coupling::kZoh, Coupling::kCoupled}) {
     StepSensitivityOptions o;
     o.coupling = coupling;
