@@ -61,7 +61,7 @@ struct CvodeProjectionIntegrator::Impl {
     roots.registered = 0;
     jac_installed = false;
     jac_ode = nullptr;
-    jac_valid = false;
+    jac_reuse.valid = false;
   }
 
   // Per-call state, D and the workspaces (sized when n changes).
@@ -80,9 +80,9 @@ struct CvodeProjectionIntegrator::Impl {
       f_pert.resize(n_new);
       jac_probe.resize(n_new, n_new);
       jac_saved.resize(n_new, n_new);
-      jac_y.resize(n_new);
+      jac_reuse.at.resize(n_new);
       last_y.resize(n_new);
-      jac_valid = false;
+      jac_reuse.valid = false;
     }
   }
   // CVodeReInit when the size is unchanged, else a new CVODE memory; y0 is
@@ -137,21 +137,15 @@ struct CvodeProjectionIntegrator::Impl {
     // convergence failure since (a failure asks for a fresh J).
     long conv_fails = 0;
     CVodeGetNumNonlinSolvConvFails(s.mem, &conv_fails);
-    if (s.jacobian_reuse > 0.0 && s.jac_valid &&
-        conv_fails == s.jac_conv_fails &&
-        (ym - s.jac_y).lpNorm<Eigen::Infinity>() <=
-            s.jacobian_reuse *
-                std::max(1.0, s.jac_y.lpNorm<Eigen::Infinity>())) {
+    if (s.jac_reuse.Keeps(ym, conv_fails, s.jacobian_reuse)) {
       out = s.jac_saved;
       return 0;
     }
     ++s.result->jacobian_evaluations;
-    s.jac_valid = false;
+    s.jac_reuse.valid = false;
     if (s.ode->RhsJacobian(t, ym, out) && out.allFinite()) {
-      s.jac_valid = true;
+      s.jac_reuse.Save(ym, conv_fails);
       s.jac_saved = out;
-      s.jac_y = ym;
-      s.jac_conv_fails = conv_fails;
       return 0;
     }
     const double sqrt_eps = std::sqrt(std::numeric_limits<double>::epsilon());
@@ -228,13 +222,11 @@ struct CvodeProjectionIntegrator::Impl {
   // for the ODE jac_ode.
   bool jac_installed = false;
   const ConstrainedOde* jac_ode = nullptr;
-  // The last RhsJacobian (jacobian_reuse): value, point, CVODE's
-  // convergence failure count then. Kept only for a call of the same ODE
-  // that starts where the last successful one ended.
-  bool jac_valid = false;
+  // The last RhsJacobian (jacobian_reuse) and where it holds. Kept only
+  // for a call of the same ODE that starts where the last successful one
+  // ended.
+  sundials_internal::JacobianReuse jac_reuse;
   MatrixXd jac_saved;
-  VectorXd jac_y;
-  long jac_conv_fails = 0;
   double last_t = 0.0;
   VectorXd last_y;  // the state the last successful call returned
 
@@ -327,8 +319,7 @@ int CvodeProjectionIntegrator::Impl::CreateOrReInit(
   // CVodeReInit resets CVODE's count: a failure since J was saved drops it.
   long conv_fails = 0;
   if (mem != nullptr) CVodeGetNumNonlinSolvConvFails(mem, &conv_fails);
-  if (conv_fails != jac_conv_fails) jac_valid = false;
-  jac_conv_fails = 0;
+  jac_reuse.BeforeReInit(conv_fails);
   if (mem != nullptr && n == n_new) {
     Map<VectorXd>(NV_DATA_S(yy), n_new) = y0;
     return CVodeReInit(mem, t0, yy);
@@ -458,7 +449,7 @@ void CvodeProjectionIntegrator::Impl::Solve(double t0, double t1,
     last_t = result->t_reached;
     last_y = y;
   } else {
-    jac_valid = false;
+    jac_reuse.valid = false;
   }
 }
 
@@ -471,7 +462,8 @@ void CvodeProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
   s.Begin(ode, result);
   // A call from elsewhere (a re-integration, a new run) computes as on a
   // fresh integrator.
-  if (&ode != s.jac_ode || t0 != s.last_t || y != s.last_y) s.jac_valid = false;
+  if (&ode != s.jac_ode || t0 != s.last_t || y != s.last_y)
+    s.jac_reuse.valid = false;
   auto fail = [&](IntegratorStatus status, const std::string& message) {
     result->status = status;
     result->t_reached = t0;

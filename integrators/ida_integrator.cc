@@ -76,7 +76,7 @@ struct IdaIntegrator::Impl {
     roots.registered = 0;
     last.valid = false;
     carried_ode = nullptr;
-    dfdx_valid = false;
+    dfdx_reuse.valid = false;
   }
 
   // Whether this call continues the last one (see ContinuesLastCall in the
@@ -149,11 +149,8 @@ struct IdaIntegrator::Impl {
   double carried_step = 0.0;
   const ConstrainedOde* carried_ode = nullptr;
   bool probe_first_step = false;  // this call restarts with restart_step=carry
-  // The last dF/dx (in dfdx), where it was evaluated and IDA's convergence
-  // failure count then (see Jacobian).
-  bool dfdx_valid = false;
-  VectorXd dfdx_x;
-  long dfdx_conv_fails = 0;
+  // Where the last dF/dx (in dfdx) holds (see Jacobian).
+  sundials_internal::JacobianReuse dfdx_reuse;
   bool from_last_end = false;  // this call starts where the last one ended
   N_Vector ele = nullptr;      // IDA's local error estimate (workspace)
 
@@ -178,8 +175,7 @@ int IdaIntegrator::Impl::Prepare(int n_new, int m_new, double t0) {
   // IDAReInit resets IDA's count: a failure since dfdx was saved drops it.
   long conv_fails = 0;
   if (mem != nullptr) IDAGetNumNonlinSolvConvFails(mem, &conv_fails);
-  if (conv_fails != dfdx_conv_fails) dfdx_valid = false;
-  dfdx_conv_fails = 0;
+  dfdx_reuse.BeforeReInit(conv_fails);
   if (mem != nullptr && n_new == n && m_new == m)
     return IDAReInit(mem, t0, yy, yp);
   // Sizes changed (or first call): the vectors, matrix and linear solver
@@ -362,16 +358,11 @@ int IdaIntegrator::Impl::Jacobian(double t, double cj, N_Vector yy, N_Vector yp,
   // start after a restart, where x has barely moved.
   long conv_fails = 0;
   IDAGetNumNonlinSolvConvFails(s.mem, &conv_fails);
-  const double reuse = s.settings.jacobian_reuse;
-  const bool reused =
-      reuse > 0.0 && s.dfdx_valid && conv_fails == s.dfdx_conv_fails &&
-      (y.head(n) - s.dfdx_x).lpNorm<Eigen::Infinity>() <=
-          reuse * std::max(1.0, s.dfdx_x.lpNorm<Eigen::Infinity>());
-  if (!reused) {
+  if (!s.dfdx_reuse.Keeps(y.head(n), conv_fails, s.settings.jacobian_reuse)) {
+    // A failure may leave dfdx half written: not to be kept.
+    s.dfdx_reuse.valid = false;
     if (!s.ComputeDfdx(t, y.head(n))) return 1;
-    s.dfdx_valid = true;
-    s.dfdx_x = y.head(n);
-    s.dfdx_conv_fails = conv_fails;
+    s.dfdx_reuse.Save(y.head(n), conv_fails);
   }
   a.setZero();
   a.topLeftCorner(n, n) = -s.dfdx;
@@ -677,8 +668,8 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
     s.x_pert.resize(n);
     s.jt_nu.resize(n);
     s.dfdx.resize(n, n);
-    s.dfdx_x.resize(n);
-    s.dfdx_valid = false;
+    s.dfdx_reuse.at.resize(n);
+    s.dfdx_reuse.valid = false;
   }
   if (s.h.size() != m || s.jac.cols() != n) {
     s.h.resize(m);
@@ -703,7 +694,7 @@ void IdaIntegrator::DoIntegrate(ConstrainedOde& ode, double t0, double t1,
 
   // A restart from another state (re-integration at switches / stops):
   // dF/dx is re-evaluated (see Jacobian).
-  if (!s.from_last_end) s.dfdx_valid = false;
+  if (!s.from_last_end) s.dfdx_reuse.valid = false;
   // --- consistent initial values (x, nu, x') ---
   bool moved = false;
   if (s.settings.dae_index == 2 && m > 0) {

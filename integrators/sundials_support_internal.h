@@ -15,6 +15,7 @@
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -131,6 +132,32 @@ StepControls StepControlsFrom(const OptionValues& values);
 int ApplyStepControls(const StepControlSetters& set, void* mem,
                       const IntegratorOptions& options, double t1,
                       const StepControls& controls, int flag);
+
+// The rule of the option jacobian_reuse (docs/model.md §8.5, §8.7): a saved
+// dF/dx is kept while x is within `reuse` (relative, max norm) of where it
+// was evaluated and the solver has had no nonlinear convergence failure
+// since (its count then is kept; a ReInit resets the solver's count).
+struct JacobianReuse {
+  bool valid = false;
+  Eigen::VectorXd at;  // sized by the backend with its state
+  long conv_fails = 0;
+  bool Keeps(const Eigen::Ref<const Eigen::VectorXd>& x, long fails_now,
+             double reuse) const {
+    return reuse > 0.0 && valid && fails_now == conv_fails &&
+           (x - at).lpNorm<Eigen::Infinity>() <=
+               reuse * std::max(1.0, at.lpNorm<Eigen::Infinity>());
+  }
+  void Save(const Eigen::Ref<const Eigen::VectorXd>& x, long fails_now) {
+    valid = true;
+    at = x;
+    conv_fails = fails_now;
+  }
+  // Before the solver's ReInit, given its failure count then.
+  void BeforeReInit(long fails_now) {
+    if (fails_now != conv_fails) valid = false;
+    conv_fails = 0;
+  }
+};
 
 // The name of a return flag from XGetReturnFlagName (which allocates; freed
 // here), or "<solver> flag <n>".
