@@ -1037,8 +1037,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   Configuration f0, f1;
   const bool dense =
       model_->Rhs(th0, s.w_held, &f0) && model_->Rhs(th1, w1, &f1);
-  if (!s.probe_solver) CreateProbeSolver();
-  QuasiStaticSolution& probe = s.sol_event;
+  QuasiStaticSolution& probe = s.sol_event;  // probe_solver: from Begin()
   // Each probe starts from the nearest (in time) of the interval's end
   // solutions and the last probe's: the probe solver's own warm start is
   // otherwise the last probe of an earlier switch, seconds away.

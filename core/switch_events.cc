@@ -11,10 +11,16 @@ namespace quasiroll {
 static_assert(kSwitchSlipOverEpsilon > kSlidingSlipOverEpsilon,
               "a switch lies inside the sliding regime of the split");
 
+namespace {
+// (|s| - level) / (|s| + level) in [-1, 1), >= 0 from the level up.
+double LevelIndicator(double slip_speed, double level) {
+  return (slip_speed - level) / (slip_speed + level);
+}
+}  // namespace
+
 double SwitchIndicator(double slip_speed, double epsilon) {
   if (std::isnan(slip_speed)) return SwitchEvent::kNaN;
-  const double scale = kSwitchSlipOverEpsilon * epsilon;
-  return (slip_speed - scale) / (slip_speed + scale);
+  return LevelIndicator(slip_speed, kSwitchSlipOverEpsilon * epsilon);
 }
 
 namespace {
@@ -331,7 +337,7 @@ bool LocateSlipLevel(double a, double ha, double b, double hb, int i,
     if (!(m > a && m < b)) m = 0.5 * (a + b);
     ++*evaluations;
     if (!evaluate(m, at)) return false;
-    const double h = ((*at)[i] - level) / ((*at)[i] + level);
+    const double h = LevelIndicator((*at)[i], level);
     if (std::isnan(h)) return false;
     *t = m;
     if (std::abs(h) <= 1e-4 || b - a <= width) return true;
@@ -379,7 +385,6 @@ bool IntegrateBetweenKinks(double a, const Slips& fa, double b, const Slips& fb,
   ++*evaluations;
   if (!evaluate(m, &fm)) return false;
   const double level = kSlidingSlipOverEpsilon * epsilon;
-  auto h = [level](double s) { return (s - level) / (s + level); };
   // At most two crossings per wheel; their times and slips, unsorted.
   std::array<double, 6> cuts;
   std::array<Slips, 6> at;
@@ -389,7 +394,8 @@ bool IntegrateBetweenKinks(double a, const Slips& fa, double b, const Slips& fb,
     const std::array<std::array<double, 2>, 2> ends{
         {{fa[i], fm[i]}, {fm[i], fb[i]}}};
     for (int k = 0; k < 2; ++k) {
-      const double h0 = h(ends[k][0]), h1 = h(ends[k][1]);
+      const double h0 = LevelIndicator(ends[k][0], level);
+      const double h1 = LevelIndicator(ends[k][1], level);
       if (std::isnan(h0) || std::isnan(h1) || (h0 >= 0) == (h1 >= 0)) continue;
       if (!LocateSlipLevel(halves[k][0], h0, halves[k][1], h1, i, level,
                            evaluate, &cuts[n], &at[n], evaluations))
