@@ -86,18 +86,19 @@ TEST(SlipRegimes, PvcCreepsInProportionToEpsilonAndNeverSlides) {
 // Paper mode slides (the over-actuated chains' incompatibility, ~1e-5 m/s):
 // the sliding distance converges as eps -> 0 while the creep falls in
 // proportion to eps (model.md §7.5). Measured 2026-11-26 (first 5 s, zoh,
-// dt 0.05): sliding 2.1726e-4, 2.2017e-4, 2.2098e-4 m and creep / eps 22.96,
-// 22.54, 22.38 s at eps 1e-7, 1e-8, 1e-9 (22.37 s at 1e-10). Asserted: the
-// sliding distance's distance to eps = 1e-9 at least halves per decade
-// (measured: to 0.22) and is within 0.5 % at 1e-8 (0.37 %); creep
-// proportional to eps within the 5 % (0.7 %).
+// dt 0.05): sliding 2.17256e-4, 2.20175e-4, 2.20477e-4 m (2.20507e-4 at
+// 1e-10) and creep / eps 22.96, 22.53, 22.37 s at eps 1e-7, 1e-8, 1e-9
+// (22.37 s at 1e-10). Asserted: the sliding distance's distance to
+// eps = 1e-9 falls at least tenfold per decade (measured: to 0.094) and is
+// within 0.5 % at 1e-8 (0.14 %); creep proportional to eps within the
+// issue's 5 % (0.7 %).
 TEST(SlipRegimes, PaperSlidingConvergesAsEpsilonFalls) {
   const SlipDistances e7 = Simulate(ActuationMode::kPaper, 1e-7);
   const SlipDistances e8 = Simulate(ActuationMode::kPaper, 1e-8);
   const SlipDistances e9 = Simulate(ActuationMode::kPaper, 1e-9);
   ASSERT_GT(e9.sliding, 0.0);
   EXPECT_LT(std::abs(e8.sliding - e9.sliding),
-            0.5 * std::abs(e7.sliding - e9.sliding));
+            0.1 * std::abs(e7.sliding - e9.sliding));
   EXPECT_NEAR(e8.sliding / e9.sliding, 1.0, 5e-3);
   // Creep proportional to eps within the 5 %.
   EXPECT_NEAR(e8.creep / e9.creep, 10.0, 0.5);
