@@ -62,6 +62,9 @@ bool NlpOptions::IsValid(std::string* why) const {
   if (max_iterations < 1)
     return fail("max_iterations: must be >= 1, got " +
                 std::to_string(max_iterations));
+  if (stall_iterations < 0)
+    return fail("stall_iterations: must be >= 0, got " +
+                std::to_string(stall_iterations));
   if (verbosity < 0)
     return fail("verbosity: must be >= 0, got " + std::to_string(verbosity));
   return true;
@@ -392,6 +395,7 @@ NlpStatus NlpSolver::Solve(const NlpProblem& problem,
   result->backend = name();
   result->backend_status.clear();
   result->has_multipliers = false;
+  result->stalled = false;
   result->multipliers_estimated = false;
   result->native_iterations = -1;  // = iterations unless the backend sets it
   result->kkt_residual = std::numeric_limits<double>::quiet_NaN();

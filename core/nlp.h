@@ -135,6 +135,14 @@ struct NlpOptions {
   double kkt_tolerance = 0.0;
   // Upper bound on major iterations of the backend.
   int max_iterations = 200;
+  // Give up early (status kIterationLimit) when the equality residual
+  // max_i |r_i| has not halved over this many consecutive iterations; 0
+  // (default) never does. For callers with a fallback that is cheaper than a
+  // stall: a Newton iteration near a stick/slip switch can creep along at
+  // |r| ~ 1e-9 for tens of iterations (docs/performance.md). Honoured by the
+  // backends that iterate on the residual of a square system (newton);
+  // others ignore it.
+  int stall_iterations = 0;
   // Start from result->multipliers if they have the right size (Ipopt uses
   // them, others ignore them).
   bool warm_start_multipliers = false;
@@ -153,6 +161,9 @@ struct NlpResult {
   // Set by a backend's DoSolve() when `multipliers` are its own estimate at
   // the returned x (Solve() clears it first); the KKT check then tries them.
   bool has_multipliers = false;
+  // True when the backend gave up because of NlpOptions::stall_iterations
+  // (status kIterationLimit); Solve() clears it first.
+  bool stalled = false;
   double objective = 0.0;
   // Independently recomputed after the solve by NlpSolver::Solve().
   double max_constraint_violation = 0.0;

@@ -57,6 +57,12 @@ bool QuasiStaticOptions::IsValid(std::string* why) const {
     if (why) *why = "max_iterations: must be >= 1";
     return false;
   }
+  if (stall_iterations < 0) {
+    if (why)
+      *why = "stall_iterations: must be >= 0, got " +
+             std::to_string(stall_iterations);
+    return false;
+  }
   return true;
 }
 
@@ -513,6 +519,7 @@ QuasiStaticSolver::QuasiStaticSolver(const KinematicModel& model,
   nlp_options_.max_iterations = options_.max_iterations;
   warm_z_.setZero(problem_.num_variables());
   z0_.setZero(problem_.num_variables());
+  z_start_.setZero(problem_.num_variables());
 }
 
 bool QuasiStaticSolver::TrySolve(const Eigen::VectorXd& z0,
@@ -522,6 +529,7 @@ bool QuasiStaticSolver::TrySolve(const Eigen::VectorXd& z0,
   out->nlp_iterations += result_.iterations;
   out->nlp_iterations_native += result_.native_iterations;
   out->nlp_solves += 1;
+  stalled_ = stalled_ || result_.stalled;
   if (!result_.x.allFinite()) return false;
   out->residual = problem_.EqualityResidual(result_.x);
   const int nm = problem_.num_motion();
@@ -572,22 +580,19 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
     // them (Ipopt) start from the previous primal-dual point.
     nlp_options_.warm_start_multipliers =
         have_warm_ && options_.warm_start_multipliers;
+    stalled_ = false;
+    nlp_options_.stall_iterations = options_.stall_iterations;
+    z_start_ = z0_;
     ok = TrySolve(z0_, out);
     nlp_options_.warm_start_multipliers = false;
-    if (!ok && options_.homotopy) {
-      // Epsilon homotopy from a well-conditioned creep law down to epsilon.
-      const double eps = problem_.parameters().epsilon;
-      problem_.ColdStartGuess(z0_);
-      for (double e = problem_.v0() * 1e-2; e > eps; e *= 0.1) {
-        problem_.set_epsilon(e);
-        if (TrySolve(z0_, out)) z0_ = result_.x;
-      }
-      problem_.set_epsilon(eps);
-      ok = TrySolve(z0_, out);
-      if (!ok) {
-        problem_.ColdStartGuess(z0_);
-        ok = TrySolve(z0_, out);
-      }
+    if (!ok && options_.homotopy) ok = HomotopyAndColdStart(out);
+    if (!ok && stalled_) {
+      // The same attempts without the stall watch: a stalled Newton can
+      // still converge where the homotopy does not (paper scene, a probe at
+      // t = 2.907 s, 4 ms after wheel 1 starts to slide).
+      nlp_options_.stall_iterations = 0;
+      ok = TrySolve(z_start_, out);
+      if (!ok && options_.homotopy) ok = HomotopyAndColdStart(out);
     }
     if (ok) {
       out->status = QuasiStaticStatus::kOk;
@@ -612,6 +617,20 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
           .count();
   return out->status;
+}
+
+bool QuasiStaticSolver::HomotopyAndColdStart(QuasiStaticSolution* out) {
+  // Epsilon homotopy from a well-conditioned creep law down to epsilon.
+  const double eps = problem_.parameters().epsilon;
+  problem_.ColdStartGuess(z0_);
+  for (double e = problem_.v0() * 1e-2; e > eps; e *= 0.1) {
+    problem_.set_epsilon(e);
+    if (TrySolve(z0_, out)) z0_ = result_.x;
+  }
+  problem_.set_epsilon(eps);
+  if (TrySolve(z0_, out)) return true;
+  problem_.ColdStartGuess(z0_);
+  return TrySolve(z0_, out);
 }
 
 void QuasiStaticSolver::Classify(QuasiStaticSolution* out) {

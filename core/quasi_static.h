@@ -216,6 +216,16 @@ struct QuasiStaticOptions {
   int max_iterations = 100;
   // Try the epsilon homotopy and a cold start when the warm solve fails.
   bool homotopy = true;
+  // NlpOptions::stall_iterations of the first attempts (0 = off): a backend
+  // that stalls gives up early and the fallbacks above take over; only if
+  // they fail too are the attempts repeated without the stall watch
+  // (model.md §7.3). Newton near a stick/slip switch can creep for tens of
+  // iterations at |r| ~ 1e-9 before it converges. Off by default: the root
+  // a fallback finds instead differs within the problem's conditioning, and
+  // a trajectory that depends on it moves at round-off; the simulator sets it
+  // for its probe solves (switch location, slip quadrature), which the
+  // trajectory does not depend on.
+  int stall_iterations = 0;
   // Compute mu_min and the condition number at every solve (costly in paper
   // mode); they are always computed on failure.
   bool diagnostics = false;
@@ -261,6 +271,8 @@ class QuasiStaticSolver {
 
  private:
   bool TrySolve(const Eigen::VectorXd& z0, QuasiStaticSolution* out);
+  // The epsilon homotopy from a cold start, then a cold start at epsilon.
+  bool HomotopyAndColdStart(QuasiStaticSolution* out);
   void FillOutputs(QuasiStaticSolution* out) const;
   void Classify(QuasiStaticSolution* out);
 
@@ -270,8 +282,9 @@ class QuasiStaticSolver {
   QuasiStaticOptions options_;
   NlpOptions nlp_options_;
   NlpResult result_;
-  Eigen::VectorXd warm_z_, previous_z_, z0_;
+  Eigen::VectorXd warm_z_, previous_z_, z0_, z_start_;
   bool have_warm_ = false, have_previous_ = false;
+  bool stalled_ = false;  // an attempt of this Solve() gave up on a stall
 };
 
 }  // namespace quasiroll

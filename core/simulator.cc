@@ -51,6 +51,9 @@ bool SimulationOptions::IsValid(std::string* why) const {
   if (!(switch_step_tolerance > 0))
     return fail("switch_step_tolerance: must be > 0, got " +
                 std::to_string(switch_step_tolerance));
+  if (probe_stall_iterations < 0)
+    return fail("probe_stall_iterations: must be >= 0, got " +
+                std::to_string(probe_stall_iterations));
   std::string inner;
   if (!integrator.IsValid(&inner)) return fail("integrator." + inner);
   if (!quasi_static.IsValid(&inner)) return fail("quasi_static." + inner);
@@ -513,9 +516,12 @@ RobotOdeProbe Simulator::ProbeOde(const Configuration& theta,
 // The solver of the switch probes (RestartAtSwitches): its own warm starts.
 void Simulator::CreateProbeSolver() {
   OptionValues unused;
+  QuasiStaticOptions probe_options = options_.quasi_static;
+  if (options_.probe_stall_iterations > 0)
+    probe_options.stall_iterations = options_.probe_stall_iterations;
   session_->probe_solver = std::make_unique<QuasiStaticSolver>(
       *model_, QuasiStaticParameters::FromScene(scene_),
-      CreateNlp(options_, &unused), options_.quasi_static);
+      CreateNlp(options_, &unused), probe_options);
 }
 
 void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -193,6 +194,10 @@ bool NewtonSolver::Iterate(const NlpProblem& problem, const NlpOptions& options,
   double target = tol;
   bool polishing = false;
   int& iter = *iter_out;
+  // Stall watch (NlpOptions::stall_iterations): the residual of the last
+  // halving and the iteration it happened at.
+  double r_halved = std::numeric_limits<double>::infinity();
+  int iter_halved = 0;
   for (;; ++iter) {
     const double r_max = w.r.lpNorm<Eigen::Infinity>();
     if (r_max <= target) {
@@ -203,6 +208,20 @@ bool NewtonSolver::Iterate(const NlpProblem& problem, const NlpOptions& options,
       if (r_max <= target) break;
     }
     if (polishing && iter >= options.max_iterations) break;
+    if (r_max <= 0.5 * r_halved) {
+      r_halved = r_max;
+      iter_halved = iter;
+    } else if (!polishing && options.stall_iterations > 0 &&
+               iter - iter_halved >= options.stall_iterations) {
+      result->status = NlpStatus::kIterationLimit;
+      result->stalled = true;
+      std::snprintf(msg, sizeof msg,
+                    "stalled: |r|_inf = %.3e not halved in %d iterations",
+                    r_max, iter - iter_halved);
+      result->backend_status = msg;
+      result->iterations = iter;
+      return false;
+    }
     if (iter >= options.max_iterations) {
       result->status = NlpStatus::kIterationLimit;
       std::snprintf(msg, sizeof msg, "max_iterations reached, |r|_inf = %.3e",

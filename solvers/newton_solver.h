@@ -17,7 +17,9 @@
 // one Levenberg-Marquardt step (J^T J + lambda diag(J^T J)) dx = -J^T r with
 // increasing lambda is taken instead, and Newton resumes from there.
 // A (numerically) rank-deficient Jacobian, a failed LM step or a
-// non-finite residual give kNumericalFailure. Multipliers are left at zero.
+// non-finite residual give kNumericalFailure; max_i |r_i| not halved over
+// options.stall_iterations iterations (if > 0; not while polishing) gives
+// kIterationLimit early. Multipliers are left at zero.
 // After the first call with given sizes DoSolve() does not allocate.
 // Backend options (option_table()): armijo, min_damping, rank_pivot_ratio,
 // lm_lambda_init, polish_floor (the constants above; defaults as stated).

@@ -262,6 +262,49 @@ TEST(SwitchEvents, NoSwitchNoChange) {
   EXPECT_EQ(on.steps, off.steps);
 }
 
+// The probe solves' stall watch (model.md §7.3) changes no trajectory: zoh
+// on the paper scene across its first switches (2.903 and 2.919 s, where
+// probe solves creep at |r| ~ 1e-9 for tens of Newton iterations), the
+// states and switch times are bit-identical with and without it, and the
+// slip integrals (adaptive Simpson on the probes' slips) agree to the
+// probes' own precision: their roots differ in slip by round-off, ~1e-13
+// m/s, over pieces of <= 0.05 s. It must also save iterations.
+TEST(SwitchEvents, ProbeStallWatchLeavesTheTrajectoryAndSavesIterations) {
+  SimulationOptions o = BuiltinOptions("rk-projection", Coupling::kZoh, 0.05);
+  o.t_end = 3.2;
+  SimulationResult r[2];
+  for (int watch = 0; watch < 2; ++watch) {
+    o.probe_stall_iterations = watch ? 10 : 0;
+    r[watch] = Simulator(PaperScene(), o).Run();
+    ASSERT_TRUE(r[watch].success()) << r[watch].stop_reason;
+  }
+  ASSERT_EQ(r[0].samples.size(), r[1].samples.size());
+  for (std::size_t k = 0; k < r[0].samples.size(); ++k) {
+    const TrajectorySample &a = r[0].samples[k], &b = r[1].samples[k];
+    ASSERT_EQ((a.theta - b.theta).norm(), 0) << a.t;
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(a.contacts[i].normal_force, b.contacts[i].normal_force);
+      EXPECT_NEAR(a.contacts[i].sliding_distance,
+                  b.contacts[i].sliding_distance, 1e-13)
+          << "t " << a.t << " wheel " << i + 1;
+      EXPECT_NEAR(a.contacts[i].creep_distance, b.contacts[i].creep_distance,
+                  1e-13)
+          << "t " << a.t << " wheel " << i + 1;
+    }
+  }
+  ASSERT_EQ(r[0].switches.size(), r[1].switches.size());
+  ASSERT_GE(r[0].switches.size(), 2u);
+  for (std::size_t j = 0; j < r[0].switches.size(); ++j)
+    EXPECT_EQ(r[0].switches[j].t, r[1].switches[j].t) << j;
+  std::printf("nlp iterations without / with the watch: %lld / %lld\n",
+              r[0].nlp_iterations, r[1].nlp_iterations);
+  EXPECT_LT(r[1].nlp_iterations, r[0].nlp_iterations);
+  o.probe_stall_iterations = -1;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("probe_stall_iterations"), std::string::npos) << why;
+}
+
 // Max over t = 0.4 k of |COM position - reference| [m].
 double LadderError(const SimulationResult& r, const SimulationResult& ref) {
   double worst = 0;

@@ -452,6 +452,50 @@ TEST(NewtonSolverTest, RankDeficientJacobianIsNumericalFailure) {
       << r.backend_status;
 }
 
+// x^2 = -1: no real root. Damped Newton from x0 = 0.7 moves x towards 0,
+// where |r| = x^2 + 1 flattens out at 1 without ever halving after its start
+// value 1.49.
+class NoRealRoot : public FreeVariableSystem {
+ public:
+  int num_variables() const override { return 1; }
+  int num_constraints() const override { return 1; }
+  void RowBounds(Eigen::Ref<Eigen::VectorXd> gl,
+                 Eigen::Ref<Eigen::VectorXd> gu) const override {
+    gl(0) = gu(0) = -1.0;
+  }
+  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
+                   Eigen::Ref<Eigen::VectorXd> g) const override {
+    g(0) = x(0) * x(0);
+  }
+  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
+    jac(0, 0) = 2.0 * x(0);
+  }
+};
+
+TEST(NewtonSolverTest, StallWatchGivesUpWhenTheResidualDoesNotHalve) {
+  RegisterBuiltinNlpSolvers();
+  auto solver = NlpSolverRegistry::Create("newton");
+  const NoRealRoot p;
+  const Eigen::VectorXd x0 = Eigen::VectorXd::Constant(1, 0.7);
+  NlpOptions options;
+  options.stall_iterations = 5;
+  NlpResult r;
+  // |r| last halved at iteration 0, so the watch fires at iteration 5.
+  EXPECT_EQ(solver->Solve(p, x0, options, &r), NlpStatus::kIterationLimit);
+  EXPECT_TRUE(r.stalled);
+  EXPECT_EQ(r.iterations, 5);
+  EXPECT_NE(r.backend_status.find("stalled"), std::string::npos)
+      << r.backend_status;
+  // Off (the default): the same start ends another way, unflagged.
+  options.stall_iterations = 0;
+  EXPECT_NE(solver->Solve(p, x0, options, &r), NlpStatus::kConverged);
+  EXPECT_FALSE(r.stalled);
+  EXPECT_GT(r.iterations, 5) << r.backend_status;
+  options.stall_iterations = -1;
+  EXPECT_THROW(solver->Solve(p, x0, options, &r), std::invalid_argument);
+}
+
 // x^3 = 1 with the inequality 1e3 (1 - x) >= 0, active at the root x* = 1.
 // Newton from x0 = 2 approaches from above (x^3 convex), so an iterate that
 // meets a loose residual tolerance still violates the scaled inequality by
