@@ -3,6 +3,7 @@
 #include <cvode/cvode.h>
 #include <cvode/cvode_ls.h>
 #include <cvode/cvode_proj.h>
+#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <algorithm>
 #include <cmath>
@@ -45,6 +46,22 @@ class CvodeProjectionIntegrator final : public Integrator {
 namespace {
 // CVODE's own defaults of the step controls.
 constexpr sundials_internal::StepControls kCvodeStepControls{5, 3, 10, 7};
+// Largest order CVODE allows for BDF (Adams: 12).
+constexpr int kBdfMaxOrder = 5;
+constexpr int kAdamsMaxOrder = 12;
+
+// Initial step of a call that restarts CVODE (option restart_step).
+enum class RestartStep { kGiven, kEstimate, kCarry };
+
+// restart_step=carry: the restart's first step h (order 1) had the weighted
+// local error estimate ||e|| ~ C h^2, so h (s / ||e||)^(1/2) would have
+// ||e|| = s; the next restart starts there. s = kCarrySafety^2 keeps the
+// order-1 start well inside the error test (paper scene, zoh, adams: safety
+// 0.2 / 0.3 / 0.4 / 0.5 give 4444 / 4014 / 4840 / 4910 right-hand sides,
+// 2 rejections each; docs/performance.md). The ratio is clamped: one step
+// says little about the next interval.
+constexpr double kCarrySafety = 0.3;
+constexpr double kCarryMinRatio = 0.2, kCarryMaxRatio = 5.0;
 }  // namespace
 
 struct CvodeProjectionIntegrator::Impl {
@@ -55,9 +72,17 @@ struct CvodeProjectionIntegrator::Impl {
 
   void Free() {
     if (mem != nullptr) CVodeFree(&mem);
+    // Not owned by CVODE: freed after it.
+    if (fixed_point_solver != nullptr) {
+      SUNNonlinSolFree(fixed_point_solver);
+      fixed_point_solver = nullptr;
+    }
     dense.Free();
     sundials_internal::DestroyVector(&yy);
+    sundials_internal::DestroyVector(&ele);
+    sundials_internal::DestroyVector(&ewt);
     n = -1;
+    carried_ode = nullptr;
     roots.registered = 0;
     jac_installed = false;
     jac_ode = nullptr;
@@ -96,6 +121,8 @@ struct CvodeProjectionIntegrator::Impl {
   // Runs CVode from t0 to t1 and sets y and *result (status, counters,
   // message), then projects the returned state.
   void Solve(double t0, double t1, Eigen::Ref<VectorXd> y);
+  // restart_step=carry, after the first step of a call: the carried step.
+  void CarryFirstStep();
   static IntegratorStatus StatusOf(int flag);
 
   // Newton projection of state onto H = 0 (model.md §8.4); false (message
@@ -210,12 +237,21 @@ struct CvodeProjectionIntegrator::Impl {
   double proj_fail_eta = 0.25;
   bool ode_jacobian = true;  // jacobian=ift
   double jacobian_reuse = 0.01;
+  int lmm = CV_ADAMS;
+  bool fixed_point = true;  // nonlinear_solver=fixedpoint
+  RestartStep restart_step = RestartStep::kCarry;
+  double eta_max_early = 3.0;
 
   // SUNDIALS objects.
   sundials_internal::Context context;
   void* mem = nullptr;
   N_Vector yy = nullptr;
-  sundials_internal::DenseLinearSolver dense;
+  sundials_internal::DenseLinearSolver dense;  // Newton only
+  SUNNonlinearSolver fixed_point_solver = nullptr;
+  // The method and nonlinear solver the CVODE memory was created with (a
+  // change of either creates a new one).
+  int created_lmm = CV_ADAMS;
+  bool created_fixed_point = true;
   int n = -1;
   sundials_internal::RootSlots roots;
   // Impl::Jacobian is installed (else CVODE's own difference quotients),
@@ -228,7 +264,15 @@ struct CvodeProjectionIntegrator::Impl {
   sundials_internal::JacobianReuse jac_reuse;
   MatrixXd jac_saved;
   double last_t = 0.0;
+  const ConstrainedOde* last_ode = nullptr;
   VectorXd last_y;  // the state the last successful call returned
+  // restart_step=carry: the step carried to the next call of carried_ode
+  // that starts where the last one ended; this call probes its first step.
+  double carried_step = 0.0;
+  const ConstrainedOde* carried_ode = nullptr;
+  bool from_last_end = false;
+  bool probe_first_step = false;
+  N_Vector ele = nullptr, ewt = nullptr;  // CVODE's error estimate, weights
 
   // Per call.
   ConstrainedOde* ode = nullptr;
@@ -252,21 +296,33 @@ OptionTable CvodeProjectionIntegrator::option_table() const {
       "projection stops when ||H||_inf <= this",
       "Newton corrections per projection (more: a recoverable projection "
       "failure)");
-  const OptionTable controls =
+  OptionTable controls =
       sundials_internal::StepControlOptions(kCvodeStepControls, "CVodeSet");
+  // Adams goes to order 12 in CVODE; BDF stops at 5 whatever is given.
+  for (OptionSpec& spec : controls) {
+    if (spec.name == "max_order") {
+      spec =
+          OptionSpec::Int("max_order", kCvodeStepControls.max_order,
+                          "largest order (CVodeSetMaxOrd; lmm=bdf: at most " +
+                              std::to_string(kBdfMaxOrder) + ")")
+              .AtLeast(1)
+              .AtMost(kAdamsMaxOrder);
+    }
+  }
   const OptionTable projection_controls = {
       OptionSpec::Bool("proj_err_est", true,
-                       "project the local error estimate too "
+                       "lmm=bdf: project the local error estimate too "
                        "(CVodeSetProjErrEst)"),
       OptionSpec::Int("proj_frequency", 1,
-                      "project every this many steps, 0 = never "
+                      "lmm=bdf: project every this many steps, 0 = never "
                       "(CVodeSetProjFrequency)")
           .AtLeast(0),
       OptionSpec::Int("max_proj_fails", 10,
-                      "projection failures per step (CVodeSetMaxNumProjFails)")
+                      "lmm=bdf: projection failures per step "
+                      "(CVodeSetMaxNumProjFails)")
           .AtLeast(1),
       OptionSpec::Double("proj_fail_eta", 0.25,
-                         "step factor after a projection failure "
+                         "lmm=bdf: step factor after a projection failure "
                          "(CVodeSetProjFailEta)")
           .GreaterThan(0)
           .AtMost(1),
@@ -276,18 +332,44 @@ OptionTable CvodeProjectionIntegrator::option_table() const {
                projection_controls.end());
   table.push_back(OptionSpec::Choice(
       "jacobian", "ift", {"ift", "fd"},
-      "dF/dy in the Newton matrix: ift = the ODE's RhsJacobian where it "
+      "nonlinear_solver=newton: dF/dy in the Newton matrix: ift = the "
+      "ODE's RhsJacobian where it "
       "gives one (robot: central differences of the kinematics + "
       "implicit-function-theorem sensitivities of the solve, model.md §8.9), "
       "else differences; fd = always CVODE's difference quotients"));
   table.push_back(
       OptionSpec::Double("jacobian_reuse", 0.01,
-                         "jacobian=ift: keep dF/dy across calls (CVODE "
+                         "newton, jacobian=ift: keep dF/dy across calls (CVODE "
                          "re-initialises at each) while y is within this "
                          "relative distance (max norm) of where it was "
                          "evaluated, the call starts where the last ended and "
                          "Newton has not failed; 0 = re-evaluate")
           .AtLeast(0));
+  table.push_back(OptionSpec::Choice(
+      "lmm", "adams", {"adams", "bdf"},
+      "multistep method (CVodeCreate): adams = Adams-Moulton, the state "
+      "projected onto H = 0 at the end of each call (CVODE projects only "
+      "with BDF); bdf = BDF with CVODE's projection after every step and of "
+      "the error estimate (the behaviour before)"));
+  table.push_back(OptionSpec::Choice(
+      "nonlinear_solver", "fixedpoint", {"fixedpoint", "newton"},
+      "corrector iteration: fixedpoint = functional iteration "
+      "(SUNNonlinSol_FixedPoint, no dF/dy, no linear solves: for non-stiff "
+      "F); newton = Newton with the dense dF/dy of option jacobian (the "
+      "behaviour before)"));
+  table.push_back(OptionSpec::Choice(
+      "restart_step", "carry", {"carry", "given", "estimate"},
+      "initial step after a re-initialisation: carry = the order-1 step "
+      "the first step's error estimate predicts, from the last call that "
+      "ended where this one starts (capped at IntegratorOptions::step); "
+      "given = IntegratorOptions::step (the behaviour before); estimate = "
+      "CVODE's own estimate"));
+  table.push_back(
+      OptionSpec::Double("eta_max_early", 3.0,
+                         "largest step growth in the first 10 steps after a "
+                         "re-initialisation (CVodeSetEtaMaxEarlyStep; CVODE's "
+                         "own: 10)")
+          .GreaterThan(1));
   return table;
 }
 
@@ -302,6 +384,13 @@ void CvodeProjectionIntegrator::ApplyBackendOptions(
   s.proj_fail_eta = values.GetDouble("proj_fail_eta");
   s.ode_jacobian = values.GetString("jacobian") == "ift";
   s.jacobian_reuse = values.GetDouble("jacobian_reuse");
+  s.lmm = values.GetString("lmm") == "bdf" ? CV_BDF : CV_ADAMS;
+  s.fixed_point = values.GetString("nonlinear_solver") == "fixedpoint";
+  const std::string restart = values.GetString("restart_step");
+  s.restart_step = restart == "given"      ? RestartStep::kGiven
+                   : restart == "estimate" ? RestartStep::kEstimate
+                                           : RestartStep::kCarry;
+  s.eta_max_early = values.GetDouble("eta_max_early");
 }
 
 namespace {
@@ -320,27 +409,40 @@ int CvodeProjectionIntegrator::Impl::CreateOrReInit(
   long conv_fails = 0;
   if (mem != nullptr) CVodeGetNumNonlinSolvConvFails(mem, &conv_fails);
   jac_reuse.BeforeReInit(conv_fails);
-  if (mem != nullptr && n == n_new) {
+  if (mem != nullptr && n == n_new && lmm == created_lmm &&
+      fixed_point == created_fixed_point) {
     Map<VectorXd>(NV_DATA_S(yy), n_new) = y0;
     return CVodeReInit(mem, t0, yy);
   }
   Free();
   yy = N_VNew_Serial(n_new, context.get());
-  if (!dense.CreateMatrix(n_new, context.get()) || yy == nullptr)
+  if (yy == nullptr)
     throw std::runtime_error("cvode-projection: cannot allocate");
-  const bool solver_created = dense.CreateSolver(yy, context.get());
-  mem = CVodeCreate(CV_BDF, context.get());
+  // The fixed-point iteration (Anderson depth 0: it converges in 1-2
+  // iterations on this non-stiff F) needs no matrix; Newton the dense one.
+  const bool solver_created =
+      fixed_point ? (fixed_point_solver = SUNNonlinSol_FixedPoint(
+                         yy, 0, context.get())) != nullptr
+                  : dense.CreateMatrix(n_new, context.get()) &&
+                        dense.CreateSolver(yy, context.get());
+  mem = CVodeCreate(lmm, context.get());
   if (!solver_created || mem == nullptr)
     throw std::runtime_error("cvode-projection: cannot create CVODE");
+  created_lmm = lmm;
+  created_fixed_point = fixed_point;
   n = n_new;
   Map<VectorXd>(NV_DATA_S(yy), n_new) = y0;
   int flag =
       CVodeSetErrHandlerFn(mem, &sundials_internal::ErrorLog::Handler, &errors);
   if (flag == CV_SUCCESS) flag = CVodeInit(mem, &Impl::Rhs, t0, yy);
   if (flag == CV_SUCCESS) flag = CVodeSetUserData(mem, this);
-  if (flag == CV_SUCCESS)
-    flag = CVodeSetLinearSolver(mem, dense.solver, dense.matrix);
-  if (flag == CV_SUCCESS && ode->num_constraints() > 0)
+  if (flag == CV_SUCCESS) {
+    flag = fixed_point ? CVodeSetNonlinearSolver(mem, fixed_point_solver)
+                       : CVodeSetLinearSolver(mem, dense.solver, dense.matrix);
+  }
+  // CVODE projects only with BDF (CVodeSetProjFn refuses Adams); with
+  // Adams the returned state is projected (Solve).
+  if (flag == CV_SUCCESS && lmm == CV_BDF && ode->num_constraints() > 0)
     flag = CVodeSetProjFn(mem, &Impl::Projection);
   return flag;
 }
@@ -351,8 +453,9 @@ int CvodeProjectionIntegrator::Impl::Configure(
   // dF/dy (option jacobian): with ift, Impl::Jacobian once the ODE has
   // given one (probed at each call's start until it does: an ODE without
   // RhsJacobian returns false at once, and the robot's may fail at a
-  // one-sided point); CVODE's difference quotients otherwise.
-  if (flag == CV_SUCCESS) {
+  // one-sided point); CVODE's difference quotients otherwise. The
+  // fixed-point iteration uses no dF/dy.
+  if (flag == CV_SUCCESS && !fixed_point) {
     bool install = ode_jacobian && jac_installed && jac_ode == ode;
     if (ode_jacobian && !install) {
       install = ode->RhsJacobian(t0, y0, jac_probe);
@@ -369,9 +472,32 @@ int CvodeProjectionIntegrator::Impl::Configure(
       &CVodeSetMaxNumSteps,  &CVodeSetMinStep,        &CVodeSetInitStep,
       &CVodeSetStopTime,     &CVodeSetMaxOrd,         &CVodeSetMaxNonlinIters,
       &CVodeSetMaxConvFails, &CVodeSetMaxErrTestFails};
-  flag = sundials_internal::ApplyStepControls(kSetters, mem, options, t1,
-                                              controls, flag);
-  if (flag == CV_SUCCESS && ode->num_constraints() > 0) {
+  // Initial step (option restart_step): every call re-initialises CVODE.
+  IntegratorOptions step_options = options;
+  probe_first_step = false;
+  switch (restart_step) {
+    case RestartStep::kGiven:
+      break;
+    case RestartStep::kEstimate:
+      step_options.step = 0.0;
+      break;
+    case RestartStep::kCarry:
+      // Only for a call that starts where the last one ended (the next
+      // hold interval), so a call from elsewhere (a re-integration, a new
+      // run) computes as it would on a fresh integrator.
+      probe_first_step = true;
+      if (from_last_end && carried_ode == ode && carried_step > 0.0 &&
+          (step_options.step <= 0.0 || carried_step < step_options.step))
+        step_options.step = carried_step;
+      break;
+  }
+  sundials_internal::StepControls method_controls = controls;
+  if (lmm == CV_BDF)
+    method_controls.max_order = std::min(controls.max_order, kBdfMaxOrder);
+  flag = sundials_internal::ApplyStepControls(kSetters, mem, step_options, t1,
+                                              method_controls, flag);
+  if (flag == CV_SUCCESS) flag = CVodeSetEtaMaxEarlyStep(mem, eta_max_early);
+  if (flag == CV_SUCCESS && lmm == CV_BDF && ode->num_constraints() > 0) {
     flag = CVodeSetProjErrEst(mem, proj_err_est ? SUNTRUE : SUNFALSE);
     if (flag == CV_SUCCESS) flag = CVodeSetProjFrequency(mem, proj_frequency);
     if (flag == CV_SUCCESS) flag = CVodeSetMaxNumProjFails(mem, max_proj_fails);
@@ -381,6 +507,27 @@ int CvodeProjectionIntegrator::Impl::Configure(
     flag = roots.Register(&CVodeRootInit, mem, ode->num_roots(),
                           &Impl::RootFunction);
   return flag;
+}
+
+void CvodeProjectionIntegrator::Impl::CarryFirstStep() {
+  carried_ode = nullptr;
+  double h = 0.0;
+  int order = 0;
+  if (ele == nullptr) ele = N_VClone(yy);
+  if (ewt == nullptr) ewt = N_VClone(yy);
+  if (ele == nullptr || ewt == nullptr ||
+      CVodeGetLastStep(mem, &h) != CV_SUCCESS ||
+      CVodeGetLastOrder(mem, &order) != CV_SUCCESS || order != 1 ||
+      CVodeGetEstLocalErrors(mem, ele) != CV_SUCCESS ||
+      CVodeGetErrWeights(mem, ewt) != CV_SUCCESS || !(h > 0.0))
+    return;
+  // CVODE's error test: ||ele||_wrms <= 1.
+  Map<const VectorXd> e(NV_DATA_S(ele), n), w(NV_DATA_S(ewt), n);
+  const double norm = std::sqrt(e.cwiseProduct(w).squaredNorm() / n);
+  const double ratio = std::clamp(kCarrySafety / std::sqrt(norm + 1e-4),
+                                  kCarryMinRatio, kCarryMaxRatio);
+  carried_step = h * ratio;
+  carried_ode = ode;
 }
 
 IntegratorStatus CvodeProjectionIntegrator::Impl::StatusOf(int flag) {
@@ -411,11 +558,17 @@ IntegratorStatus CvodeProjectionIntegrator::Impl::StatusOf(int flag) {
 void CvodeProjectionIntegrator::Impl::Solve(double t0, double t1,
                                             Eigen::Ref<VectorXd> y) {
   double t_ret = t0;
-  const int flag = CVode(mem, t1, yy, &t_ret, CV_NORMAL);
+  int flag = CV_SUCCESS;
+  if (probe_first_step) {
+    flag = CVode(mem, t1, yy, &t_ret, CV_ONE_STEP);
+    if (flag == CV_SUCCESS || flag == CV_TSTOP_RETURN) CarryFirstStep();
+  }
+  if (flag == CV_SUCCESS && t_ret < t1)
+    flag = CVode(mem, t1, yy, &t_ret, CV_NORMAL);
   long steps = 0, error_test_failures = 0, jac_evals = 0;
   CVodeGetNumSteps(mem, &steps);
   CVodeGetNumErrTestFails(mem, &error_test_failures);
-  CVodeGetNumJacEvals(mem, &jac_evals);
+  if (!fixed_point) CVodeGetNumJacEvals(mem, &jac_evals);
   result->steps += static_cast<int>(steps);
   result->rejected_steps += static_cast<int>(error_test_failures);
   // Impl::Jacobian counts itself; CVODE's own difference quotients here.
@@ -448,6 +601,7 @@ void CvodeProjectionIntegrator::Impl::Solve(double t0, double t1,
   if (status == IntegratorStatus::kSuccess) {
     last_t = result->t_reached;
     last_y = y;
+    last_ode = ode;
   } else {
     jac_reuse.valid = false;
   }
@@ -462,8 +616,8 @@ void CvodeProjectionIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
   s.Begin(ode, result);
   // A call from elsewhere (a re-integration, a new run) computes as on a
   // fresh integrator.
-  if (&ode != s.jac_ode || t0 != s.last_t || y != s.last_y)
-    s.jac_reuse.valid = false;
+  s.from_last_end = &ode == s.last_ode && t0 == s.last_t && y == s.last_y;
+  if (!s.from_last_end) s.jac_reuse.valid = false;
   auto fail = [&](IntegratorStatus status, const std::string& message) {
     result->status = status;
     result->t_reached = t0;

@@ -75,9 +75,10 @@ void RegisterBuiltinIntegrators() {
     IntegratorRegistry::Register("ida", std::move(ida),
                                  [] { return MakeIdaIntegrator(); });
     BackendInfo cvode = Info(
-        "SUNDIALS CVODE BDF with its projection onto H = 0 (CVodeSetProjFn)",
-        "BDF (ODE + projection)", "SUNDIALS CVODE", QUASIROLL_SUNDIALS_VERSION,
-        0.00088, 0.00228);
+        "SUNDIALS CVODE Adams (default; projected at each call's end) or BDF "
+        "with its projection onto H = 0 after every step (CVodeSetProjFn)",
+        "Adams / BDF (ODE + projection)", "SUNDIALS CVODE",
+        QUASIROLL_SUNDIALS_VERSION, 0.00088, 0.00228);
     cvode.adaptive = [](const OptionValues&) { return true; };
     IntegratorRegistry::Register("cvode-projection", std::move(cvode), [] {
       return MakeCvodeProjectionIntegrator();

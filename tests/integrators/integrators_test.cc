@@ -254,16 +254,20 @@ INSTANTIATE_TEST_SUITE_P(
             "ida", {{"dae_index", "2"}}, 0.0, 1e-8, 3e-6, 1e-10, "ida_index2"},
         PendulumCase{
             "ida", {{"dae_index", "1"}}, 0.0, 1e-8, 3e-6, 1e-7, "ida_index1"},
-        // CVODE BDF + projection, rtol 1e-8: error measured 7.0e-7
-        // (variable-order BDF, global error ~ tens of rtol like IDA); the
-        // projection holds H to projection_tolerance = 1e-12.
+        // CVODE Adams + fixed point (the default), the state projected at
+        // the end of each call, rtol 1e-8: error measured 7.6e-8; BDF +
+        // Newton + projection after every step: 7.0e-7 (variable-order
+        // BDF, global error ~ tens of rtol like IDA). Both project H to
+        // projection_tolerance = 1e-12.
+        PendulumCase{
+            "cvode-projection", {}, 0.0, 1e-8, 3e-6, 1e-12, "cvode_projection"},
         PendulumCase{"cvode-projection",
-                     {},
+                     {{"lmm", "bdf"}, {"nonlinear_solver", "newton"}},
                      0.0,
                      1e-8,
                      3e-6,
                      1e-12,
-                     "cvode_projection"}),
+                     "cvode_projection_bdf"}),
     [](const ::testing::TestParamInfo<PendulumCase>& info) {
       return info.param.label;
     });
@@ -853,7 +857,9 @@ TEST(IdaTest, RestartsWhereTheRightHandSideJumps) {
 // (jacobian_reuse) change the cost, not the accuracy: the defaults and the
 // old behaviour (h0 = the call's interval, no reuse) meet the same bound
 // against the exact rotation, and the defaults evaluate dF/dy less often and
-// (ida) fail the error test far less often.
+// (ida) fail the error test far less often. cvode-projection runs its Newton
+// configuration (lmm=bdf, nonlinear_solver=newton, restart_step=given) with
+// and without the reuse.
 class HeldRotationOde : public ConstrainedOde {
  public:
   double u = 0.0;
@@ -915,10 +921,18 @@ TEST_P(RestartTest, CarriedStepAndReusedJacobianKeepTheAccuracy) {
     return out;
   };
   const bool ida = GetParam() == "ida";
-  const Outcome now = run({});
+  // cvode-projection: its Newton configuration (the default is the
+  // fixed-point iteration, which has no dF/dy: CvodeZohTest below).
+  const GivenOptions cvode_newton = {{"lmm", "bdf"},
+                                     {"nonlinear_solver", "newton"},
+                                     {"restart_step", "given"},
+                                     {"eta_max_early", "10"}};
+  GivenOptions cvode_no_reuse = cvode_newton;
+  cvode_no_reuse["jacobian_reuse"] = "0";
+  const Outcome now = run(ida ? GivenOptions{} : cvode_newton);
   const Outcome old =
       ida ? run({{"restart_step", "given"}, {"jacobian_reuse", "0"}})
-          : run({{"jacobian_reuse", "0"}});
+          : run(cvode_no_reuse);
   // Global error of 40 restarted BDF runs at rtol 1e-8 (measured: ida
   // 6.0e-7 vs 7.2e-7, cvode-projection 6.2e-7 both; rejections ida 42 vs
   // 120; dF/dy evaluations 17 vs 283 and 17 vs 121).
@@ -944,6 +958,143 @@ INSTANTIATE_TEST_SUITE_P(Sundials, RestartTest,
                              if (c == '-') c = '_';
                            return name;
                          });
+
+// zoh-like: a point on the unit circle H = x^2 + y^2 - 1 = 0 turning at
+// theta' = u_k (1 + a cos(theta)), u_k held over [k dt, (k+1) dt] and changed
+// between calls (the robot's held twist: F jumps at every call's start,
+// nonlinear in the state inside the call). F is tangent to H = 0, so CVODE's
+// BDF with its projection after every step and Adams with the state
+// projected at the end of each call approximate the same solution, and the
+// exact one is theta(t) (theta integrated alone, below).
+class HeldCircleOde : public ConstrainedOde {
+ public:
+  static constexpr double kA = 0.5;
+  double u = 0.0;
+  int rhs_jacobians = 0;
+  int state_size() const override { return 2; }
+  int num_constraints() const override { return 1; }
+  bool Rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y,
+           Eigen::Ref<Eigen::VectorXd> ydot) override {
+    const double rate = u * (1.0 + kA * y(0));
+    ydot << -rate * y(1), rate * y(0);
+    return true;
+  }
+  bool RhsJacobian(double, const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::MatrixXd> dfdy) override {
+    ++rhs_jacobians;
+    dfdy << -u * kA * y(1), -u * (1.0 + kA * y(0)), u * (1.0 + 2.0 * kA * y(0)),
+        0.0;
+    return true;
+  }
+  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> h) const override {
+    h(0) = y.squaredNorm() - 1.0;
+  }
+  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& y,
+                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
+    jac << 2.0 * y(0), 2.0 * y(1);
+  }
+  // theta after `duration` at the held u: RK4 with 2000 steps (local error
+  // ~ (2.5e-5 s)^5 |theta^(5)|, far below the integrators' 1e-8).
+  double Advance(double theta, double duration) const {
+    const int steps = 2000;
+    const double h = duration / steps;
+    auto f = [&](double th) { return u * (1.0 + kA * std::cos(th)); };
+    for (int i = 0; i < steps; ++i) {
+      const double k1 = f(theta), k2 = f(theta + 0.5 * h * k1),
+                   k3 = f(theta + 0.5 * h * k2), k4 = f(theta + h * k3);
+      theta += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+    }
+    return theta;
+  }
+};
+
+// The default (Adams, fixed-point iteration, carried restart step, early
+// growth <= 3) against the configuration before it (BDF, Newton on the
+// dense dF/dy, CVODE's projection after every step, h0 = the interval,
+// CVODE's early growth 10), 60 calls of 0.05 s at rtol 1e-8 as the
+// simulator makes them.
+TEST(CvodeZohTest, AdamsFixedPointIsCheaperAtTheSameAccuracy) {
+  RegisterBuiltinIntegrators();
+  if (!IntegratorRegistry::Has("cvode-projection"))
+    GTEST_SKIP() << "built without SUNDIALS";
+  IntegratorOptions o;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  const double dt = 0.05;
+  o.step = dt;  // as the simulator passes it
+  const int calls = 60;
+  struct Outcome {
+    IntegratorResult result;
+    int rhs_jacobians = 0;
+    double error = 0.0;
+    Eigen::VectorXd y;
+  };
+  auto run = [&](Integrator& integrator) {
+    HeldCircleOde ode;
+    Eigen::VectorXd y(2);
+    y << 1.0, 0.0;
+    double theta = 0.0;
+    Outcome out;
+    for (int k = 0; k < calls; ++k) {
+      ode.u = 1.0 + 0.5 * std::sin(1.0 + k);
+      EXPECT_EQ(
+          integrator.Integrate(ode, k * dt, (k + 1) * dt, y, o, &out.result),
+          IntegratorStatus::kSuccess)
+          << out.result.message;
+      theta = ode.Advance(theta, dt);
+    }
+    out.rhs_jacobians = ode.rhs_jacobians;
+    out.error = std::hypot(y(0) - std::cos(theta), y(1) - std::sin(theta));
+    out.y = y;
+    return out;
+  };
+  const GivenOptions before = {{"lmm", "bdf"},
+                               {"nonlinear_solver", "newton"},
+                               {"restart_step", "given"},
+                               {"eta_max_early", "10"}};
+  auto fresh = [](const GivenOptions& given) {
+    auto integrator = IntegratorRegistry::Create("cvode-projection");
+    integrator->SetBackendOptions(given);
+    return integrator;
+  };
+  const Outcome now = run(*fresh({}));
+  const Outcome old = run(*fresh(before));
+  std::printf(
+      "[ measured ] cvode zoh: error %.2e vs %.2e, steps %d vs %d, rejected "
+      "%d vs %d, rhs %d vs %d, dF/dy %d vs %d, jac %d vs %d\n",
+      now.error, old.error, now.result.steps, old.result.steps,
+      now.result.rejected_steps, old.result.rejected_steps,
+      now.result.rhs_evaluations, old.result.rhs_evaluations, now.rhs_jacobians,
+      old.rhs_jacobians, now.result.jacobian_evaluations,
+      old.result.jacobian_evaluations);
+  // Accuracy: global error of 60 restarted runs at rtol 1e-8, measured
+  // 9.7e-9 now, 5.4e-7 before; bound RestartTest's 2e-6 (restarted BDF at
+  // rtol 1e-8), and no worse than before within 1.5x.
+  EXPECT_LE(old.error, 2e-6);
+  EXPECT_LE(now.error, 2e-6);
+  EXPECT_LE(now.error, 1.5 * old.error);
+  EXPECT_LE(ConstraintNorm(HeldCircleOde{}, now.y), 1e-12);
+  // Cost, measured now vs before: right-hand sides 1073 vs 2320 (bound:
+  // 2/3 of before), dF/dy 0 vs 123 (no Newton matrix, no linear solve),
+  // Jacobian evaluations (dH/dy and dF/dy) 60 vs 1731 (one projection per
+  // call instead of one per step), steps 678 vs 1223.
+  EXPECT_EQ(now.rhs_jacobians, 0);
+  EXPECT_GT(old.rhs_jacobians, 0);
+  EXPECT_LT(3 * now.result.rhs_evaluations, 2 * old.result.rhs_evaluations)
+      << now.result.rhs_evaluations << " vs " << old.result.rhs_evaluations;
+  EXPECT_LT(2 * now.result.jacobian_evaluations,
+            old.result.jacobian_evaluations);
+  EXPECT_LT(now.result.steps, old.result.steps);
+  // One object switched between the two configurations computes what fresh
+  // ones do (a change of lmm or nonlinear_solver re-creates CVODE's memory).
+  auto shared = fresh(before);
+  const Outcome old_again = run(*shared);
+  shared->SetBackendOptions({});
+  const Outcome now_again = run(*shared);
+  EXPECT_EQ(old_again.y, old.y);
+  EXPECT_EQ(now_again.y, now.y);
+}
 
 // ------------------------------------------------------------ projection
 
