@@ -3,6 +3,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "quasiroll/core/central_difference_internal.h"
+
 namespace quasiroll {
 
 namespace {
@@ -159,19 +161,53 @@ Vec6 KinematicModel::PlatformVelocity(const ChainState& s,
   return out;
 }
 
-bool KinematicModel::Rhs(const Configuration& theta, const Vec12& w,
-                         Configuration* theta_dot) const {
+bool KinematicModel::ChainRates(const Configuration& theta, int chain,
+                                const Vec12& w, EtaRates* rates) const {
   ChainState s;
   ContactVelocityMap L;
+  EvaluateChain(theta, chain, &s);
+  ContactVelocities(s, chain, &L);
+  const Vec6 twist = L * w;
+  return ContactRates(s, twist, rates);
+}
+
+bool KinematicModel::Rhs(const Configuration& theta, const Vec12& w,
+                         Configuration* theta_dot) const {
   for (int i = 0; i < kNumWheels; ++i) {
-    EvaluateChain(theta, i, &s);
-    ContactVelocities(s, i, &L);
-    const Vec6 twist = L * w;
     EtaRates rates;
-    if (!ContactRates(s, twist, &rates)) return false;
+    if (!ChainRates(theta, i, w, &rates)) return false;
     theta_dot->segment<5>(ConfigIndex::Eta(i)) = rates;
   }
   theta_dot->tail<6>() = w.tail<6>();
+  return true;
+}
+
+bool KinematicModel::RhsStateDerivative(const Configuration& theta,
+                                        const Vec12& w,
+                                        RhsStateJacobian* dfdtheta) const {
+  dfdtheta->setZero();
+  for (int i = 0; i < kNumWheels; ++i) {
+    const int e = ConfigIndex::Eta(i), j = ConfigIndex::kTheta + 2 * i;
+    const int columns[7] = {e, e + 1, e + 2, e + 3, e + 4, j, j + 1};
+    const auto rates = [this, i, &w](const Configuration& at, EtaRates* r) {
+      return ChainRates(at, i, w, r);
+    };
+    for (int k : columns) {
+      EtaRates column;
+      if (!internal::CentralDifference(theta, k, rates, &column)) return false;
+      dfdtheta->block<5, 1>(e, k) = column;
+    }
+  }
+  return true;
+}
+
+bool KinematicModel::RhsTwistDerivative(const Configuration& theta,
+                                        RhsTwistJacobian* dfdw) const {
+  Configuration column;
+  for (int j = 0; j < 12; ++j) {
+    if (!Rhs(theta, Vec12::Unit(j), &column)) return false;
+    dfdw->col(j) = column;
+  }
   return true;
 }
 

@@ -52,6 +52,9 @@ using Vec12 = Eigen::Matrix<double, 12, 1>;
 using LoopClosure = Eigen::Matrix<double, kNumConstraints, 1>;
 using LoopClosureJacobian = Eigen::Matrix<double, kNumConstraints, kConfigSize>;
 using ContactVelocityMap = Eigen::Matrix<double, 6, 12>;
+// dF/dTheta and dF/dw of Theta' = F(Theta, w) (KinematicModel::Rhs).
+using RhsStateJacobian = Eigen::Matrix<double, kConfigSize, kConfigSize>;
+using RhsTwistJacobian = Eigen::Matrix<double, kConfigSize, 12>;
 
 // Named indices into Theta.
 struct ConfigIndex {
@@ -131,6 +134,22 @@ class KinematicModel {
   // if a contact lost relative curvature.
   bool Rhs(const Configuration& theta, const Vec12& w,
            Configuration* theta_dot) const;
+  // dF/dTheta at fixed w (model.md §8.9, §7.9), for the implicit
+  // integrators' Newton matrix (the simulator's RobotOde::RhsJacobian) and
+  // the step derivative's g_Y (StepSensitivity): central differences
+  // (core/central_difference_internal.h: the step and why) of one chain's
+  // rates per column. eta_i' depends only on chain i's seven inputs (eta_i
+  // and its two joint angles) and theta' = w_theta not on Theta at all, so
+  // every other entry is exactly zero: 42 chain evaluations instead of 42
+  // right-hand sides. Returns false if a contact lost relative curvature at
+  // a differenced state (*dfdtheta then partly written).
+  bool RhsStateDerivative(const Configuration& theta, const Vec12& w,
+                          RhsStateJacobian* dfdtheta) const;
+  // dF/dw at theta, exact: F is linear in w (twist L_i w, Montana's rates
+  // linear in the twist, theta' = w_theta), so column j is F(theta, e_j):
+  // 12 right-hand sides. Returns false as Rhs.
+  bool RhsTwistDerivative(const Configuration& theta,
+                          RhsTwistJacobian* dfdw) const;
 
   void Constraints(const Configuration& theta, LoopClosure* h) const;
   void ConstraintJacobian(const Configuration& theta,
@@ -141,6 +160,11 @@ class KinematicModel {
   Configuration CorrectionWeights() const;
 
  private:
+  // eta_i' = Montana_i(L_i w) at theta (model.md §8.1): Rhs's rows of
+  // chain i. Returns false if K is singular.
+  bool ChainRates(const Configuration& theta, int chain, const Vec12& w,
+                  EtaRates* rates) const;
+
   RobotGeometry geometry_;
   std::shared_ptr<const Terrain> terrain_;
   std::array<Vec3, 3> b_;  // joint points b_i in {P}

@@ -110,16 +110,16 @@ class Simulator::RobotOde final : public LoopClosureOde {
   }
 
   // dF/dTheta (model.md §8.9). zoh: the held twist does not depend on the
-  // state, dF/dTheta = dF/dTheta|_w by central differences of the
-  // kinematics (no solve). coupled: F(Theta, w(Theta)) with w from the
-  // quasi-static solve, dF/dTheta = dF/dTheta|_w + dF/dw dw/dTheta, dw/dTheta
-  // by the implicit function theorem (SensitivityAnalyzer) at the solve at
-  // Theta (the last Rhs's when Theta is its point, else one solve). F is
-  // linear in w (twist = L w, Montana's rates linear in the twist), so dF/dw
-  // is exact from 12 unit evaluations. Returns false (the integrator then
-  // differences Rhs for this Jacobian) where the derivative does not exist
-  // or is one-sided (SINGULAR J_E, an inequality about to become active) or
-  // F cannot be evaluated.
+  // state, dF/dTheta = dF/dTheta|_w (KinematicModel::RhsStateDerivative:
+  // differences of the kinematics, no solve). coupled: F(Theta, w(Theta))
+  // with w from the quasi-static solve, dF/dTheta = dF/dTheta|_w + dF/dw
+  // dw/dTheta, dw/dTheta by the implicit function theorem
+  // (SensitivityAnalyzer) at the solve at Theta (the last Rhs's when Theta
+  // is its point, else one solve), dF/dw exact
+  // (KinematicModel::RhsTwistDerivative). Returns false (the integrator
+  // then differences Rhs for this Jacobian) where the derivative does not
+  // exist or is one-sided (SINGULAR J_E, an inequality about to become
+  // active) or F cannot be evaluated.
   bool RhsJacobian(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::MatrixXd> dfdy) override {
     const Configuration q = y;
@@ -145,14 +145,10 @@ class Simulator::RobotOde final : public LoopClosureOde {
         return Fallback();
       w = solver_->problem().JointSpaceVelocity(sol_.z);
     }
-    if (!StateDerivative(q, w)) return Fallback();
+    if (!model().RhsStateDerivative(q, w, &dfdq_)) return Fallback();
     if (coupling_ == Coupling::kCoupled) {
-      // dF/dw: F(q, e_j) (linear in w), then the chain rule.
-      Configuration col;
-      for (int j = 0; j < 12; ++j) {
-        if (!model().Rhs(q, Vec12::Unit(j), &col)) return Fallback();
-        dfdw_.col(j) = col;
-      }
+      // The chain rule: dF/dTheta|_w + dF/dw dw/dTheta.
+      if (!model().RhsTwistDerivative(q, &dfdw_)) return Fallback();
       constexpr int kState = SensitivityParameter::kState;
       constexpr int kNumState = SensitivityParameter::kNumState;
       dwdq_.topRows<6>() = sens_.twist.middleCols<kNumState>(kState);
@@ -180,49 +176,6 @@ class Simulator::RobotOde final : public LoopClosureOde {
     ++jacobian_fallbacks_;
     return false;
   }
-  // dfdq_ = dF/dTheta at fixed w: central differences, h_k = cbrt(eps_mach)
-  // max(1, |q_k|) (truncation h^2 F_3/6 and round-off eps F/h balance,
-  // ~eps^(2/3) relative; core/sensitivity.h). eta_i' depends only on chain
-  // i's inputs (eta_i and its two joint angles) and the joint rates not on
-  // Theta at all, so each column differences one chain's rates and the
-  // other entries are exactly zero.
-  bool StateDerivative(const Configuration& q, const Vec12& w) {
-    const double root = std::cbrt(std::numeric_limits<double>::epsilon());
-    dfdq_.setZero();
-    Configuration qp = q;
-    for (int i = 0; i < kNumWheels; ++i) {
-      const int columns[7] = {ConfigIndex::Eta(i),
-                              ConfigIndex::Eta(i) + 1,
-                              ConfigIndex::Eta(i) + 2,
-                              ConfigIndex::Eta(i) + 3,
-                              ConfigIndex::Eta(i) + 4,
-                              ConfigIndex::kTheta + 2 * i,
-                              ConfigIndex::kTheta + 2 * i + 1};
-      for (int k : columns) {
-        const double h = root * std::max(1.0, std::abs(q(k)));
-        EtaRates fp, fm;
-        qp(k) = q(k) + h;
-        const double hp = qp(k) - q(k);  // exactly representable steps
-        if (!ChainRates(qp, i, w, &fp)) return false;
-        qp(k) = q(k) - h;
-        const double hm = q(k) - qp(k);
-        if (!ChainRates(qp, i, w, &fm)) return false;
-        qp(k) = q(k);
-        dfdq_.block<5, 1>(ConfigIndex::Eta(i), k) = (fp - fm) / (hp + hm);
-      }
-    }
-    return true;
-  }
-  // eta_i' = Montana_i(L_i w) at theta (model.md §8.1).
-  bool ChainRates(const Configuration& theta, int chain, const Vec12& w,
-                  EtaRates* rates) const {
-    ChainState cs;
-    ContactVelocityMap L;
-    model().EvaluateChain(theta, chain, &cs);
-    model().ContactVelocities(cs, chain, &L);
-    return model().ContactRates(cs, L * w, rates);
-  }
-
   Coupling coupling_;
   QuasiStaticSolver* solver_;
   Vec12 w_ = Vec12::Zero();
@@ -242,8 +195,8 @@ class Simulator::RobotOde final : public LoopClosureOde {
     return o;
   }()};
   QuasiStaticSensitivities sens_;
-  Eigen::Matrix<double, kConfigSize, kConfigSize> dfdq_;
-  Eigen::Matrix<double, kConfigSize, 12> dfdw_;
+  RhsStateJacobian dfdq_;
+  RhsTwistJacobian dfdw_;
   Eigen::Matrix<double, 12, kConfigSize> dwdq_;
   int jacobian_fallbacks_ = 0;
   Eigen::VectorXd probe_y_ = Eigen::VectorXd::Zero(kConfigSize),

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "quasiroll/core/central_difference_internal.h"
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/loop_closure_ode.h"
 
@@ -13,7 +14,6 @@ namespace quasiroll {
 
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kEpsMach = std::numeric_limits<double>::epsilon();
 constexpr int kN = kConfigSize;
 constexpr int kP = SensitivityParameter::kCount;
 
@@ -196,28 +196,35 @@ bool StepSensitivity::FieldDerivative(const Configuration& y, const Vec12& w,
                                       const StateJac& s, const ParamJac& dw,
                                       StateJac* dk,
                                       StepSensitivityResult* out) {
-  // g_Y at fixed w: central differences (header), kinematics only.
-  Eigen::Matrix<double, kN, kN> g_y;
-  Configuration yp, ym, fp, fm;
-  for (int j = 0; j < kN; ++j) {
-    const double h = std::cbrt(kEpsMach) * std::max(1.0, std::abs(y(j)));
-    yp = y;
-    ym = y;
-    yp(j) += h;
-    ym(j) -= h;
-    if (!Field(yp, w, &fp, out) || !Field(ym, w, &fm, out)) return false;
-    g_y.col(j) = (fp - fm) / (yp(j) - ym(j));
-  }
-  // g_w exact: F is linear in w; the Baumgarte correction is affine in F.
-  Eigen::Matrix<double, kN, 12> g_w;
-  for (int j = 0; j < 12; ++j) {
-    ++out->rhs_evaluations;
-    if (!model_.Rhs(y, Vec12::Unit(j), &fp)) {
+  // g_Y at fixed w, kinematics only: F's chain by chain; the Baumgarte
+  // field, which couples the chains, column by column with the same step.
+  RhsStateJacobian g_y;
+  if (baumgarte_) {
+    const auto field = [&](const Configuration& at, Configuration* f) {
+      return Field(at, w, f, out);
+    };
+    for (int j = 0; j < kN; ++j) {
+      Configuration column;
+      if (!internal::CentralDifference(y, j, field, &column)) return false;
+      g_y.col(j) = column;
+    }
+  } else {
+    out->rhs_evaluations += 2 * kN;  // one chain's rows each
+    if (!model_.RhsStateDerivative(y, w, &g_y)) {
       Fail(StepSensitivityStatus::kRhsFailure,
-           "KinematicModel::Rhs failed (relative curvature lost)", out);
+           "KinematicModel::Rhs failed (relative curvature lost) at a stage "
+           "state",
+           out);
       return false;
     }
-    g_w.col(j) = fp;
+  }
+  // g_w exact; the Baumgarte correction is affine in F.
+  RhsTwistJacobian g_w;
+  out->rhs_evaluations += 12;
+  if (!model_.RhsTwistDerivative(y, &g_w)) {
+    Fail(StepSensitivityStatus::kRhsFailure,
+         "KinematicModel::Rhs failed (relative curvature lost)", out);
+    return false;
   }
   if (baumgarte_) {
     Eigen::Matrix<double, kN, kN> p;

@@ -35,11 +35,13 @@
 // sensitivities (SensitivityAnalyzer, model.md §7.8; IFT on the KKT system)
 // at Theta_k (zoh) or at each stage state (coupled), and
 //   g_Y  at fixed w by central differences of the field (kinematics only,
-//        no NLP solve): step h_j = cbrt(eps_mach) max(1, |Y_j|), error
-//        ~eps_mach^(2/3) relative;
-//   g_w  exact: F is linear in w (Montana's rates and the joint rates are
-//        linear in the twist), F_w e_j = F(Y, e_j), and the Baumgarte
-//        correction is affine in F: g_w = (I - D J^T (J D J^T)^{-1} J) F_w.
+//        no NLP solve): F's by KinematicModel::RhsStateDerivative, the
+//        Baumgarte field's column by column with its step
+//        (core/central_difference_internal.h), error ~eps_mach^(2/3)
+//        relative;
+//   g_w  exact: F_w = KinematicModel::RhsTwistDerivative (F is linear in
+//        w), and the Baumgarte correction is affine in F:
+//        g_w = (I - D J^T (J D J^T)^{-1} J) F_w.
 // Projection: at a converged projection y* = Pi(y), H(y*) = 0, y* - y in
 // range(D J^T); differentiating J dy* = 0 and dy* - dy = D J^T dl gives, to
 // first order in the distance moved (the drift of one step, ~1e-9),
@@ -132,7 +134,8 @@ struct StepSensitivityResult {
   double min_rcond = 0.0;  // smallest J_E reciprocal condition over solves
   double drift = 0.0;      // ||H(Theta_{k+1})||_inf
   int quasi_static_solves = 0;
-  int rhs_evaluations = 0;  // KinematicModel::Rhs calls (incl. differences)
+  // Field evaluations, incl. differences (F's evaluate one chain each).
+  int rhs_evaluations = 0;
 };
 
 // The front ends' view (docs/cli.md, `solve --step-derivative`): entries
@@ -174,7 +177,7 @@ class StepSensitivity {
   // Field value at (y, w); false on failure (status set in out).
   bool Field(const Configuration& y, const Vec12& w, Configuration* f,
              StepSensitivityResult* out);
-  // dK = g_Y S + g_w dw at (y, w).
+  // dK = g_Y S + g_w dw at (y, w), g_Y and g_w as above.
   bool FieldDerivative(const Configuration& y, const Vec12& w,
                        const StateJac& s, const ParamJac& dw, StateJac* dk,
                        StepSensitivityResult* out);

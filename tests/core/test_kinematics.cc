@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include "quasiroll/core/initial_configuration.h"
@@ -296,6 +298,45 @@ TEST(Kinematics, ObliqueInclineStraightDriveCoversRhoAlphaDotT) {
       EXPECT_LT(h_end.lpNorm<Eigen::Infinity>(), 1e-12);
     }
   }
+}
+
+// KinematicModel::RhsStateDerivative differences one chain's rates per
+// column: the numbers of central differences of the whole Rhs at the same
+// step (its divisor, h_+ + h_-, may differ from (theta_k + h) - (theta_k - h)
+// in the last bit), and F is chain-local, so everything outside chain i's
+// rows is exactly zero in both. RhsTwistDerivative w is F(theta, w).
+TEST(Kinematics, RhsDerivativesAreTheWholeFieldsDifferences) {
+  const KinematicModel model = RoughModel();
+  const Configuration theta = RoughStart(model);
+  Vec12 w;
+  w << 0.05, -0.01, 0.02, 0.03, -0.02, 0.04, 0.1, 0.6, -0.2, 0.5, 0.3, 0.7;
+  RhsStateJacobian dfdtheta, whole;
+  ASSERT_TRUE(model.RhsStateDerivative(theta, w, &dfdtheta));
+  const double root = std::cbrt(std::numeric_limits<double>::epsilon());
+  for (int k = 0; k < kConfigSize; ++k) {
+    Configuration plus = theta, minus = theta, f_plus, f_minus;
+    plus(k) += root * std::max(1.0, std::abs(theta(k)));
+    minus(k) -= root * std::max(1.0, std::abs(theta(k)));
+    ASSERT_TRUE(model.Rhs(plus, w, &f_plus) && model.Rhs(minus, w, &f_minus));
+    whole.col(k) = (f_plus - f_minus) / (plus(k) - minus(k));
+  }
+  EXPECT_LE((dfdtheta - whole).cwiseAbs().maxCoeff(),
+            1e-14 * whole.cwiseAbs().maxCoeff());
+  for (int k = 0; k < kConfigSize; ++k) {
+    const int chain = k < ConfigIndex::kTheta ? k / 5 : (k - 15) / 2;
+    for (int r = 0; r < kConfigSize; ++r) {
+      if (r >= ConfigIndex::Eta(chain) && r < ConfigIndex::Eta(chain) + 5)
+        continue;
+      EXPECT_EQ(whole(r, k), 0.0) << r << ", " << k;
+      EXPECT_EQ(dfdtheta(r, k), 0.0) << r << ", " << k;
+    }
+  }
+  RhsTwistJacobian dfdw;
+  Configuration f;
+  ASSERT_TRUE(model.RhsTwistDerivative(theta, &dfdw));
+  ASSERT_TRUE(model.Rhs(theta, w, &f));
+  EXPECT_LE((dfdw * w - f).lpNorm<Eigen::Infinity>(),
+            1e-13 * f.lpNorm<Eigen::Infinity>());
 }
 
 TEST(InitialConfiguration, FlatGroundGivesDesignHeight) {
