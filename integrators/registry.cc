@@ -2,7 +2,9 @@
 // the BackendInfo it carries (core/backend_info.h). Seconds per hold interval
 // with newton: the calibration of docs/cluster.md ("Cost model", default
 // suite); cvode-projection's from its paper-scene timings in
-// docs/performance.md scaled by rk-projection's ratio of the two.
+// docs/performance.md scaled by rk-projection's ratio of the two, then
+// divided by the speed-ups measured when Adams became its default (zoh 2.4,
+// coupled 1.73; docs/performance.md "cvode-projection in zoh: Adams").
 #include <memory>
 #include <mutex>
 
@@ -78,7 +80,7 @@ void RegisterBuiltinIntegrators() {
         "SUNDIALS CVODE Adams (default; projected at each call's end) or BDF "
         "with its projection onto H = 0 after every step (CVodeSetProjFn)",
         "Adams / BDF (ODE + projection)", "SUNDIALS CVODE",
-        QUASIROLL_SUNDIALS_VERSION, 0.00088, 0.00228);
+        QUASIROLL_SUNDIALS_VERSION, 0.00037, 0.00132);
     cvode.adaptive = [](const OptionValues&) { return true; };
     IntegratorRegistry::Register("cvode-projection", std::move(cvode), [] {
       return MakeCvodeProjectionIntegrator();
