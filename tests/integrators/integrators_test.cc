@@ -881,7 +881,56 @@ class HeldRotationOde : public ConstrainedOde {
                    Eigen::Ref<Eigen::VectorXd>) const override {}
   void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>&,
                           Eigen::Ref<Eigen::MatrixXd>) const override {}
+  // The exact angle after `duration` at the held u.
+  double Advance(double theta, double duration) const {
+    return theta + u * duration;
+  }
 };
+
+// `calls` calls of 0.05 s at rtol 1e-8 with h0 = the interval (as the
+// simulator makes them) on an Ode turning a point on the unit circle from
+// (1, 0), u_k = u0 + du sin(1 + k) held over call k. Ode has the members u
+// and rhs_jacobians and Advance(theta, duration), the exact angle.
+struct HeldCalls {
+  IntegratorResult result;
+  int rhs_jacobians = 0;
+  double error = 0.0;  // distance to the exact point
+  Eigen::VectorXd y;
+};
+template <class Ode>
+HeldCalls RunHeldCalls(Integrator& integrator, int calls, double u0,
+                       double du) {
+  IntegratorOptions o;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  const double dt = 0.05;
+  o.step = dt;
+  Ode ode;
+  Eigen::VectorXd y(2);
+  y << 1.0, 0.0;
+  double theta = 0.0;
+  HeldCalls out;
+  for (int k = 0; k < calls; ++k) {
+    ode.u = u0 + du * std::sin(1.0 + k);
+    EXPECT_EQ(
+        integrator.Integrate(ode, k * dt, (k + 1) * dt, y, o, &out.result),
+        IntegratorStatus::kSuccess)
+        << out.result.message;
+    theta = ode.Advance(theta, dt);
+  }
+  out.rhs_jacobians = ode.rhs_jacobians;
+  out.error = std::hypot(y(0) - std::cos(theta), y(1) - std::sin(theta));
+  out.y = y;
+  return out;
+}
+
+// A fresh integrator `name` with `given` options.
+std::unique_ptr<Integrator> FreshIntegrator(const std::string& name,
+                                            const GivenOptions& given) {
+  auto integrator = IntegratorRegistry::Create(name);
+  integrator->SetBackendOptions(given);
+  return integrator;
+}
 
 class RestartTest : public ::testing::TestWithParam<std::string> {};
 
@@ -889,36 +938,10 @@ TEST_P(RestartTest, CarriedStepAndReusedJacobianKeepTheAccuracy) {
   RegisterBuiltinIntegrators();
   if (!IntegratorRegistry::Has(GetParam()))
     GTEST_SKIP() << "built without SUNDIALS";
-  IntegratorOptions o;
-  o.rtol = 1e-8;
-  o.atol = 1e-10;
-  const double dt = 0.05;
-  o.step = dt;  // as the simulator passes it
-  const int calls = 40;
-  struct Outcome {
-    IntegratorResult result;
-    int rhs_jacobians = 0;
-    double error = 0.0;
-  };
+  using Outcome = HeldCalls;
   auto run = [&](const GivenOptions& given) {
-    HeldRotationOde ode;
-    auto integrator = IntegratorRegistry::Create(GetParam());
-    integrator->SetBackendOptions(given);
-    Eigen::VectorXd y(2);
-    y << 1.0, 0.0;
-    double angle = 0.0;
-    Outcome out;
-    for (int k = 0; k < calls; ++k) {
-      ode.u = 0.1 + 0.05 * std::sin(1.0 + k);
-      EXPECT_EQ(
-          integrator->Integrate(ode, k * dt, (k + 1) * dt, y, o, &out.result),
-          IntegratorStatus::kSuccess)
-          << out.result.message;
-      angle += ode.u * dt;
-    }
-    out.rhs_jacobians = ode.rhs_jacobians;
-    out.error = std::hypot(y(0) - std::cos(angle), y(1) - std::sin(angle));
-    return out;
+    return RunHeldCalls<HeldRotationOde>(*FreshIntegrator(GetParam(), given),
+                                         40, 0.1, 0.05);
   };
   const bool ida = GetParam() == "ida";
   // cvode-projection: its Newton configuration (the default is the
@@ -1018,45 +1041,16 @@ TEST(CvodeZohTest, AdamsFixedPointIsCheaperAtTheSameAccuracy) {
   RegisterBuiltinIntegrators();
   if (!IntegratorRegistry::Has("cvode-projection"))
     GTEST_SKIP() << "built without SUNDIALS";
-  IntegratorOptions o;
-  o.rtol = 1e-8;
-  o.atol = 1e-10;
-  const double dt = 0.05;
-  o.step = dt;  // as the simulator passes it
-  const int calls = 60;
-  struct Outcome {
-    IntegratorResult result;
-    int rhs_jacobians = 0;
-    double error = 0.0;
-    Eigen::VectorXd y;
-  };
-  auto run = [&](Integrator& integrator) {
-    HeldCircleOde ode;
-    Eigen::VectorXd y(2);
-    y << 1.0, 0.0;
-    double theta = 0.0;
-    Outcome out;
-    for (int k = 0; k < calls; ++k) {
-      ode.u = 1.0 + 0.5 * std::sin(1.0 + k);
-      EXPECT_EQ(
-          integrator.Integrate(ode, k * dt, (k + 1) * dt, y, o, &out.result),
-          IntegratorStatus::kSuccess)
-          << out.result.message;
-      theta = ode.Advance(theta, dt);
-    }
-    out.rhs_jacobians = ode.rhs_jacobians;
-    out.error = std::hypot(y(0) - std::cos(theta), y(1) - std::sin(theta));
-    out.y = y;
-    return out;
+  using Outcome = HeldCalls;
+  auto run = [](Integrator& integrator) {
+    return RunHeldCalls<HeldCircleOde>(integrator, 60, 1.0, 0.5);
   };
   const GivenOptions before = {{"lmm", "bdf"},
                                {"nonlinear_solver", "newton"},
                                {"restart_step", "given"},
                                {"eta_max_early", "10"}};
   auto fresh = [](const GivenOptions& given) {
-    auto integrator = IntegratorRegistry::Create("cvode-projection");
-    integrator->SetBackendOptions(given);
-    return integrator;
+    return FreshIntegrator("cvode-projection", given);
   };
   const Outcome now = run(*fresh({}));
   const Outcome old = run(*fresh(before));

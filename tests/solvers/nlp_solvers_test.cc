@@ -452,50 +452,6 @@ TEST(NewtonSolverTest, RankDeficientJacobianIsNumericalFailure) {
       << r.backend_status;
 }
 
-// x^2 = -1: no real root. Damped Newton from x0 = 0.7 moves x towards 0,
-// where |r| = x^2 + 1 flattens out at 1 without ever halving after its start
-// value 1.49.
-class NoRealRoot : public FreeVariableSystem {
- public:
-  int num_variables() const override { return 1; }
-  int num_constraints() const override { return 1; }
-  void RowBounds(Eigen::Ref<Eigen::VectorXd> gl,
-                 Eigen::Ref<Eigen::VectorXd> gu) const override {
-    gl(0) = gu(0) = -1.0;
-  }
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& x,
-                   Eigen::Ref<Eigen::VectorXd> g) const override {
-    g(0) = x(0) * x(0);
-  }
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
-    jac(0, 0) = 2.0 * x(0);
-  }
-};
-
-TEST(NewtonSolverTest, StallWatchGivesUpWhenTheResidualDoesNotHalve) {
-  RegisterBuiltinNlpSolvers();
-  auto solver = NlpSolverRegistry::Create("newton");
-  const NoRealRoot p;
-  const Eigen::VectorXd x0 = Eigen::VectorXd::Constant(1, 0.7);
-  NlpOptions options;
-  options.stall_iterations = 5;
-  NlpResult r;
-  // |r| last halved at iteration 0, so the watch fires at iteration 5.
-  EXPECT_EQ(solver->Solve(p, x0, options, &r), NlpStatus::kIterationLimit);
-  EXPECT_TRUE(r.stalled);
-  EXPECT_EQ(r.iterations, 5);
-  EXPECT_NE(r.backend_status.find("stalled"), std::string::npos)
-      << r.backend_status;
-  // Off (the default): the same start ends another way, unflagged.
-  options.stall_iterations = 0;
-  EXPECT_NE(solver->Solve(p, x0, options, &r), NlpStatus::kConverged);
-  EXPECT_FALSE(r.stalled);
-  EXPECT_GT(r.iterations, 5) << r.backend_status;
-  options.stall_iterations = -1;
-  EXPECT_THROW(solver->Solve(p, x0, options, &r), std::invalid_argument);
-}
-
 // x^3 = 1 with the inequality 1e3 (1 - x) >= 0, active at the root x* = 1.
 // Newton from x0 = 2 approaches from above (x^3 convex), so an iterate that
 // meets a loose residual tolerance still violates the scaled inequality by
@@ -735,14 +691,15 @@ TEST(NlpReferenceProblemsTest, DerivativesAndOptimaAreConsistent) {
   }
 }
 
-// x^2 = 2 from x0 = 1: Newton's iterates are the Babylonian ones 3/2, 17/12,
-// 577/408, 665857/470832 with residuals x_k^2 - 2 = 1/4, 1/144, 1/166464,
-// 1/470832^2 = 4.5e-12 (Pell: 665857^2 - 2 * 470832^2 = 1). Each full step
-// cuts the residual by > 16x, so the Armijo test accepts it undamped, and the
-// first residual below feasibility_tolerance = 1e-10 is the 4th: newton
-// takes exactly 4 steps, and both of its counts say 4.
-class SquareRootOfTwo final : public NlpProblem {
+// x^2 = c, x in [0, 10]. With c = 2 from x0 = 1: Newton's iterates are the
+// Babylonian ones 3/2, 17/12, 577/408, 665857/470832 with residuals x_k^2 - 2 =
+// 1/4, 1/144, 1/166464, 1/470832^2 = 4.5e-12 (Pell: 665857^2 - 2 * 470832^2 =
+// 1). Each full step cuts the residual by > 16x, so the Armijo test accepts it
+// undamped, and the first residual below feasibility_tolerance = 1e-10 is the
+// 4th: newton takes exactly 4 steps, and both of its counts say 4.
+class XSquaredEquals final : public NlpProblem {
  public:
+  explicit XSquaredEquals(double c) : c_(c) {}
   int num_variables() const override { return 1; }
   int num_constraints() const override { return 1; }
   void GetBounds(Eigen::Ref<Eigen::VectorXd> xl, Eigen::Ref<Eigen::VectorXd> xu,
@@ -750,7 +707,7 @@ class SquareRootOfTwo final : public NlpProblem {
                  Eigen::Ref<Eigen::VectorXd> gu) const override {
     xl(0) = 0.0;
     xu(0) = 10.0;
-    gl(0) = gu(0) = 2.0;
+    gl(0) = gu(0) = c_;
   }
   double Objective(const Eigen::Ref<const Eigen::VectorXd>&) const override {
     return 0.0;
@@ -767,12 +724,15 @@ class SquareRootOfTwo final : public NlpProblem {
                           Eigen::Ref<Eigen::MatrixXd> jac) const override {
     jac(0, 0) = 2.0 * x(0);
   }
+
+ private:
+  double c_;
 };
 
 TEST(IterationCountTest, NewtonCountsExactlyItsSteps) {
   RegisterBuiltinNlpSolvers();
   auto solver = NlpSolverRegistry::Create("newton");
-  const SquareRootOfTwo p;
+  const XSquaredEquals p(2.0);
   NlpOptions options;
   options.feasibility_tolerance = 1e-10;
   NlpResult r;
@@ -786,6 +746,32 @@ TEST(IterationCountTest, NewtonCountsExactlyItsSteps) {
   // The root is isolated: the multiplier is 0 (grad f = 0), estimated.
   EXPECT_TRUE(r.multipliers_estimated);
   EXPECT_EQ(r.multipliers(0), 0.0);
+}
+
+// x^2 = -1: no real root. Damped Newton from x0 = 0.7 moves x towards 0,
+// where |r| = x^2 + 1 flattens out at 1 without ever halving after its start
+// value 1.49.
+TEST(NewtonSolverTest, StallWatchGivesUpWhenTheResidualDoesNotHalve) {
+  RegisterBuiltinNlpSolvers();
+  auto solver = NlpSolverRegistry::Create("newton");
+  const XSquaredEquals p(-1.0);
+  const Eigen::VectorXd x0 = Eigen::VectorXd::Constant(1, 0.7);
+  NlpOptions options;
+  options.stall_iterations = 5;
+  NlpResult r;
+  // |r| last halved at iteration 0, so the watch fires at iteration 5.
+  EXPECT_EQ(solver->Solve(p, x0, options, &r), NlpStatus::kIterationLimit);
+  EXPECT_TRUE(r.stalled);
+  EXPECT_EQ(r.iterations, 5);
+  EXPECT_NE(r.backend_status.find("stalled"), std::string::npos)
+      << r.backend_status;
+  // Off (the default): the same start ends another way, unflagged.
+  options.stall_iterations = 0;
+  EXPECT_NE(solver->Solve(p, x0, options, &r), NlpStatus::kConverged);
+  EXPECT_FALSE(r.stalled);
+  EXPECT_GT(r.iterations, 5) << r.backend_status;
+  options.stall_iterations = -1;
+  EXPECT_THROW(solver->Solve(p, x0, options, &r), std::invalid_argument);
 }
 
 }  // namespace
