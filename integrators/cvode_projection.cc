@@ -50,18 +50,14 @@ constexpr sundials_internal::StepControls kCvodeStepControls{5, 3, 10, 7};
 constexpr int kBdfMaxOrder = 5;
 constexpr int kAdamsMaxOrder = 12;
 
-// Initial step of a call that restarts CVODE (option restart_step).
-enum class RestartStep { kGiven, kEstimate, kCarry };
+using sundials_internal::RestartStep;
 
-// restart_step=carry: the restart's first step h (order 1) had the weighted
-// local error estimate ||e|| ~ C h^2, so h (s / ||e||)^(1/2) would have
-// ||e|| = s; the next restart starts there. s = kCarrySafety^2 keeps the
-// order-1 start well inside the error test (paper scene, zoh, adams: safety
-// 0.2 / 0.3 / 0.4 / 0.5 give 4444 / 4014 / 4840 / 4910 right-hand sides,
-// 2 rejections each; docs/performance.md). The ratio is clamped: one step
-// says little about the next interval.
+// restart_step=carry (sundials_internal::CarriedStep): the next restart
+// starts at h (s / ||e||)^(1/2), which would have ||e|| = s; s =
+// kCarrySafety^2 keeps the order-1 start well inside the error test (paper
+// scene, zoh, adams: safety 0.2 / 0.3 / 0.4 / 0.5 give 4444 / 4014 / 4840 /
+// 4910 right-hand sides, 2 rejections each; docs/performance.md).
 constexpr double kCarrySafety = 0.3;
-constexpr double kCarryMinRatio = 0.2, kCarryMaxRatio = 5.0;
 }  // namespace
 
 struct CvodeProjectionIntegrator::Impl {
@@ -82,7 +78,7 @@ struct CvodeProjectionIntegrator::Impl {
     sundials_internal::DestroyVector(&ele);
     sundials_internal::DestroyVector(&ewt);
     n = -1;
-    carried_ode = nullptr;
+    carried = sundials_internal::CarriedStep{};
     roots.registered = 0;
     jac_installed = false;
     jac_ode = nullptr;
@@ -266,10 +262,9 @@ struct CvodeProjectionIntegrator::Impl {
   double last_t = 0.0;
   const ConstrainedOde* last_ode = nullptr;
   VectorXd last_y;  // the state the last successful call returned
-  // restart_step=carry: the step carried to the next call of carried_ode
+  // restart_step=carry: the step carried to the next call of carried.ode
   // that starts where the last one ended; this call probes its first step.
-  double carried_step = 0.0;
-  const ConstrainedOde* carried_ode = nullptr;
+  sundials_internal::CarriedStep carried;
   bool from_last_end = false;
   bool probe_first_step = false;
   N_Vector ele = nullptr, ewt = nullptr;  // CVODE's error estimate, weights
@@ -357,8 +352,7 @@ OptionTable CvodeProjectionIntegrator::option_table() const {
       "(SUNNonlinSol_FixedPoint, no dF/dy, no linear solves: for non-stiff "
       "F); newton = Newton with the dense dF/dy of option jacobian (the "
       "behaviour before)"));
-  table.push_back(OptionSpec::Choice(
-      "restart_step", "carry", {"carry", "given", "estimate"},
+  table.push_back(sundials_internal::RestartStepOption(
       "initial step after a re-initialisation: carry = the order-1 step "
       "the first step's error estimate predicts, from the last call that "
       "ended where this one starts (capped at IntegratorOptions::step); "
@@ -386,10 +380,7 @@ void CvodeProjectionIntegrator::ApplyBackendOptions(
   s.jacobian_reuse = values.GetDouble("jacobian_reuse");
   s.lmm = values.GetString("lmm") == "bdf" ? CV_BDF : CV_ADAMS;
   s.fixed_point = values.GetString("nonlinear_solver") == "fixedpoint";
-  const std::string restart = values.GetString("restart_step");
-  s.restart_step = restart == "given"      ? RestartStep::kGiven
-                   : restart == "estimate" ? RestartStep::kEstimate
-                                           : RestartStep::kCarry;
+  s.restart_step = sundials_internal::RestartStepFrom(values);
   s.eta_max_early = values.GetDouble("eta_max_early");
 }
 
@@ -474,23 +465,12 @@ int CvodeProjectionIntegrator::Impl::Configure(
       &CVodeSetMaxConvFails, &CVodeSetMaxErrTestFails};
   // Initial step (option restart_step): every call re-initialises CVODE.
   IntegratorOptions step_options = options;
-  probe_first_step = false;
-  switch (restart_step) {
-    case RestartStep::kGiven:
-      break;
-    case RestartStep::kEstimate:
-      step_options.step = 0.0;
-      break;
-    case RestartStep::kCarry:
-      // Only for a call that starts where the last one ended (the next
-      // hold interval), so a call from elsewhere (a re-integration, a new
-      // run) computes as it would on a fresh integrator.
-      probe_first_step = true;
-      if (from_last_end && carried_ode == ode && carried_step > 0.0 &&
-          (step_options.step <= 0.0 || carried_step < step_options.step))
-        step_options.step = carried_step;
-      break;
-  }
+  // carry: only for a call that starts where the last one ended (the next
+  // hold interval), so a call from elsewhere (a re-integration, a new run)
+  // computes as it would on a fresh integrator.
+  probe_first_step = restart_step == RestartStep::kCarry;
+  step_options.step =
+      carried.InitialStep(restart_step, step_options.step, from_last_end, ode);
   sundials_internal::StepControls method_controls = controls;
   if (lmm == CV_BDF)
     method_controls.max_order = std::min(controls.max_order, kBdfMaxOrder);
@@ -510,7 +490,7 @@ int CvodeProjectionIntegrator::Impl::Configure(
 }
 
 void CvodeProjectionIntegrator::Impl::CarryFirstStep() {
-  carried_ode = nullptr;
+  carried.ode = nullptr;
   double h = 0.0;
   int order = 0;
   if (ele == nullptr) ele = N_VClone(yy);
@@ -524,10 +504,7 @@ void CvodeProjectionIntegrator::Impl::CarryFirstStep() {
   // CVODE's error test: ||ele||_wrms <= 1.
   Map<const VectorXd> e(NV_DATA_S(ele), n), w(NV_DATA_S(ewt), n);
   const double norm = std::sqrt(e.cwiseProduct(w).squaredNorm() / n);
-  const double ratio = std::clamp(kCarrySafety / std::sqrt(norm + 1e-4),
-                                  kCarryMinRatio, kCarryMaxRatio);
-  carried_step = h * ratio;
-  carried_ode = ode;
+  carried.Record(ode, h, norm, kCarrySafety, 1.0);
 }
 
 IntegratorStatus CvodeProjectionIntegrator::Impl::StatusOf(int flag) {

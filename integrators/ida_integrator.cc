@@ -57,8 +57,7 @@ using Eigen::VectorXd;
 namespace {
 // IDA's own defaults of the step controls.
 constexpr sundials_internal::StepControls kIdaStepControls{5, 4, 10, 10};
-// Initial step of a restart (option restart_step).
-enum class RestartStep { kGiven, kEstimate, kCarry };
+using sundials_internal::RestartStep;
 }  // namespace
 
 struct IdaIntegrator::Impl {
@@ -75,7 +74,7 @@ struct IdaIntegrator::Impl {
     n = m = -1;
     roots.registered = 0;
     last.valid = false;
-    carried_ode = nullptr;
+    carried = sundials_internal::CarriedStep{};
     dfdx_reuse.valid = false;
   }
 
@@ -146,8 +145,7 @@ struct IdaIntegrator::Impl {
   // order-1 step that its error estimate predicts; the next restart of the
   // same problem starts with it (capped by IntegratorOptions::step).
   void CarryFirstStep(const ConstrainedOde& problem);
-  double carried_step = 0.0;
-  const ConstrainedOde* carried_ode = nullptr;
+  sundials_internal::CarriedStep carried;
   bool probe_first_step = false;  // this call restarts with restart_step=carry
   // Where the last dF/dx (in dfdx) holds (see Jacobian).
   sundials_internal::JacobianReuse dfdx_reuse;
@@ -227,8 +225,8 @@ int IdaIntegrator::Impl::Prepare(int n_new, int m_new, double t0) {
 // 3906 / 3725 / 4626 / 4925 steps, all with 1 rejection per restart, the
 // one ending IDA's order-raising start).
 void IdaIntegrator::Impl::CarryFirstStep(const ConstrainedOde& problem) {
-  constexpr double kMinRatio = 0.2, kMaxRatio = 5.0, kSafety = 0.7;
-  carried_ode = nullptr;
+  constexpr double kSafety = 0.7;
+  carried.ode = nullptr;
   double h = 0.0;
   int order = 0;
   if (ele == nullptr) ele = N_VClone(yy);
@@ -242,10 +240,7 @@ void IdaIntegrator::Impl::CarryFirstStep(const ConstrainedOde& problem) {
   Map<const VectorXd> e(NV_DATA_S(ele), n + m), w(NV_DATA_S(ewt), n + m);
   const double norm =
       std::sqrt(e.head(n).cwiseProduct(w.head(n)).squaredNorm() / (n + m));
-  const double ratio =
-      std::clamp(1.0 / std::sqrt(norm + 1e-4), kMinRatio, kMaxRatio);
-  carried_step = kSafety * h * ratio;
-  carried_ode = &problem;
+  carried.Record(&problem, h, norm, 1.0, kSafety);
 }
 
 int IdaIntegrator::Impl::Residual(double t, N_Vector yy, N_Vector yp,
@@ -477,8 +472,7 @@ OptionTable IdaIntegrator::option_table() const {
       "implicit-function-theorem sensitivities of the solve, model.md §8.9), "
       "else differences; fd = always forward "
       "differences of Rhs"));
-  table.push_back(OptionSpec::Choice(
-      "restart_step", "carry", {"carry", "given", "estimate"},
+  table.push_back(sundials_internal::RestartStepOption(
       "initial step after a re-initialisation: carry = predicted from the "
       "previous restart's first step (its error estimate; model.md §8.5), "
       "capped by the sample interval; given = the sample interval; estimate "
@@ -504,10 +498,7 @@ void IdaIntegrator::ApplyBackendOptions(const OptionValues& values) {
   s.suppress_alg = values.GetBool("suppress_alg");
   s.ode_jacobian = values.GetString("jacobian") == "ift";
   s.jacobian_reuse = values.GetDouble("jacobian_reuse");
-  const std::string restart = values.GetString("restart_step");
-  s.restart_step = restart == "given"      ? RestartStep::kGiven
-                   : restart == "estimate" ? RestartStep::kEstimate
-                                           : RestartStep::kCarry;
+  s.restart_step = sundials_internal::RestartStepFrom(values);
 }
 IdaIntegrator::~IdaIntegrator() = default;
 
@@ -774,22 +765,9 @@ void IdaIntegrator::ConfigureAndSolve(Impl& s, ConstrainedOde& ode, int flag,
   IntegratorOptions step_options = options;
   s.probe_first_step = false;
   if (!s.continuing && !s.residual_form) {
-    switch (s.settings.restart_step) {
-      case RestartStep::kGiven:
-        break;
-      case RestartStep::kEstimate:
-        step_options.step = 0.0;
-        break;
-      case RestartStep::kCarry:
-        // Only for a call that starts where the last one ended (the next
-        // hold interval), so a call from elsewhere (a re-integration, a new
-        // run) computes as it would on a fresh integrator.
-        s.probe_first_step = true;
-        if (s.from_last_end && s.carried_ode == &ode && s.carried_step > 0.0 &&
-            (step_options.step <= 0.0 || s.carried_step < step_options.step))
-          step_options.step = s.carried_step;
-        break;
-    }
+    s.probe_first_step = s.settings.restart_step == RestartStep::kCarry;
+    step_options.step = s.carried.InitialStep(
+        s.settings.restart_step, step_options.step, s.from_last_end, &ode);
   }
   flag = sundials_internal::ApplyStepControls(kSetters, s.mem, step_options, t1,
                                               s.settings.controls, flag);

@@ -100,6 +100,18 @@ StepControls StepControlsFrom(const OptionValues& values) {
   return controls;
 }
 
+OptionSpec RestartStepOption(const std::string& description) {
+  return OptionSpec::Choice("restart_step", "carry",
+                            {"carry", "given", "estimate"}, description);
+}
+
+RestartStep RestartStepFrom(const OptionValues& values) {
+  const std::string text = values.GetString("restart_step");
+  return text == "given"      ? RestartStep::kGiven
+         : text == "estimate" ? RestartStep::kEstimate
+                              : RestartStep::kCarry;
+}
+
 std::string FlagName(char* name, const char* solver, int flag) {
   std::string out = name != nullptr
                         ? name

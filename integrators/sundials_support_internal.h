@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -156,6 +157,53 @@ struct JacobianReuse {
   void BeforeReInit(long fails_now) {
     if (fails_now != conv_fails) valid = false;
     conv_fails = 0;
+  }
+};
+
+// Option restart_step (docs/model.md §8.5, §8.7): the initial step of a call
+// that re-initialises the solver. given = IntegratorOptions::step; estimate =
+// the solver's own estimate; carry = the step the previous restart's first
+// step predicts (CarriedStep).
+enum class RestartStep { kGiven, kEstimate, kCarry };
+// The option, default carry, with the backend's `description`.
+OptionSpec RestartStepOption(const std::string& description);
+RestartStep RestartStepFrom(const OptionValues& values);
+
+// restart_step=carry. A restart's first step h is taken at order 1, and its
+// weighted RMS local error estimate ||e|| ~ C h^2 predicts the step that
+// would meet ||e|| = 1: the next call that starts where this one ended (the
+// next hold interval) begins at
+//   h_next = outer h clamp(inner / sqrt(||e|| + 1e-4), 0.2, 5)
+// (one step says little about the next interval, hence the clamp; the two
+// safety factors are each backend's measured choice).
+struct CarriedStep {
+  double step = 0.0;
+  const ConstrainedOde* ode = nullptr;  // the call the step came from
+
+  void Record(const ConstrainedOde* from, double h, double error_norm,
+              double inner, double outer) {
+    step =
+        outer * h * std::clamp(inner / std::sqrt(error_norm + 1e-4), 0.2, 5.0);
+    ode = from;
+  }
+  // The initial step of a call on `call_ode` by `mode`: `given`, 0 (the
+  // solver's estimate), or with carry the carried step when the call starts
+  // where the last ended on the same ODE and the step is below `given`
+  // (else `given`, as on a fresh solver).
+  double InitialStep(RestartStep mode, double given, bool from_last_end,
+                     const ConstrainedOde* call_ode) const {
+    switch (mode) {
+      case RestartStep::kEstimate:
+        return 0.0;
+      case RestartStep::kCarry:
+        if (from_last_end && ode == call_ode && step > 0.0 &&
+            (given <= 0.0 || step < given))
+          return step;
+        return given;
+      case RestartStep::kGiven:
+        break;
+    }
+    return given;
   }
 };
 
