@@ -490,21 +490,12 @@ int CvodeProjectionIntegrator::Impl::Configure(
 }
 
 void CvodeProjectionIntegrator::Impl::CarryFirstStep() {
-  carried.ode = nullptr;
-  double h = 0.0;
-  int order = 0;
-  if (ele == nullptr) ele = N_VClone(yy);
-  if (ewt == nullptr) ewt = N_VClone(yy);
-  if (ele == nullptr || ewt == nullptr ||
-      CVodeGetLastStep(mem, &h) != CV_SUCCESS ||
-      CVodeGetLastOrder(mem, &order) != CV_SUCCESS || order != 1 ||
-      CVodeGetEstLocalErrors(mem, ele) != CV_SUCCESS ||
-      CVodeGetErrWeights(mem, ewt) != CV_SUCCESS || !(h > 0.0))
-    return;
-  // CVODE's error test: ||ele||_wrms <= 1.
-  Map<const VectorXd> e(NV_DATA_S(ele), n), w(NV_DATA_S(ewt), n);
-  const double norm = std::sqrt(e.cwiseProduct(w).squaredNorm() / n);
-  carried.Record(ode, h, norm, kCarrySafety, 1.0);
+  // CVODE's error test: ||ele||_wrms <= 1, over every component.
+  static constexpr sundials_internal::ErrorEstimateGetters kGet{
+      &CVodeGetLastStep, &CVodeGetLastOrder, &CVodeGetEstLocalErrors,
+      &CVodeGetErrWeights};
+  carried.RecordFirstStep(kGet, mem, yy, &ele, &ewt, n, n, ode, kCarrySafety,
+                          1.0);
 }
 
 IntegratorStatus CvodeProjectionIntegrator::Impl::StatusOf(int flag) {

@@ -226,21 +226,11 @@ int IdaIntegrator::Impl::Prepare(int n_new, int m_new, double t0) {
 // one ending IDA's order-raising start).
 void IdaIntegrator::Impl::CarryFirstStep(const ConstrainedOde& problem) {
   constexpr double kSafety = 0.7;
-  carried.ode = nullptr;
-  double h = 0.0;
-  int order = 0;
-  if (ele == nullptr) ele = N_VClone(yy);
-  if (ewt == nullptr) ewt = N_VClone(yy);
-  if (ele == nullptr || ewt == nullptr ||
-      IDAGetLastStep(mem, &h) != IDA_SUCCESS ||
-      IDAGetLastOrder(mem, &order) != IDA_SUCCESS || order != 1 ||
-      IDAGetEstLocalErrors(mem, ele) != IDA_SUCCESS ||
-      IDAGetErrWeights(mem, ewt) != IDA_SUCCESS || !(h > 0.0))
-    return;
-  Map<const VectorXd> e(NV_DATA_S(ele), n + m), w(NV_DATA_S(ewt), n + m);
-  const double norm =
-      std::sqrt(e.head(n).cwiseProduct(w.head(n)).squaredNorm() / (n + m));
-  carried.Record(&problem, h, norm, 1.0, kSafety);
+  static constexpr sundials_internal::ErrorEstimateGetters kGet{
+      &IDAGetLastStep, &IDAGetLastOrder, &IDAGetEstLocalErrors,
+      &IDAGetErrWeights};
+  carried.RecordFirstStep(kGet, mem, yy, &ele, &ewt, n, n + m, &problem, 1.0,
+                          kSafety);
 }
 
 int IdaIntegrator::Impl::Residual(double t, N_Vector yy, N_Vector yp,

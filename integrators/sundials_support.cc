@@ -112,6 +112,29 @@ RestartStep RestartStepFrom(const OptionValues& values) {
                               : RestartStep::kCarry;
 }
 
+void CarriedStep::RecordFirstStep(const ErrorEstimateGetters& get, void* mem,
+                                  N_Vector like, N_Vector* ele, N_Vector* ewt,
+                                  int n_tested, int n_total,
+                                  const ConstrainedOde* from, double inner,
+                                  double outer) {
+  ode = nullptr;
+  double h = 0.0;
+  int order = 0;
+  if (*ele == nullptr) *ele = N_VClone(like);
+  if (*ewt == nullptr) *ewt = N_VClone(like);
+  // CV_SUCCESS == IDA_SUCCESS == 0.
+  if (*ele == nullptr || *ewt == nullptr || get.last_step(mem, &h) != 0 ||
+      get.last_order(mem, &order) != 0 || order != 1 ||
+      get.local_errors(mem, *ele) != 0 || get.error_weights(mem, *ewt) != 0 ||
+      !(h > 0.0))
+    return;
+  Eigen::Map<const Eigen::VectorXd> e(NV_DATA_S((*ele)), n_total),
+      w(NV_DATA_S((*ewt)), n_total);
+  const double norm = std::sqrt(
+      e.head(n_tested).cwiseProduct(w.head(n_tested)).squaredNorm() / n_total);
+  Record(from, h, norm, inner, outer);
+}
+
 std::string FlagName(char* name, const char* solver, int flag) {
   std::string out = name != nullptr
                         ? name

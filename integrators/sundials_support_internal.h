@@ -169,6 +169,15 @@ enum class RestartStep { kGiven, kEstimate, kCarry };
 OptionSpec RestartStepOption(const std::string& description);
 RestartStep RestartStepFrom(const OptionValues& values);
 
+// The solver's functions (same signatures in CVODE and IDA) that tell a
+// step's size, order, local error estimate and error weights.
+struct ErrorEstimateGetters {
+  int (*last_step)(void*, sunrealtype*);
+  int (*last_order)(void*, int*);
+  int (*local_errors)(void*, N_Vector);
+  int (*error_weights)(void*, N_Vector);
+};
+
 // restart_step=carry. A restart's first step h is taken at order 1, and its
 // weighted RMS local error estimate ||e|| ~ C h^2 predicts the step that
 // would meet ||e|| = 1: the next call that starts where this one ended (the
@@ -186,6 +195,15 @@ struct CarriedStep {
         outer * h * std::clamp(inner / std::sqrt(error_norm + 1e-4), 0.2, 5.0);
     ode = from;
   }
+  // After a call's first step on `mem`: Record with ||e|| = the RMS of e_i
+  // w_i over the first `n_tested` of `n_total` components (IDA's masked
+  // norm excludes its algebraic ones), read through `get`; *ele and *ewt
+  // are workspaces cloned from `like` on first use. Nothing is carried
+  // unless the step was order 1 and every read succeeded.
+  void RecordFirstStep(const ErrorEstimateGetters& get, void* mem,
+                       N_Vector like, N_Vector* ele, N_Vector* ewt,
+                       int n_tested, int n_total, const ConstrainedOde* from,
+                       double inner, double outer);
   // The initial step of a call on `call_ode` by `mode`: `given`, 0 (the
   // solver's estimate), or with carry the carried step when the call starts
   // where the last ended on the same ODE and the step is below `given`
