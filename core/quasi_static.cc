@@ -519,7 +519,7 @@ QuasiStaticSolver::QuasiStaticSolver(const KinematicModel& model,
   nlp_options_.max_iterations = options_.max_iterations;
   warm_z_.setZero(problem_.num_variables());
   z0_.setZero(problem_.num_variables());
-  z_start_.setZero(problem_.num_variables());
+  z_homotopy_.setZero(problem_.num_variables());
 }
 
 bool QuasiStaticSolver::TrySolve(const Eigen::VectorXd& z0,
@@ -582,7 +582,6 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
         have_warm_ && options_.warm_start_multipliers;
     stalled_ = false;
     nlp_options_.stall_iterations = options_.stall_iterations;
-    z_start_ = z0_;
     ok = TrySolve(z0_, out);
     nlp_options_.warm_start_multipliers = false;
     if (!ok && options_.homotopy) ok = HomotopyAndColdStart(out);
@@ -591,7 +590,7 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
       // still converge where the homotopy does not (paper scene, a probe at
       // t = 2.907 s, 4 ms after wheel 1 starts to slide).
       nlp_options_.stall_iterations = 0;
-      ok = TrySolve(z_start_, out);
+      ok = TrySolve(z0_, out);
       if (!ok && options_.homotopy) ok = HomotopyAndColdStart(out);
     }
     if (ok) {
@@ -622,15 +621,15 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
 bool QuasiStaticSolver::HomotopyAndColdStart(QuasiStaticSolution* out) {
   // Epsilon homotopy from a well-conditioned creep law down to epsilon.
   const double eps = problem_.parameters().epsilon;
-  problem_.ColdStartGuess(z0_);
+  problem_.ColdStartGuess(z_homotopy_);
   for (double e = problem_.v0() * 1e-2; e > eps; e *= 0.1) {
     problem_.set_epsilon(e);
-    if (TrySolve(z0_, out)) z0_ = result_.x;
+    if (TrySolve(z_homotopy_, out)) z_homotopy_ = result_.x;
   }
   problem_.set_epsilon(eps);
-  if (TrySolve(z0_, out)) return true;
-  problem_.ColdStartGuess(z0_);
-  return TrySolve(z0_, out);
+  if (TrySolve(z_homotopy_, out)) return true;
+  problem_.ColdStartGuess(z_homotopy_);
+  return TrySolve(z_homotopy_, out);
 }
 
 void QuasiStaticSolver::Classify(QuasiStaticSolution* out) {

@@ -282,7 +282,9 @@ class QuasiStaticSolver {
   QuasiStaticOptions options_;
   NlpOptions nlp_options_;
   NlpResult result_;
-  Eigen::VectorXd warm_z_, previous_z_, z0_, z_start_;
+  // z0_: this Solve()'s start (kept for the retry without the stall
+  // watch); z_homotopy_: the homotopy's iterate.
+  Eigen::VectorXd warm_z_, previous_z_, z0_, z_homotopy_;
   bool have_warm_ = false, have_previous_ = false;
   bool stalled_ = false;  // an attempt of this Solve() gave up on a stall
 };

@@ -470,8 +470,7 @@ RobotOdeProbe Simulator::ProbeOde(const Configuration& theta,
 void Simulator::CreateProbeSolver() {
   OptionValues unused;
   QuasiStaticOptions probe_options = options_.quasi_static;
-  if (options_.probe_stall_iterations > 0)
-    probe_options.stall_iterations = options_.probe_stall_iterations;
+  probe_options.stall_iterations = options_.probe_stall_iterations;
   session_->probe_solver = std::make_unique<QuasiStaticSolver>(
       *model_, QuasiStaticParameters::FromScene(scene_),
       CreateNlp(options_, &unused), probe_options);

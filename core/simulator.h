@@ -78,8 +78,8 @@ struct SimulationOptions {
   // a wheel in the band are the same either way.
   bool locate_switches = true;
   // QuasiStaticOptions::stall_iterations of those probe solves (switch
-  // location and the slip quadrature; model.md §7.3 "Stall watch"); 0 = the
-  // run's own quasi_static.stall_iterations. The trajectory does not depend
+  // location and the slip quadrature; model.md §7.3 "Stall watch"); 0 =
+  // off. The trajectory does not depend
   // on the probes' roots beyond their class, so a stalled probe can hand
   // over to the homotopy at once.
   int probe_stall_iterations = 10;
