@@ -141,6 +141,14 @@ IntegratorStatus Integrator::Integrate(ConstrainedOde& ode, double t0,
     result->status = IntegratorStatus::kConvergenceFailure;
     result->message += " [non-finite state]";
   }
+  if ((result->status == IntegratorStatus::kSuccess ||
+       result->status == IntegratorStatus::kEvent) &&
+      m > 0) {
+    if (end_constraints_.size() != m) end_constraints_.resize(m);
+    ode.Constraints(y, end_constraints_);
+    result->step_drift_max = std::fmax(
+        result->step_drift_max, end_constraints_.lpNorm<Eigen::Infinity>());
+  }
   return result->status;
 }
 

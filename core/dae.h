@@ -142,6 +142,13 @@ struct IntegratorResult {
   int rhs_evaluations = 0;
   int jacobian_evaluations = 0;  // J = dH/dy (and IDA Jacobian) evaluations
   int projection_iterations = 0;
+  // Loop-closure drift the method itself commits: the largest ||H(y)||_inf
+  // of a state it produced at the end of a step before any correction moved
+  // it (the input of a successful projection, an accepted rk-baumgarte
+  // step, the end state of every Integrate() call). A running maximum over
+  // the calls, like the counters. Projection methods return states with
+  // ||H|| at their projection tolerance; this is what the projection removed.
+  double step_drift_max = 0.0;
   int root_index = -1;  // component that fired for kEvent
   double wall_seconds = 0.0;
   std::string message;
@@ -162,6 +169,7 @@ class Integrator {
   // the state at the root. Exceptions other than std::invalid_argument thrown
   // by the backend or by ode are caught and reported as kConvergenceFailure.
   // A final non-finite y turns kSuccess/kEvent into kConvergenceFailure.
+  // The end state's ||H||_inf enters result->step_drift_max.
   IntegratorStatus Integrate(ConstrainedOde& ode, double t0, double t1,
                              Eigen::Ref<Eigen::VectorXd> y,
                              const IntegratorOptions& options,
@@ -189,6 +197,7 @@ class Integrator {
   // given. Backends copy them into typed members here.
   virtual void ApplyBackendOptions(const OptionValues& /*values*/) {}
   std::optional<OptionValues> backend_options_;
+  Eigen::VectorXd end_constraints_;  // H at the end of a call (workspace)
 
   virtual void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
                            Eigen::Ref<Eigen::VectorXd> y,

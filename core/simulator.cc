@@ -537,6 +537,7 @@ bool Simulator::Advance(SimulationResult* result) {
   result->jacobian_evaluations = s.ires.jacobian_evaluations;
   result->steps = s.ires.steps;
   result->rejected_steps = s.ires.rejected_steps;
+  result->step_drift_max = s.ires.step_drift_max;
   // Checkpoints are the harness's measurement, not the method's cost.
   const double checkpoint_seconds = s.checkpoints.seconds();
   result->checkpoint_solves = s.checkpoints.solves();

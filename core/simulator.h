@@ -176,6 +176,10 @@ struct SimulationResult {
   long long jacobian_evaluations = 0;
   int steps = 0;
   int rejected_steps = 0;
+  // IntegratorResult::step_drift_max over every integration of the run: the
+  // loop-closure drift the method commits within its steps, before any
+  // projection (samples show ||H|| after it).
+  double step_drift_max = 0;
   double wall_seconds = 0;
   // Max over the run's accepted quasi-static solves (output times and, in
   // coupled mode, every right-hand side) of NlpResult::kkt_residual, the

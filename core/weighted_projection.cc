@@ -102,10 +102,15 @@ IntegratorStatus WeightedProjection::Project(const ConstrainedOde& ode,
                                              bool* moved) {
   *moved = false;
   if (m_ == 0) return IntegratorStatus::kSuccess;
+  double entry = 0.0;  // ||H|| of the state handed in
   for (int it = 0;; ++it) {
     ode.Constraints(y, h_);
     const double violation = h_.lpNorm<Eigen::Infinity>();
-    if (violation <= tol) return IntegratorStatus::kSuccess;
+    if (it == 0) entry = violation;
+    if (violation <= tol) {
+      result->step_drift_max = std::fmax(result->step_drift_max, entry);
+      return IntegratorStatus::kSuccess;
+    }
     if (!std::isfinite(violation) || it == max_iterations) {
       std::ostringstream os;
       os << "projection: ||H||_inf = " << violation << " > tolerance " << tol

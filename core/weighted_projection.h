@@ -72,8 +72,9 @@ class WeightedProjection {
 
   // Newton projection y <- y - D J^T A^{-1} H(y) until ||H||_inf <= tol, at
   // most max_iterations corrections (counted in
-  // result->projection_iterations). *moved tells whether y changed. Returns
-  // kSuccess, or kConstraintFailure with message() set.
+  // result->projection_iterations). *moved tells whether y changed; on
+  // success the entry state's ||H||_inf enters result->step_drift_max.
+  // Returns kSuccess, or kConstraintFailure with message() set.
   IntegratorStatus Project(const ConstrainedOde& ode,
                            Eigen::Ref<Eigen::VectorXd> y, double tol,
                            int max_iterations, IntegratorResult* result,

@@ -1,5 +1,6 @@
 #include "quasiroll/integrators/rk_baumgarte.h"
 
+#include <cmath>
 #include <memory>
 
 #include "quasiroll/core/weighted_projection.h"
@@ -22,10 +23,14 @@ class RkBaumgarteIntegrator final : public Integrator {
     IntegratorStatus Field(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                            Eigen::Ref<Eigen::VectorXd> f,
                            IntegratorResult* result) override;
+    // Records ||H|| of every new state (result->step_drift_max): the field
+    // only pulls drift back, so the steps' states carry the method's drift.
+    IntegratorStatus PostStep(double t, Eigen::Ref<Eigen::VectorXd> y,
+                              IntegratorResult* result, bool* moved) override;
     ConstrainedOde* ode = nullptr;
     double sigma = 0.0;
     WeightedProjection correction;
-    Eigen::VectorXd delta;
+    Eigen::VectorXd delta, h_step;
   };
 
   void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
@@ -62,6 +67,17 @@ IntegratorStatus RkBaumgarteIntegrator::CorrectedField::Field(
   return IntegratorStatus::kSuccess;
 }
 
+IntegratorStatus RkBaumgarteIntegrator::CorrectedField::PostStep(
+    double /*t*/, Eigen::Ref<Eigen::VectorXd> y, IntegratorResult* result,
+    bool* moved) {
+  *moved = false;
+  if (correction.m() == 0) return IntegratorStatus::kSuccess;
+  ode->Constraints(y, h_step);
+  result->step_drift_max =
+      std::fmax(result->step_drift_max, h_step.lpNorm<Eigen::Infinity>());
+  return IntegratorStatus::kSuccess;
+}
+
 OptionTable RkBaumgarteIntegrator::option_table() const {
   return integrators_internal::RkOptionTable(
       {OptionSpec::Double("baumgarte_sigma", 5.0,
@@ -84,6 +100,8 @@ void RkBaumgarteIntegrator::DoIntegrate(ConstrainedOde& ode, double t0,
   field_.sigma = sigma_;
   field_.correction.Begin(ode);
   if (field_.delta.size() != y.size()) field_.delta.resize(y.size());
+  if (field_.h_step.size() != field_.correction.m())
+    field_.h_step.resize(field_.correction.m());
   driver_.Run(field_, ode, t0, t1, y, options, settings_, result);
 }
 

@@ -262,6 +262,7 @@ std::vector<std::string> MakeRow(const RunSpec& run,
   }
   b.Set("drift_max", d.drift_max);
   b.Set("drift_final", d.drift_final);
+  b.Set("drift_step_max", result.step_drift_max);
   b.Set("gap_max", d.gap_max);
   b.Set("kkt_residual", result.kkt_residual);
   FailureEvidence e = Evidence(run, status, result.t_reached, reference);
@@ -316,7 +317,7 @@ std::vector<std::string> ErrorRow(const RunSpec& run,
   SetNanMetrics(&b);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (const char* c :
-       {"kkt_residual", "t_reached_frac", "wall_s_median", "wall_s_min",
+       {"kkt_residual", "drift_step_max", "t_reached_frac", "wall_s_median", "wall_s_min",
         "wall_s_max", "wall_per_sim_s", "qs_inertia_ratio", "sliding_distance",
         "creep_distance", "wall_s_q1", "wall_s_q3", "wall_s_iqr"})
     b.Set(c, nan);

@@ -115,6 +115,7 @@ void Stitch(const SimulationResult& seg, double t_off, double h, double epsilon,
   into->critical_contact = seg.critical_contact;
   if (!std::isnan(seg.kkt_residual))
     into->kkt_residual = std::fmax(into->kkt_residual, seg.kkt_residual);
+  into->step_drift_max = std::fmax(into->step_drift_max, seg.step_drift_max);
 }
 
 struct Rung {

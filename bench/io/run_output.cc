@@ -425,6 +425,7 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.EndObject();
   j.Key("wall_s").Value(r.wall_seconds);
   j.Key("kkt_residual").Value(r.kkt_residual);
+  j.Key("step_drift_max").Value(r.step_drift_max);
   j.Key("qs_inertia_ratio").Value(QuasiStaticInertiaRatio(r.samples, scene));
   const SlipDistances slip = TotalSlipDistances(r.samples);
   j.Key("sliding_distance").Value(slip.sliding);

@@ -1112,6 +1112,83 @@ TEST(RkProjectionTest, ProjectionFailureIsReported) {
   EXPECT_LE(ConstraintNorm(ode, y), 1e-12);  // projection_tolerance default
 }
 
+// ------------------------------------------------------- step drift
+
+// A point held at a constant velocity v on H = |y|^2 - 1 = 0 (v tangent at
+// the start, as zoh holds a twist solved at the interval's start): the exact
+// flow y0 + v t leaves the circle by H = |v|^2 t^2, and RK4 (exact for a
+// constant field) and Adams (exact for a linear solution) reach that state
+// before they project. IntegratorResult::step_drift_max must report it.
+class HeldVelocityOde : public ConstrainedOde {
+ public:
+  Eigen::Vector2d v{0.0, 0.5};
+  int state_size() const override { return 2; }
+  int num_constraints() const override { return 1; }
+  bool Rhs(double, const Eigen::Ref<const Eigen::VectorXd>&,
+           Eigen::Ref<Eigen::VectorXd> ydot) override {
+    ydot = v;
+    return true;
+  }
+  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> h) const override {
+    h(0) = y.squaredNorm() - 1.0;
+  }
+  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& y,
+                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
+    jac << 2.0 * y(0), 2.0 * y(1);
+  }
+};
+
+TEST(StepDriftTest, ProjectionMethodsReportTheDriftTheyRemove) {
+  RegisterBuiltinIntegrators();
+  const double h = 0.1;
+  HeldVelocityOde ode;
+  const double expected = ode.v.squaredNorm() * h * h;  // 2.5e-3
+  std::vector<std::string> names = {"rk-projection"};
+  if (IntegratorRegistry::Has("cvode-projection"))
+    names.push_back("cvode-projection");
+  for (const std::string& name : names) {
+    auto integrator = IntegratorRegistry::Create(name);
+    IntegratorOptions o;
+    o.step = name == "rk-projection" ? h : 0.0;  // RK4: one step
+    o.rtol = 1e-10;
+    o.atol = 1e-12;
+    Eigen::VectorXd y = Eigen::Vector2d(1.0, 0.0);
+    IntegratorResult r;
+    ASSERT_EQ(integrator->Integrate(ode, 0.0, h, y, o, &r),
+              IntegratorStatus::kSuccess)
+        << name << ": " << r.message;
+    EXPECT_LE(ConstraintNorm(ode, y), 1e-12) << name;  // projected
+    // Round-off of y0 + v h (RK4) or the Adams error test at rtol 1e-10
+    // (its local error on a linear solution is round-off too).
+    EXPECT_NEAR(r.step_drift_max, expected, 1e-9 * expected) << name;
+  }
+}
+
+TEST(StepDriftTest, BaumgarteReportsItsAcceptedStatesAndEveryCallItsEnd) {
+  RegisterBuiltinIntegrators();
+  HeldVelocityOde ode;
+  for (const std::string& name : Backends()) {
+    auto integrator = IntegratorRegistry::Create(name);
+    if (name == "rk-baumgarte")
+      integrator->SetBackendOptions({{"baumgarte_sigma", "0"}});
+    IntegratorOptions o;
+    o.step = 0.1;
+    Eigen::VectorXd y = Eigen::Vector2d(1.0, 0.0);
+    IntegratorResult r;
+    ASSERT_EQ(integrator->Integrate(ode, 0.0, 0.1, y, o, &r),
+              IntegratorStatus::kSuccess)
+        << name << ": " << r.message;
+    // Every call records at least its end state's drift.
+    EXPECT_GE(r.step_drift_max, ConstraintNorm(ode, y)) << name;
+    if (name == "rk-baumgarte") {
+      // One RK4 step and no projection: the end state is the step's.
+      EXPECT_EQ(r.step_drift_max, ConstraintNorm(ode, y));
+      EXPECT_GT(r.step_drift_max, 0.0);
+    }
+  }
+}
+
 TEST(RkProjectionTest, SingularConstraintJacobianIsReported) {
   RegisterBuiltinIntegrators();
   class ZeroWeights : public PendulumOde {
