@@ -362,6 +362,18 @@ class GoodReportTest(unittest.TestCase):
             self.assertIn("1", labels)
             self.assertTrue(any(label.startswith(".") for label in labels), labels)
 
+    def test_drift_figure_shows_the_drift_within_the_steps(self):
+        entry = self.manifest()["fig_drift"]
+        self.assertTrue(entry["data"]["step_drift"])
+        self.assertIn("Bottom row: drift_step_max", entry["caption"])
+        # The fixture's zoh rk-projection removes 5.6e-4 dt^2 per interval
+        # while its samples sit at ~1e-13: the caption names both.
+        runs = read_runs(Fixture.good)[0]
+        rep = [r for r in runs if r["dae"] == "rk-projection" and r["coupling"] == "zoh"
+               and r["status"] == "success"]
+        self.assertTrue(rep)
+        self.assertRegex(entry["caption"], r"rk-projection max [0-9.e-]+, within its steps")
+
     def test_references_findings_validity_and_repro(self):
         self.assert_html(
             has=['id="findings"', "For RMS position error ≤", "References</h2>",
@@ -437,6 +449,11 @@ class LegacyResultsTest(unittest.TestCase):
         for column in ("cause", "wall_s_median", "ref_err_est", "ref_mu_min"):
             self.assertIn(f"no <code>{column}</code> column", html)
         self.assertEqual(self.manifest()["fig_work_precision"]["data"]["timing"], "min")
+
+    def test_legacy_drift_figure_says_step_drift_is_missing(self):
+        entry = self.manifest()["fig_drift"]
+        self.assertFalse(entry["data"]["step_drift"])
+        self.assertIn("predate drift_step_max", entry["caption"])
 
     def test_legacy_blowup_is_unclassified_not_friction(self):
         cells = infeasible_friction_cells(self)

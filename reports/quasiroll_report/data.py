@@ -72,7 +72,7 @@ DEFAULTED_COLUMNS = [
     "qs_inertia_ratio", "ref_mu_min", "ref_err_est", "cause", "cause_detail",
     "wall_s_all", "host", "cpu_model", "ref_hash", "terrain", "rk_method",
     "sliding_distance", "creep_distance", "wall_s_q1", "wall_s_q3", "wall_s_iqr",
-    "timing_exclusive"]
+    "timing_exclusive", "drift_step_max"]
 
 for _name in REQUIRED_COLUMNS + DEFAULTED_COLUMNS:
     assert _name in RUNS_COLUMNS, f"{_name} is no runs.csv column ({RUNS_SCHEMA_PATH})"
