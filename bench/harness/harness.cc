@@ -317,9 +317,10 @@ std::vector<std::string> ErrorRow(const RunSpec& run,
   SetNanMetrics(&b);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (const char* c :
-       {"kkt_residual", "drift_step_max", "t_reached_frac", "wall_s_median", "wall_s_min",
-        "wall_s_max", "wall_per_sim_s", "qs_inertia_ratio", "sliding_distance",
-        "creep_distance", "wall_s_q1", "wall_s_q3", "wall_s_iqr"})
+       {"kkt_residual", "drift_step_max", "t_reached_frac", "wall_s_median",
+        "wall_s_min", "wall_s_max", "wall_per_sim_s", "qs_inertia_ratio",
+        "sliding_distance", "creep_distance", "wall_s_q1", "wall_s_q3",
+        "wall_s_iqr"})
     b.Set(c, nan);
   const FailureCause cause =
       ClassifyFailure(Evidence(run, RunStatus::kError, nan, reference));
