@@ -69,6 +69,23 @@ const OptionValues& Integrator::backend_options() {
   return *backend_options_;
 }
 
+// The end state of a successful call enters result->step_drift_max (inside
+// Integrate's try: an ode whose Constraints throws is reported like any
+// other exception of the ode).
+void Integrator::RecordEndDrift(const ConstrainedOde& ode,
+                                const Eigen::Ref<const Eigen::VectorXd>& y,
+                                IntegratorResult* result) {
+  const int m = ode.num_constraints();
+  if (m == 0 || !y.allFinite() ||
+      (result->status != IntegratorStatus::kSuccess &&
+       result->status != IntegratorStatus::kEvent))
+    return;
+  if (end_constraints_.size() != m) end_constraints_.resize(m);
+  ode.Constraints(y, end_constraints_);
+  result->step_drift_max = std::fmax(
+      result->step_drift_max, end_constraints_.lpNorm<Eigen::Infinity>());
+}
+
 IntegratorStatus Integrator::Integrate(ConstrainedOde& ode, double t0,
                                        double t1, Eigen::Ref<Eigen::VectorXd> y,
                                        const IntegratorOptions& options,
@@ -124,6 +141,7 @@ IntegratorStatus Integrator::Integrate(ConstrainedOde& ode, double t0,
   try {
     ode.MakeConsistent(t0, y);
     DoIntegrate(ode, t0, t1, y, options, result);
+    RecordEndDrift(ode, y, result);
   } catch (const std::invalid_argument&) {
     throw;  // misuse detected by the backend (e.g. negative weights)
   } catch (const std::exception& e) {
@@ -140,14 +158,6 @@ IntegratorStatus Integrator::Integrate(ConstrainedOde& ode, double t0,
       !y.allFinite()) {
     result->status = IntegratorStatus::kConvergenceFailure;
     result->message += " [non-finite state]";
-  }
-  if ((result->status == IntegratorStatus::kSuccess ||
-       result->status == IntegratorStatus::kEvent) &&
-      m > 0) {
-    if (end_constraints_.size() != m) end_constraints_.resize(m);
-    ode.Constraints(y, end_constraints_);
-    result->step_drift_max = std::fmax(
-        result->step_drift_max, end_constraints_.lpNorm<Eigen::Infinity>());
   }
   return result->status;
 }

@@ -197,6 +197,9 @@ class Integrator {
   // given. Backends copy them into typed members here.
   virtual void ApplyBackendOptions(const OptionValues& /*values*/) {}
   std::optional<OptionValues> backend_options_;
+  void RecordEndDrift(const ConstrainedOde& ode,
+                      const Eigen::Ref<const Eigen::VectorXd>& y,
+                      IntegratorResult* result);
   Eigen::VectorXd end_constraints_;  // H at the end of a call (workspace)
 
   virtual void DoIntegrate(ConstrainedOde& ode, double t0, double t1,
