@@ -378,11 +378,13 @@ def figure_drift(ctx):
              for dae, v, step in summary]
     second = (
         " Bottom row: drift_step_max, the largest ‖H‖∞ of a state a method's steps "
-        "produced before any projection moved it (docs/model.md §8.10). Projection "
-        "methods (rk-projection, cvode-projection) and ida return states at their "
-        "tolerance by construction, so the top row cannot tell what they removed: "
-        "in zoh the held twist leaves the manifold by O(Δt²) per interval, the same "
-        "for every method, and only rk-baumgarte shows it in its samples. "
+        "produced before any projection moved it (docs/model.md §8.10). A method that "
+        "projects, or holds H = 0 as an algebraic equation, returns states at its "
+        "tolerance by construction, so the top row cannot tell what it removed: in zoh "
+        "the held twist's exact flow leaves the manifold by O(Δt²) per interval, which "
+        "a method integrating it freely shows only here (the same value for every such "
+        "method), one solving H = 0 at every step shows its solver's tolerance, and one "
+        "that damps the drift (a Baumgarte gain) shows in its samples too. "
         if steps else
         " These results predate drift_step_max (the drift within the steps, before "
         "projection): only the samples' drift is shown. ")
