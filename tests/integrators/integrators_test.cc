@@ -989,13 +989,26 @@ INSTANTIATE_TEST_SUITE_P(Sundials, RestartTest,
 // BDF with its projection after every step and Adams with the state
 // projected at the end of each call approximate the same solution, and the
 // exact one is theta(t) (theta integrated alone, below).
-class HeldCircleOde : public ConstrainedOde {
+// A point in the plane on the unit circle H = x^2 + y^2 - 1 = 0.
+class UnitCircleOde : public ConstrainedOde {
+ public:
+  int state_size() const override { return 2; }
+  int num_constraints() const override { return 1; }
+  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& y,
+                   Eigen::Ref<Eigen::VectorXd> h) const override {
+    h(0) = y.squaredNorm() - 1.0;
+  }
+  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& y,
+                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
+    jac << 2.0 * y(0), 2.0 * y(1);
+  }
+};
+
+class HeldCircleOde : public UnitCircleOde {
  public:
   static constexpr double kA = 0.5;
   double u = 0.0;
   int rhs_jacobians = 0;
-  int state_size() const override { return 2; }
-  int num_constraints() const override { return 1; }
   bool Rhs(double, const Eigen::Ref<const Eigen::VectorXd>& y,
            Eigen::Ref<Eigen::VectorXd> ydot) override {
     const double rate = u * (1.0 + kA * y(0));
@@ -1008,14 +1021,6 @@ class HeldCircleOde : public ConstrainedOde {
     dfdy << -u * kA * y(1), -u * (1.0 + kA * y(0)), u * (1.0 + 2.0 * kA * y(0)),
         0.0;
     return true;
-  }
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& y,
-                   Eigen::Ref<Eigen::VectorXd> h) const override {
-    h(0) = y.squaredNorm() - 1.0;
-  }
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& y,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
-    jac << 2.0 * y(0), 2.0 * y(1);
   }
   // theta after `duration` at the held u: RK4 with 2000 steps (local error
   // ~ (2.5e-5 s)^5 |theta^(5)|, far below the integrators' 1e-8).
@@ -1119,23 +1124,13 @@ TEST(RkProjectionTest, ProjectionFailureIsReported) {
 // flow y0 + v t leaves the circle by H = |v|^2 t^2, and RK4 (exact for a
 // constant field) and Adams (exact for a linear solution) reach that state
 // before they project. IntegratorResult::step_drift_max must report it.
-class HeldVelocityOde : public ConstrainedOde {
+class HeldVelocityOde : public UnitCircleOde {
  public:
   Eigen::Vector2d v{0.0, 0.5};
-  int state_size() const override { return 2; }
-  int num_constraints() const override { return 1; }
   bool Rhs(double, const Eigen::Ref<const Eigen::VectorXd>&,
            Eigen::Ref<Eigen::VectorXd> ydot) override {
     ydot = v;
     return true;
-  }
-  void Constraints(const Eigen::Ref<const Eigen::VectorXd>& y,
-                   Eigen::Ref<Eigen::VectorXd> h) const override {
-    h(0) = y.squaredNorm() - 1.0;
-  }
-  void ConstraintJacobian(const Eigen::Ref<const Eigen::VectorXd>& y,
-                          Eigen::Ref<Eigen::MatrixXd> jac) const override {
-    jac << 2.0 * y(0), 2.0 * y(1);
   }
 };
 
