@@ -103,7 +103,9 @@ def summary_table(summary, styles, failed_only):
     out = ["<table>", "<tr><th></th><th>method (nlp[options]/dae[options]/coupling)</th>"
            "<th>runs</th>"
            "<th>status counts (failures: status (cause class: detail))</th><th>failures: physical / numerical / model / unclassified</th>"
-           "<th>max drift ‖H‖∞ (successes)</th><th>max KKT residual (successes)</th></tr>"]
+           "<th>max drift ‖H‖∞ (successes)</th>"
+           "<th>max drift within the steps, before projection (successes)</th>"
+           "<th>max KKT residual (successes)</th></tr>"]
     for row in summary:
         counts = ", ".join(f"{escape(s)} {n}" for s, n in
                            sorted(row["status_causes"].items(),
@@ -117,7 +119,8 @@ def summary_table(summary, styles, failed_only):
             f'<td class="num">{row["runs"]}</td><td>{counts}</td>'
             f'<td class="num">{causes.get("physical", 0)} / {causes.get("numerical", 0)}'
             f' / {causes.get("model", 0)} / {causes.get("unknown", 0)}</td>'
-            + _num(row["max_drift"]) + _num(row["max_kkt"]) + "</tr>")
+            + _num(row["max_drift"]) + _num(row["max_step_drift"]) + _num(row["max_kkt"])
+            + "</tr>")
     out.append("</table>")
     return "\n".join(out)
 

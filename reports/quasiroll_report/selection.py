@@ -390,7 +390,8 @@ def status_text(run):
 
 def method_summary(runs):
     """One dict per method: runs, status counts, failure classes, max drift
-    and max KKT residual over its successful runs. No medians of time or
+    (at the samples and within the steps) and max KKT residual over its
+    successful runs. No medians of time or
     error here: those pool different problems (see the per-problem tables)."""
     summary = []
     for method in method_names(runs):
@@ -406,6 +407,8 @@ def method_summary(runs):
             "status_causes": Counter(status_text(run) for run in mine),
             "cause_counts": classes,
             "max_drift": _max([r["drift_max"] for r in ok]),
+            # Before any projection (docs/model.md §8.10); nan for older results.
+            "max_step_drift": _max([r.get("drift_step_max", math.nan) for r in ok]),
             "max_kkt": _max([r.get("kkt_residual", math.nan) for r in ok]),
         })
     return summary
