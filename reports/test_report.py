@@ -693,6 +693,111 @@ def _base_row(**fields):
     return row
 
 
+def _implicit_row(run_id, nlp, dae, options, wall, err, dt=0.2, tol=1e-8, **fields):
+    """A successful coupled work-precision row of one problem; `options` the
+    integrator's option table (dae_options), the non-default ones (DEFAULTS)
+    also in the method id as the harness writes it."""
+    defaults = {"jacobian": "ift", "lmm": "adams", "nonlinear_solver": "fixedpoint"}
+    table = {"jacobian": "ift", **options}
+    if dae == "cvode-projection":
+        table = {"lmm": "adams", "nonlinear_solver": "fixedpoint", **table}
+    listed = ",".join(f"{k}={v}" for k, v in sorted(table.items()) if defaults[k] != v)
+    row = _base_row(run_id=run_id, suite_group="work_precision_cpl_implicit", nlp=nlp,
+                    dae=dae, coupling="coupled", dt=dt, tol=tol, wall_s=wall,
+                    err_pos_rms=err, t_end=20.0, ref_hash="problem-a",
+                    method=f"{nlp}/{dae}" + (f"[{listed}]" if listed else "")
+                    + "/coupled",
+                    dae_options=json.dumps(table, sort_keys=True))
+    row.update(fields)
+    return row
+
+
+class ImplicitFindingsTest(unittest.TestCase):
+    """Coupled implicit integrators: exact (ift) vs finite-difference (fd)
+    Jacobians and CVODE Adams vs BDF, on matched settings only."""
+    BDF = {"lmm": "bdf", "nonlinear_solver": "newton"}
+
+    @staticmethod
+    def median(values):
+        values = sorted(values)
+        mid = len(values) // 2
+        return values[mid] if len(values) % 2 else (values[mid - 1] + values[mid]) / 2
+
+    def expected(self, ratios, note=""):
+        return (f"{self.median(ratios):.2g}× ({min(ratios):.2g}–{max(ratios):.2g}× "
+                f"over {len(ratios)} matched pairs{note})")
+
+    def test_ratios_over_matched_pairs(self):
+        from quasiroll_report import findings
+        settings = [("newton", 0.2, 1.0), ("newton", 0.4, 2.0), ("slsqp", 0.2, 4.0),
+                    ("slsqp", 0.4, 3.0)]
+        ida_fd, ida_err = [2.0, 2.4, 3.0, 2.2], [0.001, 0.003, -0.002, 0.0005]
+        bdf_fd, adams = [1.5, 1.2, 1.4, 1.1], [0.5, 0.6, 0.4, 0.7]
+        adams_err = [0.05, 0.02, 0.04, 0.03]
+        rows = []
+        for k, (nlp, dt, wall) in enumerate(settings):
+            rows += [
+                _implicit_row(f"i{k}", nlp, "ida", {}, wall, 1e-6, dt),
+                _implicit_row(f"f{k}", nlp, "ida", {"jacobian": "fd"}, wall * ida_fd[k],
+                              1e-6 * (1 + ida_err[k]), dt),
+                _implicit_row(f"b{k}", nlp, "cvode-projection", self.BDF, wall, 2e-7, dt),
+                _implicit_row(f"g{k}", nlp, "cvode-projection",
+                              dict(self.BDF, jacobian="fd"), wall * bdf_fd[k], 2e-7, dt),
+                _implicit_row(f"a{k}", nlp, "cvode-projection", {}, wall * adams[k],
+                              2e-7 * adams_err[k], dt)]
+        # Not matched: an fd run at another tolerance, a failed exact run's
+        # partner, a zoh pair; none may change the numbers.
+        rows += [_implicit_row("x1", "newton", "ida", {"jacobian": "fd"}, 99.0, 1e-6,
+                               tol=1e-6),
+                 _implicit_row("x2", "ceres", "ida", {"jacobian": "fd"}, 99.0, 1e-6),
+                 _implicit_row("x3", "ceres", "ida", {}, 1.0, 1e-6, status="SOLVER_FAILURE"),
+                 _implicit_row("x4", "newton", "ida", {"jacobian": "fd"}, 99.0, 1e-6,
+                               coupling="zoh", method="newton/ida[jacobian=fd]/zoh"),
+                 _implicit_row("x5", "newton", "ida", {}, 1.0, 1e-6,
+                               coupling="zoh", method="newton/ida/zoh")]
+        jac, lmm = findings.implicit_findings(rows, {})
+        self.assertTrue(jac.startswith("Coupled implicit integrators on paper"), jac)
+        self.assertIn("finite-difference over exact (ift) Jacobians", jac)
+        self.assertIn("ida " + self.expected(ida_fd, ", errors within 0.3 %"), jac)
+        self.assertIn("cvode-projection (BDF, Newton) "
+                      + self.expected(bdf_fd, ", errors within 0 %"), jac)
+        self.assertIn("2.3× (2–3× over 4 matched pairs", jac)  # the numbers, by hand
+        self.assertIn("cvode-projection (fixed-point vs Newton) takes "
+                      + self.expected(adams) + " of BDF's wall time at "
+                      + f"{self.median(adams_err):.2g}× its position error "
+                      + f"({min(adams_err):.2g}–{max(adams_err):.2g}×)", lmm)
+        self.assertTrue(lmm.startswith("Adams vs BDF (exact Jacobians) on paper"), lmm)
+        # Wired into the page's key findings, after the work-precision ones.
+        from types import SimpleNamespace
+        ctx = SimpleNamespace(runs=rows, references={}, meta={})
+        self.assertIn(jac, findings.key_findings(ctx, []))
+
+    def test_unmatched_runs_give_no_sentence(self):
+        from quasiroll_report import findings
+        rows = [
+            # ift and fd at different Δt; a failed fd run at the ift's Δt
+            _implicit_row("i", "newton", "ida", {}, 1.0, 1e-6, dt=0.2),
+            _implicit_row("f", "newton", "ida", {"jacobian": "fd"}, 2.0, 1e-6, dt=0.4),
+            _implicit_row("g", "newton", "ida", {"jacobian": "fd"}, 2.0, 1e-6, dt=0.2,
+                          status="step_size_too_small"),
+            # different NLPs
+            _implicit_row("b", "newton", "cvode-projection", self.BDF, 1.0, 1e-7),
+            _implicit_row("c", "slsqp", "cvode-projection", dict(self.BDF, jacobian="fd"),
+                          2.0, 1e-7),
+            # Adams against a finite-difference BDF run only; at another tolerance
+            _implicit_row("a", "slsqp", "cvode-projection", {}, 0.5, 1e-8),
+            _implicit_row("d", "newton", "cvode-projection", {}, 0.5, 1e-8, tol=1e-6)]
+        self.assertEqual(findings.implicit_findings(rows, {}), [])
+        # The error column missing on one side: no pair either.
+        rows[2]["status"] = "success"
+        rows[2]["err_pos_rms"] = float("nan")
+        self.assertEqual(findings.implicit_findings(rows, {}), [])
+        # ... and with it, one pair and its sentence.
+        rows[2]["err_pos_rms"] = 1e-6
+        text, = findings.implicit_findings(rows, {})
+        self.assertIn("ida 2× (1 matched pair, errors within 0 %)", text)
+
+
 class RefereeTest(unittest.TestCase):
     """Issue #21 item 8, the referee's smaller points (report side)."""
 

@@ -3,8 +3,11 @@ sentences with numbers), and the per-problem tables that back them."""
 
 import math
 
+import numpy as np
+
 from . import selection as sel
-from .data import is_finite, is_success, method_options
+from .data import (dae_option, is_finite, is_success, method_options, method_without,
+                   parse_method)
 from .plotting import fmt
 from .problems import problem_label
 
@@ -221,8 +224,163 @@ def epsilon_findings(runs):
     return out
 
 
+# ------------------------------------------- implicit integrators, coupled mode
+
+COUPLED = "coupled"
+# The integrator options the comparisons below vary (docs/harness.md, the
+# implicit integrators' option tables): the Newton matrix's Jacobian, exact
+# (implicit-function theorem, the default) or by finite differences; the
+# linear multistep method and its nonlinear solver.
+JACOBIAN, EXACT, FINITE_DIFFERENCE = "jacobian", "ift", "fd"
+LMM, NONLINEAR_SOLVER, ADAMS, BDF = "lmm", "nonlinear_solver", "adams", "bdf"
+OPTION_WORDS = {LMM: {ADAMS: "Adams", BDF: "BDF"},
+                NONLINEAR_SOLVER: {"fixedpoint": "fixed-point"}}
+# Grid parameters two runs share to be a matched pair, besides their method
+# id (which names every backend option off its default).
+MATCH_COLUMNS = ("scene", "terrain", "rk_method", "dt", "tol", "atol", "nlp_tol",
+                 "sigma", "eps", "dae_index", "substeps", "contact_check", "mu", "seed",
+                 "roughness", "t_end", "scene_fields", "nlp_options", "nlp_max_iter",
+                 "locate_events", "event_points", "event_tolerance", "locate_switches")
+
+
+def _measured(run):
+    """(wall, err_pos_rms) of a run, the timing the other findings use; None
+    without both (positive, finite)."""
+    wall, err = sel.timing(run)[0], run.get("err_pos_rms", math.nan)
+    ok = is_finite(wall) and wall > 0 and is_finite(err) and err > 0
+    return (wall, err) if ok else None
+
+
+def _match_key(run, varied):
+    """What two runs must share to be compared: the method without the
+    options `varied`, and every grid parameter (NaN read as absent)."""
+    values = tuple(None if isinstance(v, float) and not math.isfinite(v) else v
+                   for v in (run.get(c) for c in MATCH_COLUMNS))
+    return (method_without(run["method"], varied),) + values
+
+
+def matched_pairs(rows, varied, side):
+    """{integrator variant: [(a, b)]}: coupled runs of `rows` on side 'a' and
+    'b' (side(run), None for neither) that agree on everything but the
+    options `varied`, both with a wall time and an error; per matched key
+    the first run of each side by run_id. The variant is the integrator with
+    its other non-default options, as `variant_label` names it."""
+    keys = {}
+    for run in rows:
+        which = side(run)
+        if which and run.get("coupling") == COUPLED and _measured(run):
+            keys.setdefault(_match_key(run, varied), {}).setdefault(which, []).append(run)
+    groups = {}
+    for key in sorted(keys, key=repr):
+        found = keys[key]
+        if "a" in found and "b" in found:
+            first = [min(found[s], key=lambda r: r["run_id"]) for s in ("a", "b")]
+            _, _, dae, options, _ = parse_method(key[0])
+            groups.setdefault(variant_label(dae, options), []).append(tuple(first))
+    return groups
+
+
+def option_words(options):
+    """Integrator options as words: 'BDF, Newton', 'dae_index=1'."""
+    words = []
+    for name, value in options:
+        if name in OPTION_WORDS:
+            words.append(OPTION_WORDS[name].get(value, value[:1].upper() + value[1:]))
+        else:
+            words.append(f"{name}={value}")
+    return ", ".join(words)
+
+
+def variant_label(dae, options):
+    listed = option_words(options)
+    return f"{dae} ({listed})" if listed else dae
+
+
+def _median_range(values):
+    """('1.3', '1.1–1.5×'): median and range of ratios."""
+    values = sorted(values)
+    return (fmt(float(np.median(values)), 2),
+            f"{fmt(values[0], 2)}–{fmt(values[-1], 2)}×")
+
+
+def ratio_summary(values, note=""):
+    """'1.3× (1.1–1.5× over 6 matched pairs<note>)': median and range of
+    per-pair ratios."""
+    median, span = _median_range(values)
+    spread = f"{span} over {len(values)} matched pairs" if len(values) > 1 \
+        else "1 matched pair"
+    return f"{median}× ({spread}{note})"
+
+
+def _jacobian_side(run):
+    return {FINITE_DIFFERENCE: "a", EXACT: "b"}.get(dae_option(run, JACOBIAN))
+
+
+def jacobian_finding(problem):
+    """One sentence: per implicit integrator variant, the wall-time ratio
+    finite-difference / exact Jacobian over matched pairs and the largest
+    relative difference of their errors (to the exact one's); None
+    without a matched pair."""
+    parts = []
+    for label, pairs in sorted(matched_pairs(problem["rows"], {JACOBIAN},
+                                             _jacobian_side).items()):
+        measured = [(_measured(fd), _measured(ift)) for fd, ift in pairs]
+        diff = max(abs(fd[1] - ift[1]) / ift[1] for fd, ift in measured)
+        parts.append(f"{label} " + ratio_summary(
+            [fd[0] / ift[0] for fd, ift in measured],
+            f", errors within {fmt(100 * diff, 2)} %"))
+    if not parts:
+        return None
+    return (f"Coupled implicit integrators on {problem['label']}, wall time with "
+            f"finite-difference over exact (ift) Jacobians: {'; '.join(parts)}.")
+
+
+def _lmm_side(run):
+    lmm = dae_option(run, LMM)
+    if lmm == ADAMS:
+        return "a"
+    return "b" if lmm == BDF and dae_option(run, JACOBIAN) == EXACT else None
+
+
+def _solver_words(runs):
+    values = {dae_option(r, NONLINEAR_SOLVER) for r in runs}
+    return "/".join(sorted(option_words([(NONLINEAR_SOLVER, str(v))])
+                           for v in values if v is not None))
+
+
+def lmm_finding(problem):
+    """One sentence: per integrator with a choice of linear multistep method,
+    Adams over BDF (exact Jacobians) on matched settings: the wall-time and
+    error ratios (median, range); None without a matched pair."""
+    parts = []
+    for label, pairs in sorted(matched_pairs(problem["rows"], {LMM, NONLINEAR_SOLVER},
+                                             _lmm_side).items()):
+        measured = [(_measured(adams), _measured(bdf)) for adams, bdf in pairs]
+        solvers = " vs ".join(_solver_words(p[i] for p in pairs) for i in (0, 1))
+        err_median, err_span = _median_range([a[1] / b[1] for a, b in measured])
+        parts.append(f"{label}" + (f" ({solvers})" if solvers != " vs " else "")
+                     + f" takes {ratio_summary([a[0] / b[0] for a, b in measured])} of "
+                     f"BDF's wall time at {err_median}× its position error"
+                     + (f" ({err_span})" if len(pairs) > 1 else ""))
+    if not parts:
+        return None
+    return (f"Adams vs BDF (exact Jacobians) on {problem['label']}, coupled: "
+            f"{'; '.join(parts)}.")
+
+
+def implicit_findings(runs, references):
+    """Per work-precision problem, the coupled implicit integrators' exact
+    vs finite-difference Jacobians and Adams vs BDF, where matched runs
+    exist (no sentence otherwise)."""
+    out = []
+    for problem in sel.work_precision_problems(runs, references):
+        out.extend(s for s in (jacobian_finding(problem), lmm_finding(problem)) if s)
+    return out
+
+
 def key_findings(ctx, records):
-    return (work_precision_findings(ctx.runs, ctx.references) + mu_findings(records)
+    return (work_precision_findings(ctx.runs, ctx.references)
+            + implicit_findings(ctx.runs, ctx.references) + mu_findings(records)
             + epsilon_findings(ctx.runs)
             + stability_findings(ctx.runs, ctx.references)
             + qs_findings(ctx.runs, ctx.references, ctx.meta) + kkt_findings(ctx.runs))
