@@ -758,9 +758,9 @@ class ImplicitFindingsTest(unittest.TestCase):
         jac, lmm = findings.implicit_findings(rows, {})
         self.assertTrue(jac.startswith("Coupled implicit integrators on paper"), jac)
         self.assertIn("finite-difference over exact (ift) Jacobians", jac)
-        self.assertIn("ida " + self.expected(ida_fd, ", errors within 0.3 %"), jac)
+        self.assertIn("ida " + self.expected(ida_fd, ", position errors differ by ≤ 0.3 %"), jac)
         self.assertIn("cvode-projection (BDF, Newton) "
-                      + self.expected(bdf_fd, ", errors within 0 %"), jac)
+                      + self.expected(bdf_fd, ", position errors differ by ≤ 0 %"), jac)
         self.assertIn("2.3× (2–3× over 4 matched pairs", jac)  # the numbers, by hand
         self.assertIn("cvode-projection (fixed-point vs Newton) takes "
                       + self.expected(adams) + " of BDF's wall time at "
@@ -795,7 +795,7 @@ class ImplicitFindingsTest(unittest.TestCase):
         # ... and with it, one pair and its sentence.
         rows[2]["err_pos_rms"] = 1e-6
         text, = findings.implicit_findings(rows, {})
-        self.assertIn("ida 2× (1 matched pair, errors within 0 %)", text)
+        self.assertIn("ida 2× (1 matched pair, position errors differ by ≤ 0 %)", text)
 
 
 class RefereeTest(unittest.TestCase):

@@ -328,7 +328,7 @@ def jacobian_finding(problem):
         diff = max(abs(fd[1] - ift[1]) / ift[1] for fd, ift in measured)
         parts.append(f"{label} " + ratio_summary(
             [fd[0] / ift[0] for fd, ift in measured],
-            f", errors within {fmt(100 * diff, 2)} %"))
+            f", position errors differ by ≤ {fmt(100 * diff, 2)} %"))
     if not parts:
         return None
     return (f"Coupled implicit integrators on {problem['label']}, wall time with "
