@@ -69,9 +69,27 @@ class Simulator::RobotOde final : public LoopClosureOde {
       : LoopClosureOde(model), coupling_(coupling), solver_(solver) {}
 
   void Hold(const Vec12& w) { w_ = w; }
-  void ClearFailure() { nlp_failed_ = false; }
+  void ClearFailure() { nlp_failed_ = failed_in_call_ = false; }
   const QuasiStaticSolution& last_solution() const { return sol_; }
   bool nlp_failed() const { return nlp_failed_; }
+  // Every Integrate() call starts here: a call's failed solves are its own.
+  void MakeConsistent(double /*t0*/,
+                      Eigen::Ref<Eigen::VectorXd> /*y*/) override {
+    failed_in_call_ = false;
+  }
+  // Whether an integrator call that ended with status st was stopped by a
+  // failed quasi-static solve: the latest evaluation's, or, when the
+  // integrator gave up on failing evaluations (kRhsFailure: e.g. IDA's
+  // repeated recoverable residual errors, whose last trial may have
+  // solved), any of the call's.
+  bool SolveStopped(IntegratorStatus st) const {
+    return nlp_failed_ ||
+           (st == IntegratorStatus::kRhsFailure && failed_in_call_);
+  }
+  // The failed solve SolveStopped() refers to.
+  const QuasiStaticSolution& stopping_solution() const {
+    return nlp_failed_ ? sol_ : failed_sol_;
+  }
   int nlp_solves() const { return nlp_solves_; }
   // Max KKT residual of the accepted solves since ResetKkt() (NaN: none).
   double kkt_residual() const { return kkt_residual_; }
@@ -93,7 +111,8 @@ class Simulator::RobotOde final : public LoopClosureOde {
       nlp_iterations_ += sol_.nlp_iterations;
       nlp_iterations_native_ += sol_.nlp_iterations_native;
       if (sol_.status != QuasiStaticStatus::kOk) {
-        nlp_failed_ = true;
+        nlp_failed_ = failed_in_call_ = true;
+        failed_sol_ = sol_;
         return false;
       }
       kkt_residual_ = std::fmax(kkt_residual_, sol_.kkt_residual);
@@ -181,6 +200,9 @@ class Simulator::RobotOde final : public LoopClosureOde {
   Vec12 w_ = Vec12::Zero();
   QuasiStaticSolution sol_;
   bool nlp_failed_ = false;
+  // A solve failed in the current Integrate() call; the latest that did.
+  bool failed_in_call_ = false;
+  QuasiStaticSolution failed_sol_;
   int nlp_solves_ = 0;
   long long nlp_iterations_ = 0;
   long long nlp_iterations_native_ = 0;
@@ -389,6 +411,8 @@ struct Simulator::Session {
   bool have_prev = false;
   Eigen::VectorXd y_event;
   QuasiStaticSolution sol_event, sol_b;
+  // Status of the last Reintegrate() (RobotOde::SolveStopped).
+  IntegratorStatus reintegrate_status = IntegratorStatus::kNotRun;
   LimitIndicators ind;
   double t_stop = kNaN, t_lower = kNaN, t_upper = kNaN;
   const char* pending_limit = "";
@@ -632,9 +656,9 @@ bool Simulator::Interval(SimulationResult* result) {
   const IntegratorStatus st = IntegrateInterval(t, t_next);
   if (st != IntegratorStatus::kSuccess) {
     result->t_reached = s.ires.t_reached;
-    if (s.ode.nlp_failed()) {
+    if (s.ode.SolveStopped(st)) {
       if (LocateIntegratorStop(t, t_next, result)) return !s.done_located;
-      const QuasiStaticSolution& f = s.ode.last_solution();
+      const QuasiStaticSolution& f = s.ode.stopping_solution();
       result->status = ToString(f.status);
       result->stop_configuration = s.solver.problem().configuration();
       result->mu_min_at_stop = f.mu_min;
@@ -671,8 +695,9 @@ bool Simulator::Reintegrate(double t0, const Configuration& theta0, double t1) {
   s.y_event = theta0;
   if (!(t1 > t0)) return true;
   s.ode.Hold(s.w_held);
-  return s.integrator->Integrate(s.ode, t0, t1, s.y_event, s.iopts, &s.ires) ==
-         IntegratorStatus::kSuccess;
+  s.reintegrate_status =
+      s.integrator->Integrate(s.ode, t0, t1, s.y_event, s.iopts, &s.ires);
+  return s.reintegrate_status == IntegratorStatus::kSuccess;
 }
 
 // Bisects br->[a, b] down to event_tolerance. A time m is "before the limit"
@@ -877,12 +902,12 @@ bool Simulator::LocateSampleStop(double* t, SimulationResult* result) {
     std::swap(s.sol, s.sol_b);
     s.theta = br.theta_b;
     *t = br.b;
-  } else if (!br.have_b && s.ode.nlp_failed() &&
-             s.ode.last_solution().status !=
+  } else if (!br.have_b && s.ode.SolveStopped(s.reintegrate_status) &&
+             s.ode.stopping_solution().status !=
                  QuasiStaticStatus::kSolverFailure) {
     // Coupled: the integrator itself failed past a; stop at a with the
     // failing stage's solution.
-    s.sol = s.ode.last_solution();
+    s.sol = s.ode.stopping_solution();
     s.theta = br.theta_a;
     *t = br.a;
   } else {
@@ -904,9 +929,9 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
                                      SimulationResult* result) {
   Session& s = *session_;
   if (!options_.locate_events ||
-      s.ode.last_solution().status == QuasiStaticStatus::kSolverFailure)
+      s.ode.stopping_solution().status == QuasiStaticStatus::kSolverFailure)
     return false;
-  const QuasiStaticSolution first = s.ode.last_solution();
+  const QuasiStaticSolution first = s.ode.stopping_solution();
   Bracket br;
   br.a = t0;
   br.theta_a = s.theta;
@@ -928,9 +953,10 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
   // Reproduce the failure at b for its solution and stage state. Where the
   // NLP gives up before the limit (SOLVER_FAILURE: mu > mu_min there) the
   // integrator cannot go on towards it: the limit that stopped it stands.
-  if (!Reintegrate(t0, s.theta, br.b) && s.ode.nlp_failed() &&
-      s.ode.last_solution().status != QuasiStaticStatus::kSolverFailure) {
-    s.sol = s.ode.last_solution();
+  if (!Reintegrate(t0, s.theta, br.b) &&
+      s.ode.SolveStopped(s.reintegrate_status) &&
+      s.ode.stopping_solution().status != QuasiStaticStatus::kSolverFailure) {
+    s.sol = s.ode.stopping_solution();
   } else {
     s.sol = first;  // the failure that started the search
   }

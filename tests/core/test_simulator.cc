@@ -265,6 +265,39 @@ TEST(Simulation, PvcLowFrictionStopsCleanly) {
   EXPECT_NE(json.find("mu_min"), std::string::npos);
 }
 
+// Coupled ida at a friction limit (pvc, mu = 0.1, dt 0.1: the stability_mu
+// run of the default suite): IDA meets failed quasi-static solves near the
+// limit, recovers at trial points, then gives up with repeated recoverable
+// residual errors while its last evaluation had solved. That used to end
+// the run as rhs_failure, a numerical failure; the failed solve of the call
+// now makes it a located INFEASIBLE_FRICTION stop, where rk-projection
+// (coupled, same dt) stops too: 4.842373 s against ida's 4.8423711 s (the
+// bisection of each integrator's own reachable states; 1e-5 s allows for
+// both, far below dt).
+TEST(Simulation, CoupledIdaLocatesAFrictionLimitInsteadOfFailing) {
+  RegisterBuiltinNlpSolvers();
+  RegisterBuiltinIntegrators();
+  if (!IntegratorRegistry::Has("ida")) GTEST_SKIP() << "built without SUNDIALS";
+  Scene scene = LoadScene(ScenePath("paper"));
+  scene.mode = ActuationMode::kPvc;
+  scene.mu = 0.1;
+  scene.dt = 0.1;
+  scene.t_end = 6.0;
+  auto run = [&](const std::string& dae) {
+    SimulationOptions options;
+    options.dae = dae;
+    options.coupling = Coupling::kCoupled;
+    return Simulator(scene, options).Run();
+  };
+  const SimulationResult ida = run("ida"), rk = run("rk-projection");
+  ASSERT_EQ(rk.status, "INFEASIBLE_FRICTION") << rk.stop_reason;
+  EXPECT_EQ(ida.status, "INFEASIBLE_FRICTION") << ida.stop_reason;
+  EXPECT_NE(ida.stop_reason.find("(located)"), std::string::npos)
+      << ida.stop_reason;
+  EXPECT_NEAR(ida.t_reached, rk.t_reached, 1e-5);
+  EXPECT_EQ(ida.event.limit, "friction_limit");
+}
+
 // Regression: newton + ida (coupled, rtol 1e-10) on the paper scene used to
 // stop with SOLVER_FAILURE at t = 2.907 s. IDA's Newton iterates visit states
 // where the creep law is nearly singular (cond 1.7e12 at the failing iterate
