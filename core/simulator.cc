@@ -90,6 +90,14 @@ class Simulator::RobotOde final : public LoopClosureOde {
   const QuasiStaticSolution& stopping_solution() const {
     return nlp_failed_ ? sol_ : failed_sol_;
   }
+  // That solve when SolveStopped(st) and it is a physical stop (not
+  // SOLVER_FAILURE); else null.
+  const QuasiStaticSolution* PhysicalStop(IntegratorStatus st) const {
+    if (!SolveStopped(st) ||
+        stopping_solution().status == QuasiStaticStatus::kSolverFailure)
+      return nullptr;
+    return &stopping_solution();
+  }
   int nlp_solves() const { return nlp_solves_; }
   // Max KKT residual of the accepted solves since ResetKkt() (NaN: none).
   double kkt_residual() const { return kkt_residual_; }
@@ -411,8 +419,6 @@ struct Simulator::Session {
   bool have_prev = false;
   Eigen::VectorXd y_event;
   QuasiStaticSolution sol_event, sol_b;
-  // Status of the last Reintegrate() (RobotOde::SolveStopped).
-  IntegratorStatus reintegrate_status = IntegratorStatus::kNotRun;
   LimitIndicators ind;
   double t_stop = kNaN, t_lower = kNaN, t_upper = kNaN;
   const char* pending_limit = "";
@@ -690,14 +696,13 @@ bool Simulator::Interval(SimulationResult* result) {
 
 // Integrates the run's ODE (the held twist in zoh) with the run's own
 // integrator from (t0, theta0) to t1 into s.y_event; false if it fails.
-bool Simulator::Reintegrate(double t0, const Configuration& theta0, double t1) {
+IntegratorStatus Simulator::Reintegrate(double t0, const Configuration& theta0,
+                                        double t1) {
   Session& s = *session_;
   s.y_event = theta0;
-  if (!(t1 > t0)) return true;
+  if (!(t1 > t0)) return IntegratorStatus::kSuccess;
   s.ode.Hold(s.w_held);
-  s.reintegrate_status =
-      s.integrator->Integrate(s.ode, t0, t1, s.y_event, s.iopts, &s.ires);
-  return s.reintegrate_status == IntegratorStatus::kSuccess;
+  return s.integrator->Integrate(s.ode, t0, t1, s.y_event, s.iopts, &s.ires);
 }
 
 // Bisects br->[a, b] down to event_tolerance. A time m is "before the limit"
@@ -712,7 +717,8 @@ void Simulator::Bisect(double t0, const Configuration& theta0, bool solve,
   while (br->b - br->a > options_.event_tolerance) {
     const double m = 0.5 * (br->a + br->b);
     if (!(m > br->a && m < br->b)) break;  // round-off
-    const bool reached = Reintegrate(t0, theta0, m);
+    const bool reached =
+        Reintegrate(t0, theta0, m) == IntegratorStatus::kSuccess;
     const Configuration y = s.y_event;
     bool good = reached;
     if (good && solve) {
@@ -812,7 +818,7 @@ bool Simulator::CheckIntervalEvents(double t0, double t1) {
   s.t_stop = s.t_upper;
   if (fb >= 1.0) {
     s.theta = th1;
-  } else if (Reintegrate(t0, th0, s.t_stop)) {
+  } else if (Reintegrate(t0, th0, s.t_stop) == IntegratorStatus::kSuccess) {
     s.theta = s.y_event;
   } else {
     s.theta = state(fb);
@@ -836,7 +842,7 @@ bool Simulator::ScanInterval(double t0, double t1) {
   br.theta_a = th0;
   for (int j = 1; j < kScanPoints; ++j) {
     const double tj = t0 + (t1 - t0) * j / kScanPoints;
-    const bool reached = Reintegrate(t0, th0, tj);
+    const bool reached = Reintegrate(t0, th0, tj) == IntegratorStatus::kSuccess;
     if (reached) {
       EvaluateLimitIndicators(*model_, s.y_event, false, &s.ind);
       if (s.ind.ok()) {
@@ -896,18 +902,18 @@ bool Simulator::LocateSampleStop(double* t, SimulationResult* result) {
   result->nlp_iterations += s.event_iterations;
   result->nlp_iterations_native += s.event_iterations_native;
   // Reproduce a failure to reach b (coupled) for its solution.
-  if (!br.have_b) Reintegrate(s.t_prev, s.theta_prev, br.b);
+  const QuasiStaticSolution* stop =
+      br.have_b ? nullptr
+                : s.ode.PhysicalStop(Reintegrate(s.t_prev, s.theta_prev, br.b));
   if (br.have_b && s.sol_b.status != QuasiStaticStatus::kOk &&
       s.sol_b.status != QuasiStaticStatus::kSolverFailure) {
     std::swap(s.sol, s.sol_b);
     s.theta = br.theta_b;
     *t = br.b;
-  } else if (!br.have_b && s.ode.SolveStopped(s.reintegrate_status) &&
-             s.ode.stopping_solution().status !=
-                 QuasiStaticStatus::kSolverFailure) {
+  } else if (stop) {
     // Coupled: the integrator itself failed past a; stop at a with the
     // failing stage's solution.
-    s.sol = s.ode.stopping_solution();
+    s.sol = *stop;
     s.theta = br.theta_a;
     *t = br.a;
   } else {
@@ -953,13 +959,10 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
   // Reproduce the failure at b for its solution and stage state. Where the
   // NLP gives up before the limit (SOLVER_FAILURE: mu > mu_min there) the
   // integrator cannot go on towards it: the limit that stopped it stands.
-  if (!Reintegrate(t0, s.theta, br.b) &&
-      s.ode.SolveStopped(s.reintegrate_status) &&
-      s.ode.stopping_solution().status != QuasiStaticStatus::kSolverFailure) {
-    s.sol = s.ode.stopping_solution();
-  } else {
-    s.sol = first;  // the failure that started the search
-  }
+  const IntegratorStatus st = Reintegrate(t0, s.theta, br.b);
+  const QuasiStaticSolution* stop =
+      st == IntegratorStatus::kSuccess ? nullptr : s.ode.PhysicalStop(st);
+  s.sol = stop ? *stop : first;  // else the failure that started the search
   result->stop_configuration = s.solver.problem().configuration();
   s.theta = br.theta_a;
   const QuasiStaticSolution& sol = s.sol;

@@ -255,7 +255,8 @@ class Simulator {
   bool Interval(SimulationResult* result);
   // Located stops (core/simulator_events.cc).
   struct Bracket;
-  bool Reintegrate(double t0, const Configuration& theta0, double t1);
+  IntegratorStatus Reintegrate(double t0, const Configuration& theta0,
+                               double t1);
   void Bisect(double t0, const Configuration& theta0, bool solve, Bracket* br);
   bool CheckIntervalEvents(double t0, double t1);
   bool ScanInterval(double t0, double t1);
