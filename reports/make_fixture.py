@@ -205,6 +205,7 @@ def success_fields(rng, method, dt, drift_level, t_end=T_END):
     order, err_c, wall_c, _ = METHODS[method]
     err = err_c * dt ** order * (1 + 0.1 * rng.random())
     steps = int(round(t_end / dt))
+    drift_max = drift_level * 1.4 * (dt / 0.05) ** 0.5
     return {"status": "success", "stop_reason": "", "t_reached": t_end,
             "wall_s": wall_c * 0.05 / dt * (1 + 0.1 * rng.random()) * t_end / T_END,
             "nlp_solves": steps * (4 if method[2] == "coupled" else 1),
@@ -212,9 +213,8 @@ def success_fields(rng, method, dt, drift_level, t_end=T_END):
             "rejected_steps": 0, "err_pos_rms": err, "err_pos_max": 3 * err,
             "err_final": 2 * err, "err_rot_max": 5 * err,
             "err_force_rms": 400 * err, "err_slip": err / 10,
-            "drift_max": drift_level * 1.4 * (dt / 0.05) ** 0.5,
-            "drift_final": drift_level, "gap_max": 2e-7,
-            "drift_step_max": step_drift(method, dt, drift_level * 1.4 * (dt / 0.05) ** 0.5)}
+            "drift_max": drift_max, "drift_final": drift_level, "gap_max": 2e-7,
+            "drift_step_max": step_drift(method, dt, drift_max)}
 
 
 def step_drift(method, dt, drift_max):

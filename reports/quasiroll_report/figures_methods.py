@@ -322,9 +322,10 @@ def _plot_step_drift_bars(ax, summary):
     the steps before any projection (docs/model.md §8.10)."""
     rows = [(dae, sample, step) for dae, sample, step in summary if is_finite(step)]
     y = np.arange(len(rows))
-    ax.barh(y - 0.2, [max(r[1], 1e-17) for r in rows], height=0.4, color="#9ecae1",
+    # A zero has no bar on the log axis (positive: nan), rather than a made-up floor.
+    ax.barh(y - 0.2, positive([r[1] for r in rows]), height=0.4, color="#9ecae1",
             label="at the samples (returned states)")
-    ax.barh(y + 0.2, [max(r[2], 1e-17) for r in rows], height=0.4, color="#de2d26",
+    ax.barh(y + 0.2, positive([r[2] for r in rows]), height=0.4, color="#de2d26",
             label="within the steps, before projection")
     ax.set_yticks(y, [r[0] for r in rows], fontsize=7)
     ax.set_xscale("log")
