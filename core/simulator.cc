@@ -438,6 +438,15 @@ struct Simulator::Session {
   // The accepted solution at the previous sample (probe warm starts).
   Eigen::VectorXd z_prev;
   bool have_z_prev = false;
+  // The converged probes of the current interval (RestartAtSwitches), the
+  // oldest overwritten beyond capacity; sized with the probe solver.
+  struct KnownSolution {
+    double t = kNaN;
+    Eigen::VectorXd z;
+  };
+  std::array<KnownSolution, 48> probe_known;
+  int probe_known_count = 0;
+  Eigen::VectorXd probe_warm;
   // Intervals starting before this time are integrated resolved.
   double resolve_until = -std::numeric_limits<double>::infinity();
   // The last interval was integrated resolved (step doubling).
@@ -494,6 +503,24 @@ RobotOdeProbe Simulator::ProbeOde(const Configuration& theta,
   probe.nlp_solves += s.ode.nlp_solves() - solves;
   probe.jacobian_fallbacks = s.ode.jacobian_fallbacks();
   return probe;
+}
+
+// The linear interpolation at tm between the nearest known solutions on
+// either side among the interval's ends (s.t_prev, t_end) and the converged
+// probes of RestartAtSwitches, in s.probe_warm.
+const Eigen::VectorXd& Simulator::InterpolateKnown(double tm, double t_end) {
+  Session& s = *session_;
+  double ta = s.t_prev, tb = t_end;
+  const Eigen::VectorXd *za = &s.z_prev, *zb = &s.sol.z;
+  const int known = std::min<int>(s.probe_known_count, s.probe_known.size());
+  for (int j = 0; j < known; ++j) {
+    const Session::KnownSolution& k = s.probe_known[j];
+    if (k.t <= tm && k.t > ta) ta = k.t, za = &k.z;
+    if (k.t >= tm && k.t < tb) tb = k.t, zb = &k.z;
+  }
+  const double w = tb > ta ? (tm - ta) / (tb - ta) : 0.0;
+  s.probe_warm = *za + w * (*zb - *za);
+  return s.probe_warm;
 }
 
 // The solver of the switch probes (RestartAtSwitches): its own warm starts.
@@ -600,6 +627,8 @@ bool Simulator::Interval(SimulationResult* result) {
     // Sizes the probe solver's workspaces: one solve from the answer.
     s.probe_solver->SetWarmStart(sol.z);
     s.probe_solver->Solve(s.theta, &s.sol_event);
+    for (Session::KnownSolution& k : s.probe_known) k.z = sol.z;
+    s.probe_warm = sol.z;
     result->nlp_solves += s.sol_event.nlp_solves;
     result->nlp_iterations += s.sol_event.nlp_iterations;
     result->nlp_iterations_native += s.sol_event.nlp_iterations_native;
@@ -1026,23 +1055,39 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   const bool dense =
       model_->Rhs(th0, s.w_held, &f0) && model_->Rhs(th1, w1, &f1);
   QuasiStaticSolution& probe = s.sol_event;  // probe_solver: from Begin()
-  // Each probe starts from the nearest (in time) of the interval's end
-  // solutions and the last probe's: the probe solver's own warm start is
-  // otherwise the last probe of an earlier switch, seconds away.
+  // Location probes start from the nearest (in time) of the interval's end
+  // solutions and the last probe's: Newton from there overshoots the
+  // tolerance and lands on the root to round-off, which the located switch
+  // times need (a probe's slip at the switch level moves by ~6e-10 m/s, the
+  // switch by ~2.5e-8 s, for roots that merely meet the tolerance; paper
+  // scene). The quadrature's probes start from the linear interpolation in
+  // time between the nearest known solutions on either side (the ends and
+  // every converged probe): an O(h^2) start that does not stall at the
+  // slip's kinks, where the nearest one did (tens of iterations).
   const bool ends = s.have_z_prev && s.sol.status == QuasiStaticStatus::kOk;
+  s.probe_known_count = 0;
+  bool interpolate = false;
   double t_last = std::numeric_limits<double>::quiet_NaN();
   auto probe_at = [&](double tm, std::array<Eigen::Vector2d, 3>* slip) {
     const double frac = (tm - s.t_prev) / h;
     const Configuration q = dense
                                 ? HermiteState(th0, f0, th1, f1, h, frac)
                                 : Configuration((1 - frac) * th0 + frac * th1);
-    if (ends) {
+    if (ends && interpolate) {
+      s.probe_solver->SetWarmStart(InterpolateKnown(tm, t));
+    } else if (ends) {
       const double da = tm - s.t_prev, db = t - tm;
       if (!(std::abs(tm - t_last) <= std::min(da, db)))
         s.probe_solver->SetWarmStart(da <= db ? s.z_prev : s.sol.z);
     }
     s.probe_solver->Solve(q, &probe);
-    if (probe.status == QuasiStaticStatus::kOk) t_last = tm;
+    if (ends && probe.status == QuasiStaticStatus::kOk) {
+      t_last = tm;
+      Session::KnownSolution& k =
+          s.probe_known[s.probe_known_count++ % s.probe_known.size()];
+      k.t = tm;
+      k.z = probe.z;
+    }
     result->nlp_solves += probe.nlp_solves;
     result->nlp_iterations += probe.nlp_iterations;
     result->nlp_iterations_native += probe.nlp_iterations_native;
@@ -1060,6 +1105,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     LocateSwitchesAndReversals(s.t_prev, t, slip0, slip1, eps,
                                options_.event_tolerance, evaluate,
                                &result->switches);
+  interpolate = true;
   if (change || regime) IntegrateSlipAcrossSwitches(t, first, evaluate, result);
   if (!coupled || !(change || redo)) return;
   Eigen::VectorXd& y = s.y_event;

@@ -266,6 +266,7 @@ class Simulator {
   // Switches (core/switch_events.h): locates class changes between the last
   // sample and s.sol at t; in coupled mode restarts the interval there.
   void CreateProbeSolver();
+  const Eigen::VectorXd& InterpolateKnown(double tm, double t_end);
   void RestartAtSwitches(double t, SimulationResult* result);
   void IntegrateSlipAcrossSwitches(double t, std::size_t first,
                                    const SlipVectorEvaluator& evaluate,
