@@ -607,6 +607,21 @@ class SelectionTest(unittest.TestCase):
         self.assertAlmostEqual(run["mu"], 0.5)
         self.assertEqual(run["status"], "success")
 
+    def test_drift_representatives_use_the_primary_runs_nlp(self):
+        base = next(r for r in self.runs() if r["status"] == "success"
+                    and r["scene"] == "paper" and r["coupling"] == "zoh")
+        # The same integrator with two NLPs; the other NLP's run is finer.
+        fine = dict(base, nlp="ceres", dt=base["dt"] / 2, run_id="a_fine")
+        mine = dict(base, nlp="newton", run_id="b_mine")
+        runs = [fine, mine]
+        reps = sel.drift_representatives(runs, lambda r: True, mine)
+        self.assertEqual(reps[base["dae"]]["run_id"], "b_mine")
+        reps = sel.drift_representatives(runs, lambda r: True, fine)
+        self.assertEqual(reps[base["dae"]]["run_id"], "a_fine")
+        # Without a run of the primary's NLP: the finest run.
+        reps = sel.drift_representatives([fine, dict(mine, nlp="slsqp")],
+                                         lambda r: True, dict(mine, nlp="ipopt"))
+        self.assertEqual(reps[base["dae"]]["run_id"], "a_fine")
 
 class MethodIdentityTest(unittest.TestCase):
     """Issue #20: a method is what ran, its backend options included; option

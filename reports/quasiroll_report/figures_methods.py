@@ -295,7 +295,7 @@ STEP_DRIFT = "drift_step_max"
 def _plot_drift_vs_time(ax, ctx):
     """Drift at the samples over time, one representative run per
     integrator; returns [(integrator, sample max, drift_step_max)]."""
-    reps = sel.drift_representatives(ctx.runs, ctx.trajectories.has)
+    reps = sel.drift_representatives(ctx.runs, ctx.trajectories.has, ctx.primary)
     summary = []
     for dae, run in reps.items():
         traj = ctx.trajectories.get(run)
@@ -392,7 +392,8 @@ def figure_drift(ctx):
     caption = (
         "Loop-closure constraint drift ‖H(Θ)‖∞. Top row: at the output samples, i.e. "
         "the states the runs return; left over time for one representative run per "
-        "integrator (smallest-Δt successful zoh run on the paper scene where "
+        "integrator (with the NLP of the paper figures where it ran, the smallest-Δt "
+        "successful zoh run on the paper scene where "
         "available, its problem in the legend), then its maximum against Δt per "
         "method (median over repeats of a setting), one panel per work-precision "
         "problem; each problem's two panels share their axes." + second

@@ -520,14 +520,19 @@ def _preference(run, scene):
             not mu_equals(run, PAPER_MU), dt, run["run_id"])
 
 
-def drift_representatives(runs, has_trajectory):
+def drift_representatives(runs, has_trajectory, primary=None):
     """{dae: run}: per integrator the smallest-dt successful zoh paper run
-    (falling back to other couplings and scenes) that has a trajectory."""
+    (falling back to other couplings and scenes) that has a trajectory,
+    preferring the primary (paper-figure) run's NLP so that every panel
+    shows the integrators with the solver of the other figures."""
     chosen = OrderedDict()
     ok = [r for r in successful(runs) if has_trajectory(r)]
+
+    def key(r):
+        same = primary is not None and r["nlp"] == primary["nlp"]
+        return (not same,) + _preference(r, PAPER_SCENE)
     for dae in sorted({r["dae"] for r in ok}):
-        mine = [r for r in ok if r["dae"] == dae]
-        chosen[dae] = min(mine, key=lambda r: _preference(r, PAPER_SCENE))
+        chosen[dae] = min((r for r in ok if r["dae"] == dae), key=key)
     return chosen
 
 
