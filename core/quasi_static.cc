@@ -618,6 +618,31 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
   return out->status;
 }
 
+bool QuasiStaticSolver::Refine(double tolerance, QuasiStaticSolution* out) {
+  if (out->status != QuasiStaticStatus::kOk ||
+      !(tolerance < options_.residual_tolerance))
+    return false;
+  const double saved = options_.residual_tolerance;
+  const NlpStatus nlp_status = out->nlp_status;
+  const double residual = out->residual;
+  options_.residual_tolerance = tolerance;
+  nlp_options_.feasibility_tolerance = tolerance;
+  z0_ = out->z;
+  const bool ok = TrySolve(z0_, out);
+  options_.residual_tolerance = saved;
+  nlp_options_.feasibility_tolerance = saved;
+  if (!ok) {
+    out->nlp_status = nlp_status;
+    out->residual = residual;
+    return false;
+  }
+  out->z = result_.x;
+  out->kkt_residual = result_.kkt_residual;
+  warm_z_ = result_.x;
+  FillOutputs(out);
+  return true;
+}
+
 bool QuasiStaticSolver::HomotopyAndColdStart(QuasiStaticSolution* out) {
   // Epsilon homotopy from a well-conditioned creep law down to epsilon.
   const double eps = problem_.parameters().epsilon;

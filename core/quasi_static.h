@@ -255,6 +255,11 @@ class QuasiStaticSolver {
 
   // Status is also stored in *out. Never throws for numerical trouble.
   QuasiStaticStatus Solve(const Configuration& theta, QuasiStaticSolution* out);
+  // Re-solves from *out (a kOk solution of the last Solve()) to the tighter
+  // residual tolerance `tolerance`; on success *out becomes the refined
+  // solution and the warm start, else *out keeps its solution (its counters
+  // include the attempt). False if not attempted or not reached.
+  bool Refine(double tolerance, QuasiStaticSolution* out);
   // Forget the warm start.
   void Reset() { have_warm_ = have_previous_ = false; }
   // Start the next Solve() from z (scaled unknowns, num_variables() rows),

@@ -345,6 +345,8 @@ void Simulator::Record(double t, const Configuration& theta,
 
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// Residual tolerance of the switch-location probes (RestartAtSwitches).
+constexpr double kLocationResidualTolerance = 1e-14;
 
 // Zoh solves follow the path at regular steps: extrapolated warm starts.
 QuasiStaticOptions SolverOptions(const SimulationOptions& options) {
@@ -1055,34 +1057,26 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   const bool dense =
       model_->Rhs(th0, s.w_held, &f0) && model_->Rhs(th1, w1, &f1);
   QuasiStaticSolution& probe = s.sol_event;  // probe_solver: from Begin()
-  // Location probes start from the nearest (in time) of the interval's end
-  // solutions and the last probe's: Newton from there overshoots the
-  // tolerance and lands on the root to round-off, which the located switch
-  // times need (a probe's slip at the switch level moves by ~6e-10 m/s, the
-  // switch by ~2.5e-8 s, for roots that merely meet the tolerance; paper
-  // scene). The quadrature's probes start from the linear interpolation in
-  // time between the nearest known solutions on either side (the ends and
-  // every converged probe): an O(h^2) start that does not stall at the
-  // slip's kinks, where the nearest one did (tens of iterations).
+  // Each probe starts from the linear interpolation in time between the
+  // nearest converged solutions on either side (the interval's ends and
+  // every probe so far): an O(h^2) start that does not creep at the slip's
+  // kinks, where the nearest solution alone did (tens of iterations). The
+  // location's probes are then refined to kLocationResidualTolerance: a root
+  // that merely meets the run's tolerance fixes the switching wheel's slip
+  // at the switch level only to ~6e-10 m/s, i.e. the switch time to ~2.5e-8
+  // s per 1e-12 of residual (paper scene), 25x the location tolerance.
   const bool ends = s.have_z_prev && s.sol.status == QuasiStaticStatus::kOk;
   s.probe_known_count = 0;
-  bool interpolate = false;
-  double t_last = std::numeric_limits<double>::quiet_NaN();
+  bool refine = true;
   auto probe_at = [&](double tm, std::array<Eigen::Vector2d, 3>* slip) {
     const double frac = (tm - s.t_prev) / h;
     const Configuration q = dense
                                 ? HermiteState(th0, f0, th1, f1, h, frac)
                                 : Configuration((1 - frac) * th0 + frac * th1);
-    if (ends && interpolate) {
-      s.probe_solver->SetWarmStart(InterpolateKnown(tm, t));
-    } else if (ends) {
-      const double da = tm - s.t_prev, db = t - tm;
-      if (!(std::abs(tm - t_last) <= std::min(da, db)))
-        s.probe_solver->SetWarmStart(da <= db ? s.z_prev : s.sol.z);
-    }
+    if (ends) s.probe_solver->SetWarmStart(InterpolateKnown(tm, t));
     s.probe_solver->Solve(q, &probe);
+    if (refine) s.probe_solver->Refine(kLocationResidualTolerance, &probe);
     if (ends && probe.status == QuasiStaticStatus::kOk) {
-      t_last = tm;
       Session::KnownSolution& k =
           s.probe_known[s.probe_known_count++ % s.probe_known.size()];
       k.t = tm;
@@ -1105,7 +1099,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     LocateSwitchesAndReversals(s.t_prev, t, slip0, slip1, eps,
                                options_.event_tolerance, evaluate,
                                &result->switches);
-  interpolate = true;
+  refine = false;
   if (change || regime) IntegrateSlipAcrossSwitches(t, first, evaluate, result);
   if (!coupled || !(change || redo)) return;
   Eigen::VectorXd& y = s.y_event;
