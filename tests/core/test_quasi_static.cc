@@ -438,6 +438,54 @@ TEST(QuasiStaticSolver, DowngradedSolveIsSolverFailure) {
   EXPECT_LT(sol.mu_min, s.params.mu);
 }
 
+// Refine (the switch-location probes, model.md §7.3): from an accepted
+// root to a tighter residual. Every backend either reaches it (then the
+// residual meets it and the solution stays within the first solve's
+// tolerance, scaled by the condition number as in AgreesWithNewton...) or
+// leaves the solution as it was; a looser tolerance or a failed solve is
+// not attempted.
+TEST_P(QuasiStaticBackends, RefineTightensTheResidualOrLeavesTheSolution) {
+  std::vector<GaussianBump> bumps = {{0.0231, 0.2323, -0.1855, 0.3764}};
+  const Scenario s =
+      MakeSetup(std::make_shared<GaussianTerrain>(bumps), ActuationMode::kPaper,
+                0.1, {0.2, 0, 0, 0, 0, 0}, {0, 0.6, 0, 0.6, 0, 0.6});
+  QuasiStaticSolver solver(*s.model, s.params,
+                           NlpSolverRegistry::Create(GetParam()));
+  QuasiStaticSolution sol;
+  if (solver.Solve(s.theta, &sol) != QuasiStaticStatus::kOk)
+    GTEST_SKIP() << GetParam() << ": " << sol.message;
+  const QuasiStaticSolution first = sol;
+  EXPECT_FALSE(solver.Refine(1e-12, &sol));  // not tighter
+  EXPECT_EQ((sol.z - first.z).norm(), 0.0);
+  if (solver.Refine(1e-14, &sol)) {
+    EXPECT_LE(sol.residual, 1e-14);
+    EXPECT_EQ(sol.status, QuasiStaticStatus::kOk);
+    // Condition number (~1.2e7 for creeping paper-mode states) x 1e-12.
+    EXPECT_LT((sol.z - first.z).lpNorm<Eigen::Infinity>(), 1.2e7 * 1e-12);
+  } else {
+    EXPECT_EQ((sol.z - first.z).norm(), 0.0);
+    EXPECT_EQ(sol.residual, first.residual);
+  }
+  EXPECT_GT(sol.nlp_solves, first.nlp_solves);
+  QuasiStaticSolution failed = first;
+  failed.status = QuasiStaticStatus::kSolverFailure;
+  EXPECT_FALSE(solver.Refine(1e-14, &failed));
+}
+
+TEST(QuasiStaticSolver, NewtonRefinesToTheTighterResidual) {
+  RegisterBuiltinNlpSolvers();
+  std::vector<GaussianBump> bumps = {{0.0231, 0.2323, -0.1855, 0.3764}};
+  const Scenario s =
+      MakeSetup(std::make_shared<GaussianTerrain>(bumps), ActuationMode::kPaper,
+                0.1, {0.2, 0, 0, 0, 0, 0}, {0, 0.6, 0, 0.6, 0, 0.6});
+  QuasiStaticSolver solver(*s.model, s.params,
+                           NlpSolverRegistry::Create("newton"));
+  QuasiStaticSolution sol;
+  ASSERT_EQ(solver.Solve(s.theta, &sol), QuasiStaticStatus::kOk);
+  ASSERT_TRUE(solver.Refine(1e-15, &sol));
+  EXPECT_LE(sol.residual, 1e-15);
+}
+
 INSTANTIATE_TEST_SUITE_P(AllBackends, QuasiStaticBackends,
                          ::testing::ValuesIn([] {
                            RegisterBuiltinNlpSolvers();
