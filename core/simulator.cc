@@ -54,6 +54,9 @@ bool SimulationOptions::IsValid(std::string* why) const {
   if (probe_stall_iterations < 0)
     return fail("probe_stall_iterations: must be >= 0, got " +
                 std::to_string(probe_stall_iterations));
+  if (zoh_stall_iterations < 0)
+    return fail("zoh_stall_iterations: must be >= 0, got " +
+                std::to_string(zoh_stall_iterations));
   std::string inner;
   if (!integrator.IsValid(&inner)) return fail("integrator." + inner);
   if (!quasi_static.IsValid(&inner)) return fail("quasi_static." + inner);
@@ -348,10 +351,14 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Residual tolerance of the switch-location probes (RestartAtSwitches).
 constexpr double kLocationResidualTolerance = 1e-14;
 
-// Zoh solves follow the path at regular steps: extrapolated warm starts.
+// Zoh solves follow the path at regular steps: extrapolated warm starts,
+// and a stall hands over to the fallbacks (zoh_stall_iterations).
 QuasiStaticOptions SolverOptions(const SimulationOptions& options) {
   QuasiStaticOptions qs = options.quasi_static;
-  qs.extrapolate_warm_start = options.coupling == Coupling::kZoh;
+  if (options.coupling == Coupling::kZoh) {
+    qs.extrapolate_warm_start = true;
+    qs.stall_iterations = options.zoh_stall_iterations;
+  }
   return qs;
 }
 

@@ -83,6 +83,15 @@ struct SimulationOptions {
   // on the probes' roots beyond their class, so a stalled probe can hand
   // over to the homotopy at once.
   int probe_stall_iterations = 10;
+  // QuasiStaticOptions::stall_iterations of the zoh sample solves (the held
+  // twist; model.md §7.3 "Stall watch"); 0 = patient. A Newton that stalls
+  // there mostly ends in the homotopy anyway, after up to max_iterations
+  // (paper scene: 3 of its 4 long sample solves); with the watch the held
+  // twist of a solve that would have converged patiently comes from the
+  // homotopy's root instead, which moves a zoh trajectory at round-off
+  // (paper scene, 20 s: 5e-15 m). Coupled solves stay patient (their roots
+  // feed the integrator's stages).
+  int zoh_stall_iterations = 10;
   // Coupled mode, fixed-step integrators: those segments, and every
   // interval starting within kSwitchResolveWindow after a located switch,
   // are integrated with step doubling until one step and two half steps
