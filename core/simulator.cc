@@ -452,6 +452,14 @@ struct Simulator::Session {
   SlipIncrements slip_increments;
   std::vector<double> slip_breaks;
   double slip_increments_t = std::numeric_limits<double>::quiet_NaN();
+  // The switch probes of the current interval by exact time: the slip
+  // quadrature's breaks are the located t_upper, already solved there.
+  struct ProbeRecord {
+    double t;
+    std::array<Eigen::Vector2d, 3> slip;
+  };
+  std::array<ProbeRecord, 64> probe_cache;
+  int probe_cache_size = 0, probe_cache_next = 0;
 };
 
 // A bisection bracket: the limit is not met at a, met at b (or the state at
@@ -1031,7 +1039,14 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   // otherwise the last probe of an earlier switch, seconds away.
   const bool ends = s.have_z_prev && s.sol.status == QuasiStaticStatus::kOk;
   double t_last = std::numeric_limits<double>::quiet_NaN();
+  s.probe_cache_size = s.probe_cache_next = 0;
   auto probe_at = [&](double tm, std::array<Eigen::Vector2d, 3>* slip) {
+    for (int k = 0; k < s.probe_cache_size; ++k) {
+      if (s.probe_cache[k].t == tm) {
+        *slip = s.probe_cache[k].slip;
+        return true;
+      }
+    }
     const double frac = (tm - s.t_prev) / h;
     const Configuration q = dense
                                 ? HermiteState(th0, f0, th1, f1, h, frac)
@@ -1048,6 +1063,14 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     result->nlp_iterations_native += probe.nlp_iterations_native;
     if (probe.status != QuasiStaticStatus::kOk) return false;
     for (int i = 0; i < 3; ++i) (*slip)[i] = probe.contacts[i].slip;
+    // Kept: the most recent 64 (a ring once full).
+    Session::ProbeRecord& r = s.probe_cache[s.probe_cache_next];
+    r.t = tm;
+    r.slip = *slip;
+    s.probe_cache_next = (s.probe_cache_next + 1) % int(s.probe_cache.size());
+    s.probe_cache_size = std::max(
+        s.probe_cache_size, s.probe_cache_next == 0 ? int(s.probe_cache.size())
+                                                    : s.probe_cache_next);
     return true;
   };
   // One captured reference: std::function keeps it without allocating.

@@ -31,15 +31,26 @@
 // slips at interior times (the simulator: the quasi-static solve at states
 // of the interval's cubic Hermite dense output, core/limit_events.h),
 // keeping the invariant "class at t_lower = class at t0, class at t_upper =
-// class at t1" until t_upper - t_lower <= tolerance. The bracket is the one
-// bisection ends with: bisection down to 1e-6 s, then Illinois steps on g_i
-// to a bracket of width <= tolerance, then bisection's remaining halvings
-// replayed against it, and the ends of the result that were not evaluated
-// checked (a failed check or evaluation: plain bisection on); paper scene:
-// ~21 instead of 26 evaluations per switch. The switch time is t_upper (the
-// first state found in the new class). A wheel that changes class twice
-// within [t0, t1] has the same class at both ends and is not seen (the
-// samples bound the resolution, as for any sampled detection).
+// class at t1" until t_upper - t_lower <= tolerance, by Brent's method on
+//   v(t) = -|l(t)| on t0's side, +|l(t)| on t1's,  l = log(|s_i| / (kappa eps))
+// (l is g's argument, g = tanh(l / 2): near linear in t across the decades
+// of a transition, where g saturates at +-1; the side comes from g's sign,
+// so v and the class cannot disagree at round-off). Each step evaluates
+// the inverse quadratic (or secant) interpolant's zero when it lies inside
+// 3/4 of the bracket and the step before last shrank at least twofold, the
+// bracket's midpoint otherwise, and moves at least tol1 = 0.49 tolerance
+// from the best point, so the step that crosses the zero closes the bracket
+// to <= 2 tol1; every end of a bracket is an evaluated point (a new point
+// replaces the end on its side: the one on t0's side stays the lower). A
+// failed evaluation: bisection of the bracket so far. The bracket is not
+// bisection's (which needed log2((t1 - t0) / tolerance) evaluations): the
+// located times differ from it within the tolerance. Paper scene (8
+// switches, Delta t = 0.05 s): 5-10 evaluations per switch, 58 in all,
+// instead of 20-22 (168) for bisection to 1e-6 s, Illinois, and bisection's
+// halvings replayed. The switch time is t_upper (the first state found in
+// the new class). A wheel that changes class twice within [t0, t1] has the
+// same class at both ends and is not seen (the samples bound the
+// resolution, as for any sampled detection).
 //
 // Resolution (coupled mode, fixed-step methods): with eps > 0 a switch is
 // not a kink but a steep, smooth transition whose width scales with eps
@@ -97,8 +108,8 @@ struct SwitchEvent {
 using SlipEvaluator = std::function<bool(double t, std::array<double, 3>*)>;
 
 // Appends to *out one event per wheel whose class (slip0 at t0, slip1 at t1)
-// differs, located on `evaluate` to `tolerance` seconds (the bracket of
-// bisection, see "Location" above), sorted by time. Returns the number
+// differs, located on `evaluate` to `tolerance` seconds (see "Location"
+// above), sorted by time. Returns the number
 // appended. Throws std::invalid_argument for t1 <= t0, tolerance <= 0 or
 // epsilon <= 0.
 int LocateSwitches(double t0, double t1, const std::array<double, 3>& slip0,
