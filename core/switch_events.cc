@@ -53,11 +53,12 @@ double SidedValue(double f, bool start) {
   return start ? -m : m;
 }
 
-// Narrows [*a, *b] (*a on t0's side, *b not; values fa, fb) to a bracket of
-// width <= tolerance whose ends keep their sides, by Brent's method (see
-// "Location" in the header). eval(t, &f, &start) returns false when f
-// cannot be evaluated at t; *start: t on t0's side. After a failed
-// evaluation, bisection of the bracket so far; false if one fails there.
+// Narrows [*a, *b] (*a on t0's side, *b not; values fa, fb) to bisection's
+// bracket of width <= tolerance by Brent's method, then bisection's
+// halvings replayed (see "Location" in the header). eval(t, &f, &start)
+// returns false when f cannot be evaluated at t; *start: t on t0's side.
+// After a failed evaluation, bisection of the bracket so far; false if one
+// fails there.
 template <class Eval>
 bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
                    double* b_io, double fa_in, double fb_in) {
@@ -129,6 +130,35 @@ bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
   }
   // The bracket so far, its t0 side first.
   double lo = std::min(b, c), hi = std::max(b, c);
+  if (ok) {
+    // Bisection's bracket: its halvings of [*a_io, *b_io] replayed against
+    // [lo, hi] (a midpoint left of lo lies on t0's side if the class
+    // changes once, one inside [lo, hi] is evaluated), then the ends that
+    // were not evaluated checked. A disagreement keeps [lo, hi].
+    double ra = *a_io, rb = *b_io;
+    bool a_seen = true, b_seen = true, agree = true;
+    while (agree && rb - ra > tolerance) {
+      const double m = 0.5 * (ra + rb);
+      if (!(m > ra && m < rb)) break;  // round-off
+      if (m <= lo || m >= hi) {
+        const bool left = m <= lo;
+        (left ? ra : rb) = m;
+        (left ? a_seen : b_seen) = m == (left ? lo : hi);
+      } else if (eval(m, &f, &start)) {
+        (start ? ra : rb) = m;
+        (start ? lo : hi) = m;
+        (start ? a_seen : b_seen) = true;
+      } else {
+        agree = false;
+      }
+    }
+    if (agree && !a_seen) agree = eval(ra, &f, &start) && start;
+    if (agree && !b_seen) agree = eval(rb, &f, &start) && !start;
+    if (agree) {
+      lo = ra;
+      hi = rb;
+    }
+  }
   if (!ok) {
     ok = true;
     while (hi - lo > tolerance) {
