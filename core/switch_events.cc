@@ -54,22 +54,53 @@ double SidedValue(double f, bool start) {
 }
 
 // Narrows [*a, *b] (*a on t0's side, *b not; values fa, fb) to bisection's
-// bracket of width <= tolerance by Brent's method, then bisection's
-// halvings replayed (see "Location" in the header). eval(t, &f, &start)
+// bracket of width <= tolerance by Brent's method and bisection's halvings
+// replayed (see "Location" in the header). eval(t, &f, &start)
 // returns false when f cannot be evaluated at t; *start: t on t0's side.
 // After a failed evaluation, bisection of the bracket so far; false if one
 // fails there.
 template <class Eval>
 bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
                    double* b_io, double fa_in, double fb_in) {
+  double f = 0;
+  bool start = false;
+  // Bisection's halvings of [*a_io, *b_io] replayed against [lo, hi] (a
+  // midpoint left of lo lies on t0's side if the class changes once, one
+  // inside [lo, hi] is evaluated), then the ends of the result not
+  // evaluated checked (lo and hi count as evaluated if `evaluated`). True
+  // with [*ra, *rb] = bisection's bracket if every check agrees.
+  auto replay = [&](double lo, double hi, bool evaluated, double* ra,
+                    double* rb) {
+    *ra = *a_io;
+    *rb = *b_io;
+    bool a_seen = true, b_seen = true;
+    while (*rb - *ra > tolerance) {
+      const double m = 0.5 * (*ra + *rb);
+      if (!(m > *ra && m < *rb)) break;  // round-off
+      if (m <= lo || m >= hi) {
+        const bool left = m <= lo;
+        (left ? *ra : *rb) = m;
+        (left ? a_seen : b_seen) = evaluated && m == (left ? lo : hi);
+      } else if (eval(m, &f, &start)) {
+        (start ? *ra : *rb) = m;
+        (start ? lo : hi) = m;
+        (start ? a_seen : b_seen) = true;
+      } else {
+        return false;
+      }
+    }
+    if (!a_seen && !(eval(*ra, &f, &start) && start)) return false;
+    if (!b_seen && !(eval(*rb, &f, &start) && !start)) return false;
+    return true;
+  };
   // b: the latest best point, c: the other end of the bracket [b, c] (or
   // [c, b]), a: the previous b. Each new point lies strictly inside the
   // bracket and replaces the end on its side, so the end on t0's side
   // stays the lower one.
   double a = *a_io, b = *b_io, c = b;
   double fa = SidedValue(fa_in, true), fb = SidedValue(fb_in, false), fc = fb;
-  double d = b - a, e = d, f = 0;
-  bool start = false, ok = true;
+  double d = b - a, e = d, ra, rb;
+  bool ok = true, tried = false;
   // Steps of at least tol1 from b: the last one, across the zero, closes
   // the bracket to <= 2 tol1 (< tolerance, with room for round-off).
   const double tol1 = 0.49 * tolerance;
@@ -89,6 +120,7 @@ bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
     }
     const double xm = 0.5 * (c - b);
     if (std::abs(xm) <= tol1) break;
+    bool interpolated = false;
     if (std::abs(e) >= tol1 && std::abs(fa) > std::abs(fb)) {
       // Inverse quadratic interpolation (secant if a == c), accepted when
       // it lands inside 3/4 of the bracket and shrinks faster than half
@@ -111,11 +143,23 @@ bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
       if (2 * p < std::min(3 * xm * q - std::abs(tol1 * q), std::abs(e * q))) {
         e = d;
         d = p / q;
+        interpolated = true;
       } else {
         d = e = xm;
       }
     } else {
       d = e = xm;
+    }
+    // An interpolated correction below tol1: the zero is at b + d to far
+    // better than the tolerance, so bisection's bracket around it is
+    // checked at once instead of closing Brent's bracket first (once).
+    if (interpolated && std::abs(d) <= tol1 && !tried) {
+      tried = true;
+      if (replay(b + d, b + d, false, &ra, &rb)) {
+        *a_io = ra;
+        *b_io = rb;
+        return true;
+      }
     }
     const double x = std::abs(d) > tol1 ? b + d : b + std::copysign(tol1, xm);
     if (!(x > std::min(b, c) && x < std::max(b, c))) break;  // round-off
@@ -128,36 +172,12 @@ bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
     b = x;
     fb = SidedValue(f, start);
   }
-  // The bracket so far, its t0 side first.
+  // The bracket so far, its t0 side first; bisection's if the replay
+  // agrees, else this one.
   double lo = std::min(b, c), hi = std::max(b, c);
-  if (ok) {
-    // Bisection's bracket: its halvings of [*a_io, *b_io] replayed against
-    // [lo, hi] (a midpoint left of lo lies on t0's side if the class
-    // changes once, one inside [lo, hi] is evaluated), then the ends that
-    // were not evaluated checked. A disagreement keeps [lo, hi].
-    double ra = *a_io, rb = *b_io;
-    bool a_seen = true, b_seen = true, agree = true;
-    while (agree && rb - ra > tolerance) {
-      const double m = 0.5 * (ra + rb);
-      if (!(m > ra && m < rb)) break;  // round-off
-      if (m <= lo || m >= hi) {
-        const bool left = m <= lo;
-        (left ? ra : rb) = m;
-        (left ? a_seen : b_seen) = m == (left ? lo : hi);
-      } else if (eval(m, &f, &start)) {
-        (start ? ra : rb) = m;
-        (start ? lo : hi) = m;
-        (start ? a_seen : b_seen) = true;
-      } else {
-        agree = false;
-      }
-    }
-    if (agree && !a_seen) agree = eval(ra, &f, &start) && start;
-    if (agree && !b_seen) agree = eval(rb, &f, &start) && !start;
-    if (agree) {
-      lo = ra;
-      hi = rb;
-    }
+  if (ok && replay(lo, hi, true, &ra, &rb)) {
+    lo = ra;
+    hi = rb;
   }
   if (!ok) {
     ok = true;

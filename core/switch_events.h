@@ -49,13 +49,17 @@
 //     class changes once, one inside is evaluated;
 //  3. each end of the result not evaluated in 1-2 is evaluated and must be
 //     in its class (else [lo, hi] is kept: a bracket of the invariant too).
+// Once an interpolated correction d is below tol1 (the zero is at b + d to
+// far better than the tolerance), 2-3 are tried at once against
+// [b + d, b + d] (two evaluations: the ends), before the step that would
+// close Brent's bracket; if a check disagrees, Brent goes on.
 // A failed evaluation: bisection of the bracket so far. Paper scene (8
-// switches, Delta t = 0.05 s): 7-12 evaluations per switch, 74 in all, 16 of
-// them for 2-3 (1: 58), instead of 20-22 (168) with bisection to 1e-6 s and
-// Illinois; plain bisection takes 26. Without 2-3 the located times move
-// within the tolerance, which moved the coupled RK4 ladder's rungs at the
-// 1e-10 m level of the resolved steps' tolerance (SwitchEvents test
-// PaperSceneCoupledRk4LadderHasOrderFourAboveTheFloor). The switch time is
+// switches, Delta t = 0.05 s): 6-11 evaluations per switch, 67 in all
+// (Brent alone, without 2-3: 58), instead of 20-22 (168) with bisection to
+// 1e-6 s and Illinois; plain bisection takes 26. Without 2-3 the located
+// times move within the tolerance, which moved the coupled RK4 ladder's
+// rungs at the 1e-10 m level of the resolved steps' tolerance (SwitchEvents
+// test PaperSceneCoupledRk4LadderHasOrderFourAboveTheFloor). The switch time is
 // t_upper (the first state found in the new class). A wheel that changes
 // class twice within [t0, t1] has the same class at both ends and is not
 // seen (the samples bound the resolution, as for any sampled detection).
