@@ -59,40 +59,45 @@ double SidedValue(double f, bool start) {
 // returns false when f cannot be evaluated at t; *start: t on t0's side.
 // After a failed evaluation, bisection of the bracket so far; false if one
 // fails there.
+// Bisection's halvings of [t0, t1] to `tolerance` replayed against [lo, hi]
+// (a midpoint left of lo lies on t0's side if the class changes once, one
+// inside [lo, hi] is evaluated), then the ends of the result not evaluated
+// checked (lo and hi count as evaluated if `evaluated`). True with
+// [*ra, *rb] = bisection's bracket if every check agrees.
+template <class Eval>
+bool ReplayBisection(double tolerance, const Eval& eval, double t0, double t1,
+                     double lo, double hi, bool evaluated, double* ra,
+                     double* rb) {
+  double f;
+  bool start, a_seen = true, b_seen = true;
+  *ra = t0;
+  *rb = t1;
+  while (*rb - *ra > tolerance) {
+    const double m = 0.5 * (*ra + *rb);
+    if (!(m > *ra && m < *rb)) break;  // round-off
+    if (m <= lo || m >= hi) {
+      const bool left = m <= lo;
+      (left ? *ra : *rb) = m;
+      (left ? a_seen : b_seen) = evaluated && m == (left ? lo : hi);
+    } else if (eval(m, &f, &start)) {
+      (start ? *ra : *rb) = m;
+      (start ? lo : hi) = m;
+      (start ? a_seen : b_seen) = true;
+    } else {
+      return false;
+    }
+  }
+  if (!a_seen && !(eval(*ra, &f, &start) && start)) return false;
+  if (!b_seen && !(eval(*rb, &f, &start) && !start)) return false;
+  return true;
+}
+
 template <class Eval>
 bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
                    double* b_io, double fa_in, double fb_in) {
+  const double t0 = *a_io, t1 = *b_io;
   double f = 0;
   bool start = false;
-  // Bisection's halvings of [*a_io, *b_io] replayed against [lo, hi] (a
-  // midpoint left of lo lies on t0's side if the class changes once, one
-  // inside [lo, hi] is evaluated), then the ends of the result not
-  // evaluated checked (lo and hi count as evaluated if `evaluated`). True
-  // with [*ra, *rb] = bisection's bracket if every check agrees.
-  auto replay = [&](double lo, double hi, bool evaluated, double* ra,
-                    double* rb) {
-    *ra = *a_io;
-    *rb = *b_io;
-    bool a_seen = true, b_seen = true;
-    while (*rb - *ra > tolerance) {
-      const double m = 0.5 * (*ra + *rb);
-      if (!(m > *ra && m < *rb)) break;  // round-off
-      if (m <= lo || m >= hi) {
-        const bool left = m <= lo;
-        (left ? *ra : *rb) = m;
-        (left ? a_seen : b_seen) = evaluated && m == (left ? lo : hi);
-      } else if (eval(m, &f, &start)) {
-        (start ? *ra : *rb) = m;
-        (start ? lo : hi) = m;
-        (start ? a_seen : b_seen) = true;
-      } else {
-        return false;
-      }
-    }
-    if (!a_seen && !(eval(*ra, &f, &start) && start)) return false;
-    if (!b_seen && !(eval(*rb, &f, &start) && !start)) return false;
-    return true;
-  };
   // b: the latest best point, c: the other end of the bracket [b, c] (or
   // [c, b]), a: the previous b. Each new point lies strictly inside the
   // bracket and replaces the end on its side, so the end on t0's side
@@ -155,7 +160,8 @@ bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
     // checked at once instead of closing Brent's bracket first (once).
     if (interpolated && std::abs(d) <= tol1 && !tried) {
       tried = true;
-      if (replay(b + d, b + d, false, &ra, &rb)) {
+      if (ReplayBisection(tolerance, eval, t0, t1, b + d, b + d, false, &ra,
+                          &rb)) {
         *a_io = ra;
         *b_io = rb;
         return true;
@@ -175,7 +181,7 @@ bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
   // The bracket so far, its t0 side first; bisection's if the replay
   // agrees, else this one.
   double lo = std::min(b, c), hi = std::max(b, c);
-  if (ok && replay(lo, hi, true, &ra, &rb)) {
+  if (ok && ReplayBisection(tolerance, eval, t0, t1, lo, hi, true, &ra, &rb)) {
     lo = ra;
     hi = rb;
   }
