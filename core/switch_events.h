@@ -32,7 +32,9 @@
 // of the interval's cubic Hermite dense output, core/limit_events.h),
 // keeping the invariant "class at t_lower = class at t0, class at t_upper =
 // class at t1" until t_upper - t_lower <= tolerance. The bracket is the one
-// bisection ends with, found at fewer evaluations:
+// bisection ends with (if the class changes once and the probes agree with
+// bisection's: a probe's class within its solve's noise of the level can
+// differ with its warm start), found at fewer evaluations:
 //  1. Brent's method on
 //       v(t) = -|l(t)| on t0's side, +|l(t)| on t1's,
 //       l = log(|s_i| / (kappa eps))
