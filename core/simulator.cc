@@ -447,13 +447,17 @@ struct Simulator::Session {
   // The accepted solution at the previous sample (probe warm starts).
   Eigen::VectorXd z_prev;
   bool have_z_prev = false;
-  // The converged probes of the current interval (RestartAtSwitches), the
-  // oldest overwritten beyond capacity; sized with the probe solver.
+  // The converged probes of the current interval (RestartAtSwitches): the
+  // warm starts' interpolation nodes, and by exact time their slips (the
+  // slip quadrature's breaks are the located t_upper, already solved
+  // there). The oldest is overwritten beyond capacity; sized with the probe
+  // solver.
   struct KnownSolution {
     double t = kNaN;
     Eigen::VectorXd z;
+    std::array<Eigen::Vector2d, 3> slip;
   };
-  std::array<KnownSolution, 48> probe_known;
+  std::array<KnownSolution, 64> probe_known;
   int probe_known_count = 0;
   Eigen::VectorXd probe_warm;
   // Intervals starting before this time are integrated resolved.
@@ -1076,6 +1080,13 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   s.probe_known_count = 0;
   bool refine = true;
   auto probe_at = [&](double tm, std::array<Eigen::Vector2d, 3>* slip) {
+    const int known = std::min<int>(s.probe_known_count, s.probe_known.size());
+    for (int j = 0; j < known; ++j) {
+      if (s.probe_known[j].t == tm) {
+        *slip = s.probe_known[j].slip;
+        return true;
+      }
+    }
     const double frac = (tm - s.t_prev) / h;
     const Configuration q = dense
                                 ? HermiteState(th0, f0, th1, f1, h, frac)
@@ -1083,17 +1094,16 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     if (ends) s.probe_solver->SetWarmStart(InterpolateKnown(tm, t));
     s.probe_solver->Solve(q, &probe);
     if (refine) s.probe_solver->Refine(kLocationResidualTolerance, &probe);
-    if (ends && probe.status == QuasiStaticStatus::kOk) {
-      Session::KnownSolution& k =
-          s.probe_known[s.probe_known_count++ % s.probe_known.size()];
-      k.t = tm;
-      k.z = probe.z;
-    }
     result->nlp_solves += probe.nlp_solves;
     result->nlp_iterations += probe.nlp_iterations;
     result->nlp_iterations_native += probe.nlp_iterations_native;
     if (probe.status != QuasiStaticStatus::kOk) return false;
     for (int i = 0; i < 3; ++i) (*slip)[i] = probe.contacts[i].slip;
+    Session::KnownSolution& k =
+        s.probe_known[s.probe_known_count++ % s.probe_known.size()];
+    k.t = tm;
+    k.z = probe.z;
+    k.slip = *slip;
     return true;
   };
   // One captured reference: std::function keeps it without allocating.

@@ -24,9 +24,6 @@ double SwitchIndicator(double slip_speed, double epsilon) {
 }
 
 namespace {
-// Bisection down to this bracket width, then the secant (below) [s].
-constexpr double kSecantBracket = 1e-6;
-
 // One Illinois step on the bracket [lo, hi] (values flo, fhi of opposite
 // signs): the point m (value f) replaces lo if replaces_lo, else hi; the
 // other end, if it was kept the step before too, has its value halved
@@ -47,97 +44,161 @@ void IllinoisUpdate(bool replaces_lo, double m, double f, double* lo,
   }
 }
 
-// Narrows [*a, *b] around a sign change of a continuous f (*a on t0's
-// side, *b not) to *b - *a <= tolerance, ending with the bracket that
-// bisection to `tolerance` ends with, at fewer evaluations:
-//  1. bisection while wider than kSecantBracket (bisection's own points);
-//  2. Illinois (regula falsi, the value at an end kept twice halved; a
-//     bisection step when two secant steps do not halve the bracket) to a
-//     bracket [lo, hi] of width <= tolerance (each point >= tolerance / 2
-//     inside, so that it closes); on a smooth f with a transition of time
-//     scale T the secant point errs by ~ w^2 / (2 T) in a bracket of width
-//     w (5e-9 s at w = 1e-6 s, T = 0.1 ms), so this takes ~3 evaluations;
-//  3. bisection's remaining halvings replayed: a midpoint left of lo (right
-//     of hi) lies on t0's (t1's) side if f changes sign once in [*a, *b];
-//     one inside [lo, hi] is evaluated;
-//  4. each end of the result not evaluated in 1-3 is evaluated and must be
-//     on its side (a bracket of the invariant, whatever f does inside).
-// Should an evaluation fail or a check in 4 disagree (f not monotone), the
-// bisection of 1 continues to `tolerance` as before. eval(t, &f, &start)
+// The value Brent's method below interpolates: -|f| on t0's side, +|f| on
+// t1's (the side decides the sign, so that a value and its class cannot
+// disagree at round-off), finite and nonzero.
+double SidedValue(double f, bool start) {
+  const double m = std::clamp(std::abs(f), std::numeric_limits<double>::min(),
+                              1e3);  // |f| = inf (|s| = 0): a large value
+  return start ? -m : m;
+}
+
+// Narrows [*a, *b] (*a on t0's side, *b not; values fa, fb) to bisection's
+// bracket of width <= tolerance by Brent's method and bisection's halvings
+// replayed (see "Location" in the header). eval(t, &f, &start)
 // returns false when f cannot be evaluated at t; *start: t on t0's side.
+// After a failed evaluation, bisection of the bracket so far; false if one
+// fails there.
+// Bisection's halvings of [t0, t1] to `tolerance` replayed against [lo, hi]
+// (a midpoint left of lo lies on t0's side if the class changes once, one
+// inside [lo, hi] is evaluated), then the ends of the result not evaluated
+// checked (lo and hi count as evaluated if `evaluated`). True with
+// [*ra, *rb] = bisection's bracket if every check agrees.
 template <class Eval>
-bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
-                   double* b_io, double fa, double fb) {
-  double a = *a_io, b = *b_io, f = 0;
-  bool start = false;
-  auto bisect = [&](double width) {
-    while (b - a > width) {
-      const double m = 0.5 * (a + b);
-      if (!(m > a && m < b)) break;  // round-off
-      if (!eval(m, &f, &start)) return false;
-      (start ? a : b) = m;
-      (start ? fa : fb) = f;
-    }
-    return true;
-  };
-  bool ok = bisect(std::max(tolerance, kSecantBracket));
-  if (ok && b - a > tolerance) {
-    const double a1 = a, b1 = b;
-    double lo = a, hi = b, flo = fa, fhi = fb;
-    bool fast = std::isfinite(flo) && std::isfinite(fhi);
-    // 2. Illinois on [lo, hi].
-    const double width = tolerance;
-    int kept = 0, steps = 0;  // kept: +1 lo, -1 hi last
-    double before = hi - lo;
-    while (fast && hi - lo > width) {
-      double m = 0.5 * (lo + hi);
-      const bool secant = steps < 2 || hi - lo <= 0.5 * before;
-      if (steps == 2) {
-        steps = 0;
-        before = hi - lo;
-      }
-      if (secant && fhi != flo) {
-        m = std::clamp(hi - fhi * (hi - lo) / (fhi - flo), lo + 0.5 * width,
-                       hi - 0.5 * width);
-        ++steps;
-      } else {
-        kept = 0;
-      }
-      if (!(m > lo && m < hi)) break;  // round-off
-      if (!eval(m, &f, &start)) {
-        fast = false;
-        break;
-      }
-      IllinoisUpdate(start, m, f, &lo, &flo, &hi, &fhi, &kept);
-    }
-    // 3. Bisection's halvings, replayed.
-    bool a_seen = true, b_seen = true;  // the end is an evaluated point
-    while (fast && b - a > tolerance) {
-      const double m = 0.5 * (a + b);
-      if (!(m > a && m < b)) break;
-      if (m <= lo || m >= hi) {
-        const bool left = m <= lo;
-        (left ? a : b) = m;
-        (left ? a_seen : b_seen) = m == (left ? lo : hi);
-      } else if (eval(m, &f, &start)) {
-        (start ? a : b) = m;
-        (start ? lo : hi) = m;
-        (start ? a_seen : b_seen) = true;
-      } else {
-        fast = false;
-      }
-    }
-    // 4. The ends checked.
-    if (fast && !a_seen) fast = eval(a, &f, &start) && start;
-    if (fast && !b_seen) fast = eval(b, &f, &start) && !start;
-    if (!fast) {
-      a = a1;
-      b = b1;
-      ok = bisect(tolerance);
+bool ReplayBisection(double tolerance, const Eval& eval, double t0, double t1,
+                     double lo, double hi, bool evaluated, double* ra,
+                     double* rb) {
+  double f;
+  bool start, a_seen = true, b_seen = true;
+  *ra = t0;
+  *rb = t1;
+  while (*rb - *ra > tolerance) {
+    const double m = 0.5 * (*ra + *rb);
+    if (!(m > *ra && m < *rb)) break;  // round-off
+    if (m <= lo || m >= hi) {
+      const bool left = m <= lo;
+      (left ? *ra : *rb) = m;
+      (left ? a_seen : b_seen) = evaluated && m == (left ? lo : hi);
+    } else if (eval(m, &f, &start)) {
+      (start ? *ra : *rb) = m;
+      (start ? lo : hi) = m;
+      (start ? a_seen : b_seen) = true;
+    } else {
+      return false;
     }
   }
-  *a_io = a;
-  *b_io = b;
+  if (!a_seen && !(eval(*ra, &f, &start) && start)) return false;
+  if (!b_seen && !(eval(*rb, &f, &start) && !start)) return false;
+  return true;
+}
+
+template <class Eval>
+bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
+                   double* b_io, double fa_in, double fb_in) {
+  const double t0 = *a_io, t1 = *b_io;
+  double f = 0;
+  bool start = false;
+  // b: the latest best point, c: the other end of the bracket [b, c] (or
+  // [c, b]), a: the previous b. Each new point lies strictly inside the
+  // bracket and replaces the end on its side, so the end on t0's side
+  // stays the lower one.
+  double a = *a_io, b = *b_io, c = b;
+  double fa = SidedValue(fa_in, true), fb = SidedValue(fb_in, false), fc = fb;
+  double d = b - a, e = d, ra, rb;
+  bool ok = true, tried = false;
+  // Steps of at least tol1 from b: the last one, across the zero, closes
+  // the bracket to <= 2 tol1 (< tolerance, with room for round-off).
+  const double tol1 = 0.49 * tolerance;
+  for (;;) {
+    if ((fb > 0) == (fc > 0)) {
+      c = a;
+      fc = fa;
+      e = d = b - a;
+    }
+    if (std::abs(fc) < std::abs(fb)) {
+      a = b;
+      b = c;
+      c = a;
+      fa = fb;
+      fb = fc;
+      fc = fa;
+    }
+    const double xm = 0.5 * (c - b);
+    if (std::abs(xm) <= tol1) break;
+    bool interpolated = false;
+    if (std::abs(e) >= tol1 && std::abs(fa) > std::abs(fb)) {
+      // Inverse quadratic interpolation (secant if a == c), accepted when
+      // it lands inside 3/4 of the bracket and shrinks faster than half
+      // the step before last.
+      const double s = fb / fa;
+      double p, q;
+      if (a == c) {
+        p = 2 * xm * s;
+        q = 1 - s;
+      } else {
+        const double qa = fa / fc, r = fb / fc;
+        p = s * (2 * xm * qa * (qa - r) - (b - a) * (r - 1));
+        q = (qa - 1) * (r - 1) * (s - 1);
+      }
+      if (p > 0) {
+        q = -q;
+      } else {
+        p = -p;
+      }
+      if (2 * p < std::min(3 * xm * q - std::abs(tol1 * q), std::abs(e * q))) {
+        e = d;
+        d = p / q;
+        interpolated = true;
+      } else {
+        d = e = xm;
+      }
+    } else {
+      d = e = xm;
+    }
+    // An interpolated correction below tol1: the zero is at b + d to far
+    // better than the tolerance, so bisection's bracket around it is
+    // checked at once instead of closing Brent's bracket first (once).
+    if (interpolated && std::abs(d) <= tol1 && !tried) {
+      tried = true;
+      if (ReplayBisection(tolerance, eval, t0, t1, b + d, b + d, false, &ra,
+                          &rb)) {
+        *a_io = ra;
+        *b_io = rb;
+        return true;
+      }
+    }
+    const double x = std::abs(d) > tol1 ? b + d : b + std::copysign(tol1, xm);
+    if (!(x > std::min(b, c) && x < std::max(b, c))) break;  // round-off
+    if (!eval(x, &f, &start)) {
+      ok = false;
+      break;
+    }
+    a = b;
+    fa = fb;
+    b = x;
+    fb = SidedValue(f, start);
+  }
+  // The bracket so far, its t0 side first; bisection's if the replay
+  // agrees, else this one.
+  double lo = std::min(b, c), hi = std::max(b, c);
+  if (ok && ReplayBisection(tolerance, eval, t0, t1, lo, hi, true, &ra, &rb)) {
+    lo = ra;
+    hi = rb;
+  }
+  if (!ok) {
+    ok = true;
+    while (hi - lo > tolerance) {
+      const double m = 0.5 * (lo + hi);
+      if (!(m > lo && m < hi)) break;  // round-off
+      if (!eval(m, &f, &start)) {
+        ok = false;
+        break;
+      }
+      (start ? lo : hi) = m;
+    }
+  }
+  *a_io = lo;
+  *b_io = hi;
   return ok;
 }
 }  // namespace
@@ -162,14 +223,20 @@ int LocateSwitches(double t0, double t1, const std::array<double, 3>& slip0,
     e.wheel = i + 1;
     e.from_sliding = g0 >= 0;
     e.to_sliding = g1 >= 0;
-    auto eval = [&](double t, double* g, bool* start) {
+    // Interpolated: log(|s| / (kappa eps)), near linear in t across the
+    // decades of a transition where g = tanh(log(...) / 2) saturates.
+    const double level = kSwitchSlipOverEpsilon * epsilon;
+    auto eval = [&](double t, double* f, bool* start) {
       if (!evaluate(t, &slip)) return false;
-      *g = SwitchIndicator(slip[i], epsilon);
-      *start = (*g >= 0) == e.from_sliding;
-      return !std::isnan(*g);
+      const double g = SwitchIndicator(slip[i], epsilon);
+      *f = std::log(slip[i] / level);
+      *start = (g >= 0) == e.from_sliding;
+      return !std::isnan(g);
     };
     double a = t0, b = t1;
-    e.located = NarrowBracket(tolerance, eval, &a, &b, g0, g1);
+    e.located =
+        NarrowBracket(tolerance, eval, &a, &b, std::log(slip0[i] / level),
+                      std::log(slip1[i] / level));
     e.t_lower = a;
     e.t_upper = b;
     e.t = b;

@@ -57,8 +57,10 @@ TEST(SwitchEvents, SwitchesBetweenSamplesAreLocatedToTheTolerance) {
   ASSERT_EQ(LocateSwitches(t0, t1, slips(t0), slips(t1), kEps, tolerance,
                            evaluate, &out),
             2);
-  EXPECT_GT(evaluations, 2 * 20);  // 0.4 s / 2^k <= 1e-9 takes 29 halvings
-  const SwitchEvent& a = out[0];   // sorted by time: wheel 3 first
+  // Bisection: 0.4 s / 2^k <= 1e-9 takes 29 halvings per switch (measured:
+  // 10 for both; 46 with bisection to 1e-6 s, then Illinois).
+  EXPECT_LE(evaluations, 2 * 6);
+  const SwitchEvent& a = out[0];  // sorted by time: wheel 3 first
   EXPECT_EQ(a.wheel, 3);
   EXPECT_TRUE(a.from_sliding);
   EXPECT_FALSE(a.to_sliding);
@@ -75,6 +77,54 @@ TEST(SwitchEvents, SwitchesBetweenSamplesAreLocatedToTheTolerance) {
     EXPECT_GE(e.t_upper, exact - 1e-15);
     EXPECT_EQ(e.t, e.t_upper);
     EXPECT_NEAR(e.t, exact, tolerance);
+  }
+}
+
+// A steep, smooth transition like the paper scene's (the slip rises over
+// ~1 ms by decades, creeping as eps / sqrt(2 r D) before it): located to
+// the tolerance with the bracket's ends in their classes, in far fewer
+// evaluations than bisection's 26 over 0.05 s (measured: 10, of them 2
+// to check bisection's bracket; bisection to 1e-6 s, then Illinois: 20).
+TEST(SwitchEvents, ASteepSmoothTransitionIsLocatedInFewEvaluations) {
+  const double at = kSwitchSlipOverEpsilon * kEps;
+  for (const double tc : {2.9012345678, 2.9234567891, 2.9487654321}) {
+    for (const bool rising : {true, false}) {
+      const double t0 = 2.9, t1 = 2.95, width = 3e-4;
+      // |s| from ~1e-8 (creep) to ~1e-4 m/s (sliding) through a tanh in
+      // log|s| over ~width.
+      auto slip = [&](double t) {
+        const double x = (rising ? t - tc : tc - t) / width;
+        return std::exp(std::log(1e-6) + 4.6 * std::tanh(x) + 0.1 * x);
+      };
+      // |s| = kappa eps = 1e-6 m/s at x = 0, t = tc.
+      int evaluations = 0;
+      SlipEvaluator evaluate = [&](double t, std::array<double, 3>* s) {
+        ++evaluations;
+        *s = {slip(t), 0.0, 2 * at};
+        return true;
+      };
+      std::vector<SwitchEvent> out;
+      ASSERT_EQ(
+          LocateSwitches(t0, t1, {slip(t0), 0.0, 2 * at},
+                         {slip(t1), 0.0, 2 * at}, kEps, 1e-9, evaluate, &out),
+          1);
+      const SwitchEvent& e = out[0];
+      EXPECT_TRUE(e.located);
+      EXPECT_EQ(e.to_sliding, rising);
+      EXPECT_LE(e.t_upper - e.t_lower, 1e-9);
+      EXPECT_EQ(SwitchIndicator(slip(e.t_lower), kEps) >= 0, !rising);
+      EXPECT_EQ(SwitchIndicator(slip(e.t_upper), kEps) >= 0, rising);
+      EXPECT_NEAR(e.t, tc, 1e-9);
+      EXPECT_LE(evaluations, 11) << tc << " " << rising;
+      // The bracket is bisection's.
+      double lo = t0, hi = t1;
+      while (hi - lo > 1e-9) {
+        const double m = 0.5 * (lo + hi);
+        ((SwitchIndicator(slip(m), kEps) >= 0) == rising ? hi : lo) = m;
+      }
+      EXPECT_EQ(e.t_lower, lo);
+      EXPECT_EQ(e.t_upper, hi);
+    }
   }
 }
 
@@ -262,13 +312,13 @@ TEST(SwitchEvents, NoSwitchNoChange) {
   EXPECT_EQ(on.steps, off.steps);
 }
 
-// The probe solves' stall watch (model.md §7.3) changes no trajectory: zoh
-// on the paper scene across its first switches (2.903 and 2.919 s), the
+// The probe solves' stall watch (model.md §7.3; off by default since the
+// probes start from interpolated solutions) changes no trajectory: zoh on
+// the paper scene across its first switches (2.903 and 2.919 s), the
 // states, switch times and slip integrals are bit-identical with and
-// without it. Since the probes start from interpolated solutions
-// (RestartAtSwitches) none of them creeps there any more (the whole 20 s
-// run: 2241 Newton iterations either way; 3924 with the watch before), so
-// the watch does not fire: same iteration count.
+// without it. (It no longer saves iterations there: the whole 20 s run
+// takes 1923 Newton iterations patient and 1975 watched; 3924 watched with
+// the nearest-solution starts before.)
 TEST(SwitchEvents, ProbeStallWatchLeavesTheTrajectory) {
   SimulationOptions o = BuiltinOptions("rk-projection", Coupling::kZoh, 0.05);
   o.t_end = 3.2;
@@ -296,7 +346,6 @@ TEST(SwitchEvents, ProbeStallWatchLeavesTheTrajectory) {
     EXPECT_EQ(r[0].switches[j].t, r[1].switches[j].t) << j;
   std::printf("nlp iterations without / with the watch: %lld / %lld\n",
               r[0].nlp_iterations, r[1].nlp_iterations);
-  EXPECT_EQ(r[1].nlp_iterations, r[0].nlp_iterations);
   o.probe_stall_iterations = -1;
   std::string why;
   EXPECT_FALSE(o.IsValid(&why));
@@ -339,9 +388,10 @@ TEST(SwitchEvents, ZohStallWatchSavesIterationsAtRoundOff) {
 // across the paper scene's first switches (zoh, 3.2 s, stall watch off so
 // that a creeping Newton shows in full) the probes (the run's solves minus
 // those of the same run without switch location) took 151 solves and 1390
-// Newton iterations from the nearest solution (9.2 per solve) and take 140
-// and 176 (1.3; the location's refinement to 1e-14 counted as a solve of
-// its own). Asserted: <= 2 per solve.
+// Newton iterations from the nearest solution (9.2 per solve, with the
+// location by bisection then) and take 88 and 188 (2.1; the location by
+// Brent's method, its refinement to 1e-14 counted as a solve of its own).
+// Asserted: <= 3 per solve.
 TEST(SwitchEvents, ProbesStartFromInterpolatedSolutions) {
   SimulationOptions o = BuiltinOptions("rk-projection", Coupling::kZoh, 0.05);
   o.t_end = 3.2;
@@ -357,7 +407,7 @@ TEST(SwitchEvents, ProbesStartFromInterpolatedSolutions) {
   const long long iterations = r[1].nlp_iterations - r[0].nlp_iterations;
   ASSERT_GT(solves, 0);
   std::printf("probe solves %d, Newton iterations %lld\n", solves, iterations);
-  EXPECT_LE(iterations, 2LL * solves);
+  EXPECT_LE(iterations, 3LL * solves);
 }
 
 // Max over t = 0.4 k of |COM position - reference| [m].
@@ -419,17 +469,18 @@ const SimulationResult& PaperReference(double rtol, double dt) {
 // the rungs above the error floor fall at RK4's order. The floor is the
 // reference's own error, estimated as the spread between two references
 // (coupled dp54 at rtol 1e-12, dt = 0.003125, and at rtol 1e-13, dt = 0.05:
-// 4.7e-11 m, made at the first switch, 2.907 s, where the slip jumps within
-// 0.5 ms). Measured (model.md §8.6): 1.36e-7, 1.53e-8, 1.19e-9, 1.12e-10 m
-// at dt = 1.6, 0.8, 0.4, 0.2, then 8.0e-11, 3.0e-11, 1.0e-10 m at 0.1,
-// 0.05, 0.025: at the floor. The 0.4 s rung carries ~2e-10 m of the switch
-// handling (restarts at the located times, step doubling after them): with
-// the location tolerance at 5e-10 instead of 1e-9 it is 1.09e-9 (1.24e-9
-// with the probes' earlier warm starts, 1.01e-9 at 1e-9), so the three
-// coarsest rungs fit slopes of 3.39-3.54 for the same method. Asserted:
-// every rung above 2x the floor is below the one before; those rungs (at
-// least 4) and the three coarsest fit a slope >= 3.3; the rungs below stay
-// within 3x the floor.
+// 3.9e-11 m, made at the first switch, 2.907 s, where the slip jumps within
+// 0.5 ms). Measured (model.md §8.6): 1.36e-7, 1.53e-8, 1.01e-9, 1.54e-10 m
+// at dt = 1.6, 0.8, 0.4, 0.2 (fitted slope 3.33; 3.54 over the first
+// three), then 3.0e-11, 5.6e-11, 3.6e-11 m at 0.1, 0.05, 0.025: at the
+// floor. Asserted: every rung above 2x the floor is below the one before;
+// those rungs (at least 4) fit a slope >= 3.3 and the three coarsest >= 3.5;
+// the rungs below stay within 3x the floor. The 0.4 s rung carries ~2e-10 m
+// of the switch handling (restarts at the located times): switch times
+// moved within the location tolerance (location tolerance 5e-10 s, or
+// Brent's bracket instead of bisection's) give 1.09e-9-1.24e-9 m there and
+// slopes 3.39-3.48 over the three coarsest, so the 3.5 asserts bisection's
+// brackets as much as RK4's order.
 TEST(SwitchEvents, PaperSceneCoupledRk4LadderHasOrderFourAboveTheFloor) {
   const SimulationResult& ref = PaperReference(1e-12, 0.003125);
   const SimulationResult check = PaperReference(1e-13, 0.05);
@@ -452,7 +503,7 @@ TEST(SwitchEvents, PaperSceneCoupledRk4LadderHasOrderFourAboveTheFloor) {
   EXPECT_GE(above, 4u) << "floor " << floor;
   for (std::size_t j = 1; j < above; ++j) EXPECT_LT(on[j], on[j - 1]) << j;
   EXPECT_GE(FittedOrder(dts, on, 0, above), 3.3);
-  EXPECT_GE(FittedOrder(dts, on, 0, 3), 3.3);
+  EXPECT_GE(FittedOrder(dts, on, 0, 3), 3.5);
   for (std::size_t j = above; j < on.size(); ++j)
     EXPECT_LT(on[j], 3 * floor) << j;
   // The defect the location removes.
