@@ -117,6 +117,16 @@ TEST(SlipRegimes, PaperSlidingConvergesAsEpsilonFalls) {
 // of the piece (its extrapolated sum is far better than the estimate) and
 // tx located to |s| within 2e-4 of the level (<= 3e-4 of the creep). The
 // two-sample trapezoid's sliding errs by more than 100 % here.
+// An evaluator of slip(t) counting its calls in *calls.
+template <class Slip>
+SlipEvaluator Counting(const Slip& slip, int* calls) {
+  return [&slip, calls](double t, std::array<double, 3>* f) {
+    ++*calls;
+    *f = slip(t);
+    return true;
+  };
+}
+
 TEST(SlipRegimes, SwitchIntervalIsIntegratedPiecewise) {
   const double eps = 1e-8, t0 = 0.0, t1 = 0.05, ts = 0.03, tx = 0.02;
   // tc - tx = 1 / (200 r) and tc - ts = 1 / (2e4 r).
@@ -130,11 +140,7 @@ TEST(SlipRegimes, SwitchIntervalIsIntegratedPiecewise) {
   };
   ASSERT_NEAR(slip(tx)[0], 10 * eps, 1e-12 * eps);
   int calls = 0;
-  const SlipEvaluator evaluate = [&](double t, std::array<double, 3>* f) {
-    ++calls;
-    *f = slip(t);
-    return true;
-  };
+  const SlipEvaluator evaluate = Counting(slip, &calls);
   SlipIncrements inc;
   int evaluations = 0;
   ASSERT_TRUE(IntegrateSlipRegimes(t0, t1, slip(t0), slip(t1), {ts}, eps,
@@ -199,11 +205,7 @@ TEST(SlipRegimes, ASteepTransitionIsIntegratedWithinTheTolerance) {
               2e-5 * (1 + t)};
     };
     int calls = 0;
-    const SlipEvaluator evaluate = [&](double t, std::array<double, 3>* f) {
-      ++calls;
-      *f = slip(t);
-      return true;
-    };
+    const SlipEvaluator evaluate = Counting(slip, &calls);
     SlipIncrements inc;
     int evaluations = 0;
     ASSERT_TRUE(IntegrateSlipRegimes(t0, t1, slip(t0), slip(t1), {}, eps,

@@ -4,8 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <functional>
 #include <stdexcept>
+#include <string>
 
 #include "quasiroll/core/simulator.h"
 #include "quasiroll/core/slip_regimes.h"
@@ -312,6 +315,31 @@ TEST(SwitchEvents, NoSwitchNoChange) {
   EXPECT_EQ(on.steps, off.steps);
 }
 
+// The paper scene's first 3.2 s (zoh, dt 0.05 s, rk-projection, across its
+// first switches) twice, run k's options set by vary(k, &options).
+std::array<SimulationResult, 2> FirstSwitchesTwice(
+    const std::function<void(int, SimulationOptions*)>& vary) {
+  std::array<SimulationResult, 2> r;
+  for (int k = 0; k < 2; ++k) {
+    SimulationOptions o = BuiltinOptions("rk-projection", Coupling::kZoh, 0.05);
+    o.t_end = 3.2;
+    vary(k, &o);
+    r[k] = Simulator(PaperScene(), o).Run();
+    EXPECT_TRUE(r[k].success()) << r[k].stop_reason;
+  }
+  return r;
+}
+
+// A negative stall watch is rejected, naming its field.
+void ExpectNegativeRejected(int SimulationOptions::*field,
+                            const std::string& name) {
+  SimulationOptions o;
+  o.*field = -1;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why)) << name;
+  EXPECT_NE(why.find(name), std::string::npos) << why;
+}
+
 // The probe solves' stall watch (model.md §7.3; off by default since the
 // probes start from interpolated solutions) changes no trajectory: zoh on
 // the paper scene across its first switches (2.903 and 2.919 s), the
@@ -320,14 +348,9 @@ TEST(SwitchEvents, NoSwitchNoChange) {
 // takes 1923 Newton iterations patient and 1975 watched; 3924 watched with
 // the nearest-solution starts before.)
 TEST(SwitchEvents, ProbeStallWatchLeavesTheTrajectory) {
-  SimulationOptions o = BuiltinOptions("rk-projection", Coupling::kZoh, 0.05);
-  o.t_end = 3.2;
-  SimulationResult r[2];
-  for (int watch = 0; watch < 2; ++watch) {
-    o.probe_stall_iterations = watch ? 10 : 0;
-    r[watch] = Simulator(PaperScene(), o).Run();
-    ASSERT_TRUE(r[watch].success()) << r[watch].stop_reason;
-  }
+  const auto r = FirstSwitchesTwice([](int watch, SimulationOptions* o) {
+    o->probe_stall_iterations = watch ? 10 : 0;
+  });
   ASSERT_EQ(r[0].samples.size(), r[1].samples.size());
   for (std::size_t k = 0; k < r[0].samples.size(); ++k) {
     const TrajectorySample &a = r[0].samples[k], &b = r[1].samples[k];
@@ -346,10 +369,8 @@ TEST(SwitchEvents, ProbeStallWatchLeavesTheTrajectory) {
     EXPECT_EQ(r[0].switches[j].t, r[1].switches[j].t) << j;
   std::printf("nlp iterations without / with the watch: %lld / %lld\n",
               r[0].nlp_iterations, r[1].nlp_iterations);
-  o.probe_stall_iterations = -1;
-  std::string why;
-  EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_NE(why.find("probe_stall_iterations"), std::string::npos) << why;
+  ExpectNegativeRejected(&SimulationOptions::probe_stall_iterations,
+                         "probe_stall_iterations");
 }
 
 // The zoh sample solves' stall watch (SimulationOptions::
@@ -360,14 +381,9 @@ TEST(SwitchEvents, ProbeStallWatchLeavesTheTrajectory) {
 // states within 4.5e-15 m (the homotopy's root instead of the patient one at
 // 3.00 s; round-off). Asserted: fewer iterations, states within 1e-13 m.
 TEST(SwitchEvents, ZohStallWatchSavesIterationsAtRoundOff) {
-  SimulationOptions o = BuiltinOptions("rk-projection", Coupling::kZoh, 0.05);
-  o.t_end = 3.2;
-  SimulationResult r[2];
-  for (int watch = 0; watch < 2; ++watch) {
-    o.zoh_stall_iterations = watch ? 10 : 0;
-    r[watch] = Simulator(PaperScene(), o).Run();
-    ASSERT_TRUE(r[watch].success()) << r[watch].stop_reason;
-  }
+  const auto r = FirstSwitchesTwice([](int watch, SimulationOptions* o) {
+    o->zoh_stall_iterations = watch ? 10 : 0;
+  });
   ASSERT_EQ(r[0].samples.size(), r[1].samples.size());
   double worst = 0;
   for (std::size_t k = 0; k < r[0].samples.size(); ++k)
@@ -377,10 +393,8 @@ TEST(SwitchEvents, ZohStallWatchSavesIterationsAtRoundOff) {
               r[0].nlp_iterations, r[1].nlp_iterations, worst);
   EXPECT_LT(r[1].nlp_iterations, r[0].nlp_iterations);
   EXPECT_LT(worst, 1e-13);
-  o.zoh_stall_iterations = -1;
-  std::string why;
-  EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_NE(why.find("zoh_stall_iterations"), std::string::npos) << why;
+  ExpectNegativeRejected(&SimulationOptions::zoh_stall_iterations,
+                         "zoh_stall_iterations");
 }
 
 // The probes start from the interpolation between the nearest known
@@ -393,15 +407,10 @@ TEST(SwitchEvents, ZohStallWatchSavesIterationsAtRoundOff) {
 // Brent's method, its refinement to 1e-14 counted as a solve of its own).
 // Asserted: <= 3 per solve.
 TEST(SwitchEvents, ProbesStartFromInterpolatedSolutions) {
-  SimulationOptions o = BuiltinOptions("rk-projection", Coupling::kZoh, 0.05);
-  o.t_end = 3.2;
-  o.probe_stall_iterations = 0;
-  SimulationResult r[2];
-  for (int locate = 0; locate < 2; ++locate) {
-    o.locate_switches = locate == 1;
-    r[locate] = Simulator(PaperScene(), o).Run();
-    ASSERT_TRUE(r[locate].success()) << r[locate].stop_reason;
-  }
+  const auto r = FirstSwitchesTwice([](int locate, SimulationOptions* o) {
+    o->probe_stall_iterations = 0;
+    o->locate_switches = locate == 1;
+  });
   ASSERT_GE(r[1].switches.size(), 2u);
   const int solves = r[1].nlp_solves - r[0].nlp_solves;
   const long long iterations = r[1].nlp_iterations - r[0].nlp_iterations;
