@@ -7,6 +7,7 @@ import math
 import numpy as np
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
+from matplotlib.ticker import NullFormatter
 
 from . import selection as sel
 from .data import is_finite
@@ -349,6 +350,11 @@ def _plot_drift_vs_dt(ax, ctx, problem, column="drift_max"):
         return 0
     ax.set_xscale("log")
     ax.set_yscale("log")
+    # Ticks at the run's Δt values: a log axis over less than a decade
+    # otherwise labels its minor ticks on top of each other.
+    dts = sorted({r["dt"] for r in rows})
+    ax.set_xticks(dts, [fmt(dt) for dt in dts])
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("Δt [s]")
     ax.set_ylabel("max ‖H‖∞ over the run [m, rad]")
     return len(rows)
@@ -396,7 +402,9 @@ def figure_drift(ctx):
         "successful zoh run on the paper scene where "
         "available, its problem in the legend), then its maximum against Δt per "
         "method (median over repeats of a setting), one panel per work-precision "
-        "problem; each problem's two panels share their axes." + second
+        "problem; each problem's two panels share their axes; where methods differ "
+        "only in their NLP their lines coincide (the drift does not depend on it) and "
+        "the NLP last in the legend covers the others." + second
         + f"This run: {'; '.join(parts) or 'no trajectories'}." + _failed_note(ctx))
     record = save_figure(fig, ctx.out_dir, "fig_drift", "2. Constraint drift", caption)
     record.data = {"panels": [p["label"] for p in problems], "step_drift": steps}
