@@ -223,8 +223,8 @@ struct QuasiStaticOptions {
   // iterations at |r| ~ 1e-9 before it converges. Off by default: the root
   // a fallback finds instead differs within the problem's conditioning, and
   // a trajectory that depends on it moves at round-off; the simulator sets it
-  // for its probe solves (switch location, slip quadrature), which the
-  // trajectory does not depend on.
+  // for its zoh sample solves and its probe solves (SimulationOptions::
+  // zoh_stall_iterations, probe_stall_iterations).
   int stall_iterations = 0;
   // Compute mu_min and the condition number at every solve (costly in paper
   // mode); they are always computed on failure.

@@ -53,12 +53,6 @@ double SidedValue(double f, bool start) {
   return start ? -m : m;
 }
 
-// Narrows [*a, *b] (*a on t0's side, *b not; values fa, fb) to bisection's
-// bracket of width <= tolerance by Brent's method and bisection's halvings
-// replayed (see "Location" in the header). eval(t, &f, &start)
-// returns false when f cannot be evaluated at t; *start: t on t0's side.
-// After a failed evaluation, bisection of the bracket so far; false if one
-// fails there.
 // Bisection's halvings of [t0, t1] to `tolerance` replayed against [lo, hi]
 // (a midpoint left of lo lies on t0's side if the class changes once, one
 // inside [lo, hi] is evaluated), then the ends of the result not evaluated
@@ -92,6 +86,12 @@ bool ReplayBisection(double tolerance, const Eval& eval, double t0, double t1,
   return true;
 }
 
+// Narrows [*a, *b] (*a on t0's side, *b not; values fa, fb) to bisection's
+// bracket of width <= tolerance by Brent's method and bisection's halvings
+// replayed (see "Location" in the header). eval(t, &f, &start)
+// returns false when f cannot be evaluated at t; *start: t on t0's side.
+// After a failed evaluation, bisection of the bracket so far; false if one
+// fails there.
 template <class Eval>
 bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
                    double* b_io, double fa_in, double fb_in) {

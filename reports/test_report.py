@@ -623,6 +623,7 @@ class SelectionTest(unittest.TestCase):
                                          lambda r: True, dict(mine, nlp="ipopt"))
         self.assertEqual(reps[base["dae"]]["run_id"], "a_fine")
 
+
 class MethodIdentityTest(unittest.TestCase):
     """Issue #20: a method is what ran, its backend options included; option
     variants are never pooled with their pair."""

@@ -104,6 +104,16 @@ TEST(SlipRegimes, PaperSlidingConvergesAsEpsilonFalls) {
   EXPECT_NEAR(e8.creep / e9.creep, 10.0, 0.5);
 }
 
+// An evaluator of slip(t) counting its calls in *calls.
+template <class Slip>
+SlipEvaluator Counting(const Slip& slip, int* calls) {
+  return [&slip, calls](double t, std::array<double, 3>* f) {
+    ++*calls;
+    *f = slip(t);
+    return true;
+  };
+}
+
 // An interval with a located stick -> slide switch of wheel 1 at ts: before
 // it the creep precursor |s| = eps / sqrt(2 r (tc - t)) (a wheel heading for
 // its cone, switch_events.h), |s(ts)| = 100 eps (the switch: a kink); after
@@ -117,16 +127,6 @@ TEST(SlipRegimes, PaperSlidingConvergesAsEpsilonFalls) {
 // of the piece (its extrapolated sum is far better than the estimate) and
 // tx located to |s| within 2e-4 of the level (<= 3e-4 of the creep). The
 // two-sample trapezoid's sliding errs by more than 100 % here.
-// An evaluator of slip(t) counting its calls in *calls.
-template <class Slip>
-SlipEvaluator Counting(const Slip& slip, int* calls) {
-  return [&slip, calls](double t, std::array<double, 3>* f) {
-    ++*calls;
-    *f = slip(t);
-    return true;
-  };
-}
-
 TEST(SlipRegimes, SwitchIntervalIsIntegratedPiecewise) {
   const double eps = 1e-8, t0 = 0.0, t1 = 0.05, ts = 0.03, tx = 0.02;
   // tc - tx = 1 / (200 r) and tc - ts = 1 / (2e4 r).
