@@ -71,7 +71,9 @@ class WeightedProjection {
             Eigen::Ref<Eigen::VectorXd> delta) const;
 
   // Newton projection y <- y - D J^T A^{-1} H(y) until ||H||_inf <= tol, at
-  // most max_iterations corrections (counted in
+  // most max_iterations corrections; A is refactorised at the current y
+  // unless the previous correction contracted ||H||_inf by 1e3 or more (then
+  // the last factorisation is kept: a chord step). Corrections are counted in
   // result->projection_iterations). *moved tells whether y changed; on
   // success the entry state's ||H||_inf enters result->step_drift_max.
   // Returns kSuccess, or kConstraintFailure with message() set.

@@ -1184,6 +1184,46 @@ TEST(StepDriftTest, BaumgarteReportsItsAcceptedStatesAndEveryCallItsEnd) {
   }
 }
 
+// Projection onto the unit circle from radius r: a Newton correction gives
+// H' = H^2 / (4 r^2) (H = r^2 - 1). Near the manifold (H = 2e-6, as after an
+// RK4 step) the first correction contracts H by 5e-7, so the second one
+// reuses the factorisation (a chord step, 1 Jacobian for 2 corrections); far
+// from it (r = 1.1: contractions 0.043, then 2.3e-3, both weaker than 1e-3)
+// the matrix is refactorised until Newton contracts strongly.
+TEST(WeightedProjectionTest, KeepsTheFactorisationOnceNewtonContracts) {
+  class Circle final : public UnitCircleOde {  // the manifold alone
+    bool Rhs(double, const Eigen::Ref<const Eigen::VectorXd>&,
+             Eigen::Ref<Eigen::VectorXd>) override {
+      return false;
+    }
+  } ode;
+  WeightedProjection projection;
+  projection.Begin(ode);
+  const double tol = 1e-14;
+  {
+    Eigen::VectorXd y(2);
+    y << 0.6 * (1 + 1e-6), 0.8 * (1 + 1e-6);
+    IntegratorResult r;
+    bool moved = false;
+    ASSERT_EQ(projection.Project(ode, y, tol, 10, &r, &moved),
+              IntegratorStatus::kSuccess);
+    EXPECT_LE(std::abs(y.squaredNorm() - 1.0), tol);
+    EXPECT_EQ(r.projection_iterations, 2);
+    EXPECT_EQ(r.jacobian_evaluations, 1);
+  }
+  {
+    Eigen::VectorXd y(2);
+    y << 0.6 * 1.1, 0.8 * 1.1;
+    IntegratorResult r;
+    bool moved = false;
+    ASSERT_EQ(projection.Project(ode, y, tol, 10, &r, &moved),
+              IntegratorStatus::kSuccess);
+    EXPECT_LE(std::abs(y.squaredNorm() - 1.0), tol);
+    EXPECT_EQ(r.projection_iterations, 4);
+    EXPECT_EQ(r.jacobian_evaluations, 3);
+  }
+}
+
 TEST(RkProjectionTest, SingularConstraintJacobianIsReported) {
   RegisterBuiltinIntegrators();
   class ZeroWeights : public PendulumOde {
