@@ -50,14 +50,20 @@ void KinematicModel::Mount(int chain, double q0, double q1, Mat3* R_PW,
   }
 }
 
-void KinematicModel::EvaluateChain(const Configuration& theta, int chain,
-                                   ChainState* s) const {
-  const int e = ConfigIndex::Eta(chain);
-  const int j = ConfigIndex::kTheta + 2 * chain;
-  std::array<CacheEntry, kCacheWays>& ways = cache_[chain];
-  int& next = cache_next_[chain];
+namespace {
+Eigen::Matrix<double, 7, 1> ChainKey(const Configuration& theta, int chain) {
   Eigen::Matrix<double, 7, 1> key;
-  key << theta.segment<5>(e), theta.segment<2>(j);
+  key << theta.segment<5>(ConfigIndex::Eta(chain)),
+      theta.segment<2>(ConfigIndex::kTheta + 2 * chain);
+  return key;
+}
+}  // namespace
+
+bool KinematicModel::CachedChain(const Configuration& theta, int chain,
+                                 ChainState* s) const {
+  const std::array<CacheEntry, kCacheWays>& ways = cache_[chain];
+  const int next = cache_next_[chain];
+  const Eigen::Matrix<double, 7, 1> key = ChainKey(theta, chain);
   // Bitwise comparison: NaNs never hit, -0.0 vs 0.0 only costs a recompute.
   // Most recent first.
   for (int w = 1; w <= kCacheWays; ++w) {
@@ -65,9 +71,20 @@ void KinematicModel::EvaluateChain(const Configuration& theta, int chain,
     if (entry.valid &&
         std::memcmp(key.data(), entry.key.data(), sizeof(double) * 7) == 0) {
       *s = entry.state;
-      return;
+      return true;
     }
   }
+  return false;
+}
+
+void KinematicModel::EvaluateChain(const Configuration& theta, int chain,
+                                   ChainState* s) const {
+  if (CachedChain(theta, chain, s)) return;
+  const int e = ConfigIndex::Eta(chain);
+  const int j = ConfigIndex::kTheta + 2 * chain;
+  std::array<CacheEntry, kCacheWays>& ways = cache_[chain];
+  int& next = cache_next_[chain];
+  const Eigen::Matrix<double, 7, 1> key = ChainKey(theta, chain);
   CacheEntry& entry = ways[next];
   next = (next + 1) % kCacheWays;
   const double u = theta(e), v = theta(e + 1), xg = theta(e + 2),
@@ -104,18 +121,24 @@ void KinematicModel::PlatformPose(const Configuration& theta, Mat3* R,
 
 void KinematicModel::ContactVelocities(const ChainState& s, int chain,
                                        ContactVelocityMap* L) const {
-  // World-frame map first, then rotate both halves into {C_W}.
-  ContactVelocityMap m = ContactVelocityMap::Zero();
+  // World-frame map first, then rotate both halves into {C_W}. Only the
+  // 8 columns of the platform and of this chain's joints are non-zero; each
+  // column of a product is computed on its own, so rotating those 8 gives
+  // the 6 x 12 product's values.
+  Eigen::Matrix<double, 6, 8> m = Eigen::Matrix<double, 6, 8>::Zero();
   m.block<3, 3>(0, 0) = s.R;
   m.block<3, 3>(0, 3) = -Skew(s.p_c - s.p) * s.R;
   m.block<3, 3>(3, 3) = s.R;
   for (int k = 0; k < 2; ++k) {
-    const int col = 6 + 2 * chain + k;
-    m.block<3, 1>(0, col) = s.axis[k].cross(s.p_c - s.point[k]);
-    m.block<3, 1>(3, col) = s.axis[k];
+    m.block<3, 1>(0, 6 + k) = s.axis[k].cross(s.p_c - s.point[k]);
+    m.block<3, 1>(3, 6 + k) = s.axis[k];
   }
-  L->topRows<3>().noalias() = s.R_GCW.transpose() * m.topRows<3>();
-  L->bottomRows<3>().noalias() = s.R_GCW.transpose() * m.bottomRows<3>();
+  Eigen::Matrix<double, 6, 8> rotated;
+  rotated.topRows<3>().noalias() = s.R_GCW.transpose() * m.topRows<3>();
+  rotated.bottomRows<3>().noalias() = s.R_GCW.transpose() * m.bottomRows<3>();
+  L->setZero();
+  L->leftCols<6>() = rotated.leftCols<6>();
+  L->middleCols<2>(6 + 2 * chain) = rotated.rightCols<2>();
 }
 
 bool KinematicModel::ContactRates(const ChainState& s, const Vec6& twist,

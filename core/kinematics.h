@@ -112,6 +112,13 @@ class KinematicModel {
   // threads at once; use one per thread.
   void EvaluateChain(const Configuration& theta, int chain,
                      ChainState* out) const;
+  // The cached evaluation of chain i at theta if there is one (true, *out
+  // set, bit for bit EvaluateChain's), else false; never evaluates, so a
+  // caller that only needs part of a chain (the limit indicators' curvature
+  // at an interval's end, where the projection just evaluated the chains)
+  // neither pays for the rest nor evicts the integrator's states.
+  bool CachedChain(const Configuration& theta, int chain,
+                   ChainState* out) const;
 
   // Platform pose reported for Theta: chain 1's.
   void PlatformPose(const Configuration& theta, Mat3* R, Vec3* p) const;

@@ -12,8 +12,14 @@ constexpr double kSecondContactTolerance = 1e-9;  // [m], as CheckValidity
 constexpr int kGridU = 72, kGridV = 36;           // as CheckValidity
 
 // K = K_w + r_psi K_g r_psi of wheel i (contact assumed inside the terrain).
+// From the chain cache when theta's chain is there (an interval's end state:
+// no terrain evaluation), else from the two surfaces' forms alone; the same
+// operations on the same values either way.
 Mat2 RelativeCurvature(const KinematicModel& model, const Configuration& theta,
                        int wheel) {
+  ChainState s;
+  if (model.CachedChain(theta, wheel, &s))
+    return s.wheel.K + s.r_psi * s.ground.K * s.r_psi;
   const int e = ConfigIndex::Eta(wheel);
   const RobotGeometry& g = model.geometry();
   const SurfaceForms w =

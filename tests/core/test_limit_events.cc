@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/limit_events.h"
@@ -105,6 +106,38 @@ TEST(LimitEvents, IndicatorsAgreeWithCheckValidity) {
     ++checked;
   }
   EXPECT_GT(checked, 300);
+}
+
+// The indicators take an end state's curvature from the chain cache
+// (KinematicModel::CachedChain) and compute it from the surfaces' forms
+// otherwise: the same values bit for bit, and a lookup that neither
+// evaluates nor evicts.
+TEST(LimitEvents, CachedAndComputedCurvatureAgreeBitForBit) {
+  const Scene scene = DipScene();
+  const SimulationResult r = Simulate(scene, 0.05, true);
+  ASSERT_GT(r.samples.size(), 10u);
+  for (const TrajectorySample& ts : r.samples) {
+    KinematicModel model(scene.geometry, scene.terrain);
+    ChainState cs;
+    for (int i = 0; i < 3; ++i)
+      EXPECT_FALSE(model.CachedChain(ts.theta, i, &cs));
+    LimitIndicators computed, cached;
+    EvaluateLimitIndicators(model, ts.theta, false, &computed);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_FALSE(model.CachedChain(ts.theta, i, &cs)) << "no side effect";
+      model.EvaluateChain(ts.theta, i, &cs);
+      ChainState again;
+      ASSERT_TRUE(model.CachedChain(ts.theta, i, &again));
+      EXPECT_EQ(std::memcmp(&again.ground.K, &cs.ground.K, sizeof(Mat2)), 0);
+    }
+    EvaluateLimitIndicators(model, ts.theta, false, &cached);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(std::memcmp(&computed.relative_curvature[i],
+                            &cached.relative_curvature[i], sizeof(double)),
+                0)
+          << ts.t << " wheel " << i;
+    }
+  }
 }
 
 // The curvature limit lies between two samples: the run stops at the
