@@ -126,7 +126,7 @@ void QuasiStaticProblem::SetConfiguration(const Configuration& theta) {
     model_.EvaluateChain(theta, i, &chains_[i]);
     model_.ContactVelocities(chains_[i], i, &L_[i]);
     const auto lv = L_[i].topRows<3>();
-    vel_m_.block(3 * i, 0, 3, nm).noalias() = lv * w_from_m_;
+    vel_m_.block(3 * i, 0, 3, nm).noalias() = lv.lazyProduct(w_from_m_);
     vel_0_.segment<3>(3 * i).noalias() = lv * w_fixed_;
     // f~ = F0 diag(1, 1, -1) fhat; rows scaled by 1/F0 (forces) and
     // 1/(F0 L0) (moments, passive torques).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <stdexcept>
 
@@ -71,7 +72,20 @@ class Simulator::RobotOde final : public LoopClosureOde {
            QuasiStaticSolver* solver)
       : LoopClosureOde(model), coupling_(coupling), solver_(solver) {}
 
-  void Hold(const Vec12& w) { w_ = w; }
+  void Hold(const Vec12& w) {
+    w_ = w;
+    have_first_ = false;
+  }
+  // zoh: F(q) with the held twist if it is the first right-hand side since
+  // Hold() (an RK method's first stage at the interval's start), bitwise;
+  // else false.
+  bool FirstHeldRhs(const Configuration& q, Configuration* f) const {
+    if (!have_first_ ||
+        std::memcmp(q.data(), first_q_.data(), sizeof(double) * kConfigSize))
+      return false;
+    *f = first_f_;
+    return true;
+  }
   void ClearFailure() { nlp_failed_ = failed_in_call_ = false; }
   const QuasiStaticSolution& last_solution() const { return sol_; }
   bool nlp_failed() const { return nlp_failed_; }
@@ -132,6 +146,11 @@ class Simulator::RobotOde final : public LoopClosureOde {
     Configuration qd;
     if (!model().Rhs(q, w, &qd)) return false;
     ydot = qd;
+    if (coupling_ == Coupling::kZoh && !have_first_) {
+      first_q_ = q;
+      first_f_ = qd;
+      have_first_ = true;
+    }
     if (coupling_ == Coupling::kCoupled) {
       solved_q_ = q;
       have_solved_ = true;
@@ -218,6 +237,10 @@ class Simulator::RobotOde final : public LoopClosureOde {
   long long nlp_iterations_ = 0;
   long long nlp_iterations_native_ = 0;
   double kkt_residual_ = std::numeric_limits<double>::quiet_NaN();
+  // zoh: the first right-hand side since Hold() (FirstHeldRhs).
+  Configuration first_q_ = Configuration::Zero(),
+                first_f_ = Configuration::Zero();
+  bool have_first_ = false;
   // RhsJacobian: the point of the last successful coupled solve, the
   // analyzer (cheap path: no multipliers' derivatives) and workspaces.
   Configuration solved_q_ = Configuration::Zero();
@@ -805,7 +828,8 @@ bool Simulator::CheckIntervalEvents(double t0, double t1) {
   // zoh: F at the end with the held twist (exact); coupled: the end slope
   // of the quadratic through (Theta_0, F_0, Theta_1). Without a right-hand
   // side (K singular at an end) the dense output is linear.
-  bool dense = m > 0 && model_->Rhs(th0, s.w_held, &f0);
+  bool dense = m > 0 && (s.ode.FirstHeldRhs(th0, &f0) ||
+                         model_->Rhs(th0, s.w_held, &f0));
   if (dense && options_.coupling == Coupling::kZoh) {
     dense = model_->Rhs(th1, s.w_held, &f1);
   } else if (dense) {
