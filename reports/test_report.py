@@ -365,6 +365,8 @@ class GoodReportTest(unittest.TestCase):
     def test_drift_figure_shows_the_drift_within_the_steps(self):
         entry = self.manifest()["fig_drift"]
         self.assertTrue(entry["data"]["step_drift"])
+        # The drift-over-time legend sits in a band of its own.
+        self.assertEqual(entry["data"]["points_under_legend"], 0)
         self.assertIn("Bottom row: drift_step_max", entry["caption"])
         # The fixture's zoh rk-projection removes 5.6e-4 dt^2 per interval
         # while its samples sit at ~1e-13: the caption names both.

@@ -12,7 +12,7 @@ from matplotlib.ticker import NullFormatter
 from . import selection as sel
 from .data import is_finite
 from .plotting import (MissingData, NOT_RUN_COLOUR, UNKNOWN_COLOUR, cause_colour,
-                       vline_label,
+                       legend_below_log_data, points_under_legend, vline_label,
                        fmt, new_figure, no_data, positive, save_figure,
                        text_colour)
 from .data import is_variant
@@ -298,11 +298,13 @@ def _plot_drift_vs_time(ax, ctx):
     integrator; returns [(integrator, sample max, drift_step_max)]."""
     reps = sel.drift_representatives(ctx.runs, ctx.trajectories.has, ctx.primary)
     summary = []
+    plotted = []
     for dae, run in reps.items():
         traj = ctx.trajectories.get(run)
         if traj is None:
             continue
         drift = positive(traj["drift"])
+        plotted.append(drift)
         ax.plot(traj["t"], drift, markevery=0.1, **plot_style(ctx.styles[run["method"]]),
                 label=f"{run['method']}, Δt={fmt(run['dt'])} s ({problem_label(run, ctx.references)})")
         summary.append((dae, np.nanmax(drift) if np.any(np.isfinite(drift)) else math.nan,
@@ -314,7 +316,9 @@ def _plot_drift_vs_time(ax, ctx):
     ax.set_xlabel("t [s]")
     ax.set_ylabel("‖H‖∞ at the samples [m, rad]")
     ax.set_title("loop-closure drift, one run per integrator", fontsize=9)
-    ax.legend(loc="lower right", fontsize=7)
+    # The lines share one colour (the NLP) and fill the axes: the legend
+    # gets a band of its own below them.
+    legend_below_log_data(ax, np.concatenate(plotted))
     return summary
 
 
@@ -368,7 +372,8 @@ def figure_drift(ctx):
     fig = new_figure(4.6 * n + 2.6, 4.6 * (2 if steps else 1))
     gs = fig.add_gridspec(2 if steps else 1, n + 1,
                           width_ratios=[1.25] + [1] * (n - 1) + [0.5])
-    summary = _plot_drift_vs_time(fig.add_subplot(gs[0, 0]), ctx)
+    over_time = fig.add_subplot(gs[0, 0])
+    summary = _plot_drift_vs_time(over_time, ctx)
     tops = [fig.add_subplot(gs[0, k + 1]) for k in range(len(problems))]
     n_rows = sum(_plot_drift_vs_dt(ax, ctx, p) for ax, p in zip(tops, problems))
     if not summary and not n_rows:
@@ -406,8 +411,10 @@ def figure_drift(ctx):
         "only in their NLP their lines coincide (the drift does not depend on it) and "
         "the NLP last in the legend covers the others." + second
         + f"This run: {'; '.join(parts) or 'no trajectories'}." + _failed_note(ctx))
+    covered = points_under_legend(fig, over_time)
     record = save_figure(fig, ctx.out_dir, "fig_drift", "2. Constraint drift", caption)
-    record.data = {"panels": [p["label"] for p in problems], "step_drift": steps}
+    record.data = {"panels": [p["label"] for p in problems], "step_drift": steps,
+                   "points_under_legend": covered}
     return record
 
 

@@ -174,6 +174,40 @@ def spans_decades(values, decades=1.5):
     return math.log10(values.max() / values.min()) >= decades
 
 
+def legend_below_log_data(ax, values, fontsize=7):
+    """Legend of a log-y axes in a band kept free below its data: the lower
+    limit is set half the data's span (in decades) under the smallest value,
+    so the legend, in the lower third, covers none of the lines."""
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values) & (values > 0)]
+    if values.size:
+        lo, hi = float(values.min()), float(values.max())
+        span = max(1.0, math.log10(hi / lo))
+        ax.set_ylim(lo / 10 ** (0.55 * span), hi * 10 ** (0.05 * span))
+    return ax.legend(loc="lower center", fontsize=fontsize)
+
+
+def points_under_legend(fig, ax):
+    """How many of ax's line vertices the legend's box covers (drawn figure
+    coordinates): a referee's check that the legend hides no data."""
+    legend = ax.get_legend()
+    if legend is None:
+        return 0
+    fig.canvas.draw()
+    box = legend.get_window_extent()
+    covered = 0
+    for line in ax.get_lines():
+        xy = np.column_stack([np.asarray(line.get_xdata(), dtype=float),
+                              np.asarray(line.get_ydata(), dtype=float)])
+        xy = xy[np.all(np.isfinite(xy), axis=1)]
+        if xy.size == 0:
+            continue
+        px = ax.transData.transform(xy)
+        covered += int(np.sum((px[:, 0] >= box.x0) & (px[:, 0] <= box.x1) &
+                              (px[:, 1] >= box.y0) & (px[:, 1] <= box.y1)))
+    return covered
+
+
 def no_data(ax, text="no data"):
     ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes,
             color="#555555")
