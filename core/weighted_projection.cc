@@ -110,7 +110,6 @@ IntegratorStatus WeightedProjection::Project(const ConstrainedOde& ode,
   if (m_ == 0) return IntegratorStatus::kSuccess;
   double entry = 0.0;      // ||H|| of the state handed in
   double corrected = 0.0;  // ||H|| before the last correction
-  bool factorized = false;
   for (int it = 0;; ++it) {
     ode.Constraints(y, h_);
     const double violation = h_.lpNorm<Eigen::Infinity>();
@@ -131,12 +130,12 @@ IntegratorStatus WeightedProjection::Project(const ConstrainedOde& ode,
     // O(|correction|) ~ O(||H_prev||) since it was factorised, and the
     // chord step contracts ||H|| by about that much again (after an RK4
     // step with ||H|| ~ 1e-6 the second correction meets 1e-12 either way).
-    const bool reuse = factorized && violation <= kChordContraction * corrected;
+    // (it > 0: an earlier pass factorised, or it would have returned.)
+    const bool reuse = it > 0 && violation <= kChordContraction * corrected;
     if (!reuse && !Factorize(ode, y, result)) {
       message_ = "projection: " + message_;
       return IntegratorStatus::kConstraintFailure;
     }
-    factorized = true;
     corrected = violation;
     lambda_ = ldlt_.solve(h_);
     delta_.noalias() = jd_.transpose() * lambda_;

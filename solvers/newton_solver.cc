@@ -263,9 +263,7 @@ bool NewtonSolver::FactorJacobian(const NlpProblem& problem, bool polishing,
   const int n = static_cast<int>(w.eq_rows.size());
   problem.ConstraintJacobian(result->x, w.jac);
   ++result->jacobian_evaluations;
-  // Column by column: both matrices are column-major.
-  for (int j = 0; j < n; ++j)
-    for (int k = 0; k < n; ++k) w.jac_eq(k, j) = w.jac(w.eq_rows[k], j);
+  for (int k = 0; k < n; ++k) w.jac_eq.row(k) = w.jac.row(w.eq_rows[k]);
   if (!w.jac_eq.allFinite()) {
     if (polishing) return false;
     result->status = NlpStatus::kNumericalFailure;
