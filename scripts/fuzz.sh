@@ -1,19 +1,28 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (tests/fuzz) with clang and
-# -fsanitize=fuzzer,address,undefined in build-fuzz/ and runs each one for a
-# bounded time (docs/fuzzing.md).
-#   scripts/fuzz.sh [SECONDS] [TARGET...]     default 60 s each, both targets
+# -fsanitize=fuzzer,address,undefined in build-fuzz/ (or in a build given
+# with --build) and runs each one for a bounded time (docs/fuzzing.md).
+#   scripts/fuzz.sh [--build DIR] [SECONDS] [TARGET...]
+#                                 default 60 s each, both targets
+# --build DIR: an existing QUASIROLL_FUZZ=ON build to reuse (scripts/test.sh
+# --sanitize makes build-asan one); only the targets are built there.
 # The committed seed corpus (tests/fuzz/corpus/<target>) is read, never
-# written; new inputs go to build-fuzz/corpus/<target>, crashes to
-# build-fuzz/artifacts/<target>/. Exits 1 if any target found a crash.
+# written; new inputs go to <build>/corpus/<target>, crashes to
+# <build>/artifacts/<target>/. Exits 1 if any target found a crash.
 # Needs clang and libclang-rt-14-dev (scripts/install-deps.sh --fuzz).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+build=build-fuzz
+reuse=
+if [ "${1:-}" = --build ]; then
+  build=${2:?fuzz.sh: --build needs a directory}
+  reuse=1
+  shift 2
+fi
 seconds=${1:-60}
 shift || true
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=(fuzz_scene fuzz_quasi_static)
-build=build-fuzz
 jobs=$(nproc 2>/dev/null || echo 2)
 command -v clang++ > /dev/null || { echo "fuzz.sh: clang++ not found (scripts/install-deps.sh --fuzz)" >&2; exit 2; }
 
@@ -24,13 +33,18 @@ if command -v ccache > /dev/null; then
   export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=true
   launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 fi
-# Only what the targets need: no optional solver backends, tests, benchmarks.
-cmake -S . -B "$build" "${launcher[@]}" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DQUASIROLL_FUZZ=ON -DBUILD_TESTING=OFF -DQUASIROLL_WITH_BENCHMARKS=OFF \
-  -DQUASIROLL_WITH_IPOPT=OFF -DQUASIROLL_WITH_NLOPT=OFF \
-  -DQUASIROLL_WITH_CERES=OFF -DQUASIROLL_WITH_SUNDIALS=OFF > "$build.configure.log" \
-  || { cat "$build.configure.log"; exit 1; }
-rm -f "$build.configure.log"
+if [ -n "$reuse" ]; then
+  grep -q '^QUASIROLL_FUZZ:BOOL=ON' "$build/CMakeCache.txt" 2> /dev/null \
+    || { echo "fuzz.sh: $build is not a QUASIROLL_FUZZ=ON build" >&2; exit 2; }
+else
+  # Only what the targets need: no optional solver backends, tests, benchmarks.
+  cmake -S . -B "$build" "${launcher[@]}" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DQUASIROLL_FUZZ=ON -DBUILD_TESTING=OFF -DQUASIROLL_WITH_BENCHMARKS=OFF \
+    -DQUASIROLL_WITH_IPOPT=OFF -DQUASIROLL_WITH_NLOPT=OFF \
+    -DQUASIROLL_WITH_CERES=OFF -DQUASIROLL_WITH_SUNDIALS=OFF > "$build.configure.log" \
+    || { cat "$build.configure.log"; exit 1; }
+  rm -f "$build.configure.log"
+fi
 cmake --build "$build" -j "$jobs" --target "${targets[@]}"
 
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}

@@ -147,7 +147,7 @@ class Dispatcher {
  public:
   Dispatcher(const bench::Suite& suite, bench::SuitePlan* plan,
              bench::Progress* progress)
-      : suite_(suite), plan_(*plan), progress_(*progress) {
+      : plan_(*plan), progress_(*progress) {
     for (std::size_t i = 0; i < plan_.selected.size(); ++i)
       selected_of_grid_[plan_.selected[i]->index] = static_cast<int>(i);
     waiting_.resize(plan_.references.size());
@@ -240,7 +240,6 @@ class Dispatcher {
                      });
   }
 
-  const bench::Suite& suite_;
   bench::SuitePlan& plan_;
   bench::Progress& progress_;
   std::map<int, int> selected_of_grid_;

@@ -9,8 +9,11 @@
 #   tests/install/core_consumer_test.sh BUILD_DIR [--sanitized]
 # (--sanitized: BUILD_DIR is a -fsanitize=address,undefined build, whose
 # instrumented libraries need the sanitizer runtimes at link time.)
+# The consumer is compiled by the build's own compiler: sanitizer runtimes
+# (and the fuzz build's coverage hooks) are the compiler's.
 set -euo pipefail
 build=$(cd "$1" && pwd)
+compiler=$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$build/CMakeCache.txt")
 sanitize_flags=()
 if [ "${2:-}" = --sanitized ]; then
   sanitize_flags=(-DCMAKE_CXX_FLAGS=-fsanitize=address,undefined
@@ -31,6 +34,7 @@ for pkg in Ceres SUNDIALS NLopt PkgConfig LAPACK BLAS Threads; do
 done
 cmake -S "$src/tests/install/core_consumer" -B "$tmp/build" \
   -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$tmp/prefix" "${disable[@]}" \
+  ${compiler:+-DCMAKE_CXX_COMPILER="$compiler"} \
   "${sanitize_flags[@]}" \
   > "$tmp/configure.log" || { cat "$tmp/configure.log"; exit 1; }
 grep 'core consumer' "$tmp/configure.log"
