@@ -260,7 +260,8 @@ class Simulator::RobotOde final : public LoopClosureOde {
   Eigen::MatrixXd probe_jac_ = Eigen::MatrixXd::Zero(kConfigSize, kConfigSize);
 };
 
-double GeometricGap(const KinematicModel& model, const Configuration& theta) {
+double GeometricGap(const KinematicModel& model, const Configuration& theta,
+                    double resolution) {
   Mat3 R;
   Vec3 p;
   model.PlatformPose(theta, &R, &p);
@@ -310,6 +311,8 @@ double GeometricGap(const KinematicModel& model, const Configuration& theta) {
       Vec2 step = -hess.ldlt().solve(grad);
       if (!step.allFinite() || !(hess(0, 0) > 0 && hess.determinant() > 0))
         step = -1e-2 * grad;
+      else if (-0.5 * grad.dot(step) <= resolution)
+        break;
       Vec2 grad1;
       Mat2 hess1;
       bool accepted = false;

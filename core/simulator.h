@@ -206,8 +206,15 @@ struct SimulationResult {
 // Largest vertical distance between the terrain and each wheel's lowest point
 // (relative to the terrain), from the platform pose of chain 1 and the joint
 // angles by a closest-point search over the torus: an independent check of
-// the contact kinematics (0 for exact contact).
-double GeometricGap(const KinematicModel& model, const Configuration& theta);
+// the contact kinematics (0 for exact contact). Newton's method on the
+// torus coordinates (u, v) from the state's own contact coordinates stops
+// once its predicted decrease g^T H^-1 g / 2 of the clearance is at most
+// `resolution` [m]. The default is the clearance's own rounding (ulp of a
+// 0.1 m height: 1.4e-17 m), so that a state on the contact manifold costs
+// one evaluation per wheel; 0 iterates until no step decreases it.
+inline constexpr double kGapResolution = 1e-17;
+double GeometricGap(const KinematicModel& model, const Configuration& theta,
+                    double resolution = kGapResolution);
 
 // The robot ODE as the integrators see it (core/dae.h), evaluated at one
 // state by Simulator::ProbeOde (tests, diagnostics): F = Theta' and

@@ -57,6 +57,40 @@ class EveryIntegrator : public ::testing::TestWithParam<Method> {
   }
 };
 
+// GeometricGap stops its closest-point search once Newton's predicted
+// decrease is at most kGapResolution (1e-17 m, the clearance's rounding):
+// on the paper scene's path (states on the contact manifold) and on states
+// moved off it (chain 1's ground point by 1e-4 m, which lifts or sinks the
+// other wheels by ~1e-5 m; chain 2's torus coordinates by 1e-2 rad, a far
+// start), it agrees with the search run until no step decreases the
+// clearance to 4e-17 m: the stopping rule's 1e-17 plus the rounding of two
+// clearance evaluations (1.4e-17 m each at a 0.1 m height).
+TEST(GeometricGap, StopsAtTheClearancesRounding) {
+  Scene scene = LoadWithEnd("paper", 1.0);
+  const SimulationResult r = Simulator(scene, SimulationOptions{}).Run();
+  ASSERT_TRUE(r.success()) << r.stop_reason;
+  const KinematicModel model(scene.geometry, scene.terrain);
+  double largest = 0, apart = 0;
+  for (const TrajectorySample& s : r.samples) {
+    for (int variant = 0; variant < 3; ++variant) {
+      Configuration theta = s.theta;
+      if (variant == 1) theta(ConfigIndex::Xg(0)) += 1e-4;
+      if (variant == 2) {
+        theta(ConfigIndex::U(1)) += 1e-2;
+        theta(ConfigIndex::V(1)) -= 1e-2;
+      }
+      const double gap = GeometricGap(model, theta);
+      const double exhaustive = GeometricGap(model, theta, 0.0);
+      EXPECT_NEAR(gap, exhaustive, 4e-17) << s.t << " variant " << variant;
+      apart = std::max(apart, std::abs(gap - exhaustive));
+      if (variant == 1) largest = std::max(largest, gap);
+    }
+  }
+  std::printf("%zu states: largest moved gap %.3e m, apart %.2e m\n",
+              r.samples.size(), largest, apart);
+  EXPECT_GT(largest, 1e-6);  // the moved states are off the manifold
+}
+
 // O1: flat straight drive. Speed rho alphadot = 0.06 m/s, creep slip <= eps,
 // loads (24.5, 12.25, 12.25) N, no drift. Exact solution is a constant
 // twist, so RK truncation vanishes: position to 1e-9 m over 2 s; loads to the
