@@ -27,16 +27,15 @@ jobs=$(nproc 2>/dev/null || echo 2)
 command -v clang++ > /dev/null || { echo "fuzz.sh: clang++ not found (scripts/install-deps.sh --fuzz)" >&2; exit 2; }
 
 # ccache when present, as scripts/test.sh: the instrumented build is most of
-# the step's time (docs/fuzzing.md).
-launcher=()
-if command -v ccache > /dev/null; then
-  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=true
-  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-fi
+# the step's time (docs/fuzzing.md). Its settings also for a reused build,
+# whose launcher is ccache when test.sh found it.
+export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=true
 if [ -n "$reuse" ]; then
   grep -q '^QUASIROLL_FUZZ:BOOL=ON' "$build/CMakeCache.txt" 2> /dev/null \
     || { echo "fuzz.sh: $build is not a QUASIROLL_FUZZ=ON build" >&2; exit 2; }
 else
+  launcher=()
+  command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
   # Only what the targets need: no optional solver backends, tests, benchmarks.
   cmake -S . -B "$build" "${launcher[@]}" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DQUASIROLL_FUZZ=ON -DBUILD_TESTING=OFF -DQUASIROLL_WITH_BENCHMARKS=OFF \

@@ -51,16 +51,15 @@ cmake --build "$build_dir" -j "$jobs"
 # each under ASan, their units covered by shorter tests) to the Release pass.
 skip=()
 if [ "$sanitize" = ON ]; then
-  names=$(sed -e 's/#.*//' -e 's/[[:space:]]*$//' -e '/^$/d' tests/sanitizer-skip.txt \
-    | sed -e 's/[.[\*^$()+?{|]/\\&/g' | paste -sd '|')
+  skipped=$(sed -e 's/#.*//' -e 's/[[:space:]]*$//' -e '/^$/d' tests/sanitizer-skip.txt)
+  names=$(printf '%s\n' "$skipped" | sed -e 's/[.[\*^$()+?{|]/\\&/g' | paste -sd '|')
   # (a parameterised gtest's ctest name ends in "  # GetParam() = ...")
   skip=(-E "^($names)( +# GetParam.*)?\$")
   # A name that is no test any more (renamed, removed) is an error, not a
   # silent no-op.
   listed=$(ctest --test-dir "$build_dir" -N | sed -n 's/^ *Test *#[0-9]*: //p' \
     | sed 's/  *# GetParam.*//')
-  stale=$(sed -e 's/#.*//' -e 's/[[:space:]]*$//' -e '/^$/d' tests/sanitizer-skip.txt \
-    | grep -vxF -f <(printf '%s\n' "$listed") || true)
+  stale=$(printf '%s\n' "$skipped" | grep -vxF -f <(printf '%s\n' "$listed") || true)
   if [ -n "$stale" ]; then
     echo "test.sh: tests/sanitizer-skip.txt names no test: $stale" >&2
     exit 1
