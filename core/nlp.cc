@@ -1,6 +1,5 @@
 #include "quasiroll/core/nlp.h"
 
-#include <Eigen/LU>
 #include <Eigen/QR>
 #include <algorithm>
 #include <chrono>
@@ -11,6 +10,7 @@
 #include <stdexcept>
 
 #include "quasiroll/core/registry.h"
+#include "quasiroll/core/square_lu.h"
 
 namespace quasiroll {
 
@@ -100,7 +100,7 @@ struct KktVerifier::Workspace {
   int num_equalities = 0;
   Eigen::VectorXi equality_rows;
   Eigen::MatrixXd square;
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+  SquareLu lu;
   // Active sides: -1 lower, +1 upper, 0 inactive (rows: inequality rows only;
   // variables: bounds). Fixed variables and equality rows are handled apart.
   Eigen::VectorXi row_side, var_side;
@@ -127,7 +127,6 @@ struct KktVerifier::Workspace {
     qr = Eigen::ColPivHouseholderQR<Eigen::MatrixXd>(n, std::max(m, 1));
     equality_rows.resize(m);
     square.resize(n, n);
-    lu = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
   }
 
   // Stage 1 for square equality systems: lambda_eq = -J_eq^{-T} grad f.
@@ -135,9 +134,9 @@ struct KktVerifier::Workspace {
     lambda.setZero();
     for (int k = 0; k < n; ++k)
       square.col(k) = jac.row(equality_rows(k)).transpose();
-    lu.compute(square);
+    lu.Compute(square);
     rhs = -grad;
-    c.noalias() = lu.solve(rhs);
+    lu.Solve(rhs, c);
     for (int k = 0; k < n; ++k) lambda(equality_rows(k)) = c(k);
   }
 

