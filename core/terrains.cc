@@ -93,6 +93,9 @@ GaussianTerrain::GaussianTerrain(std::vector<GaussianBump> bumps)
                        Num(b.sigma));
     }
     inv_var_.push_back(1.0 / (b.sigma * b.sigma));
+    amplitude_.push_back(b.amplitude);
+    center_x_.push_back(b.x);
+    center_y_.push_back(b.y);
   }
 }
 
@@ -169,15 +172,45 @@ TerrainJet GaussianTerrain::Evaluate(double x, double y) const {
   return j;
 }
 
-// Evaluate()'s sums without the third-order ones.
+// Evaluate()'s sums without the third-order ones, in three passes over
+// blocks of bumps so that the per-bump arithmetic vectorises: the exponents,
+// the exp calls, then each bump's terms, summed in bump order. Each value is
+// the same expression as in AddSecondOrder and the sums keep their order,
+// so the result is bit-identical to Evaluate()'s first six entries
+// (tested); the terrain jet is ~25% of a paper-scene run's instructions.
 TerrainJet GaussianTerrain::EvaluateSecondOrder(double x, double y) const {
+  constexpr std::size_t kBlock = 32;
+  alignas(16) double dx[kBlock], dy[kBlock], g[kBlock], t[5][kBlock];
   TerrainJet j;
-  for (std::size_t k = 0; k < bumps_.size(); ++k) {
-    const GaussianBump& b = bumps_[k];
-    const double dx = x - b.x, dy = y - b.y;
-    const double q = inv_var_[k];
-    AddSecondOrder(q, dx, dy,
-                   b.amplitude * std::exp(-0.5 * q * (dx * dx + dy * dy)), &j);
+  const std::size_t n = bumps_.size();
+  for (std::size_t k0 = 0; k0 < n; k0 += kBlock) {
+    const std::size_t m = std::min(kBlock, n - k0);
+    const double* bx = &center_x_[k0];
+    const double* by = &center_y_[k0];
+    const double* q = &inv_var_[k0];
+    const double* amp = &amplitude_[k0];
+    for (std::size_t k = 0; k < m; ++k) {
+      dx[k] = x - bx[k];
+      dy[k] = y - by[k];
+      g[k] = -0.5 * q[k] * (dx[k] * dx[k] + dy[k] * dy[k]);
+    }
+    for (std::size_t k = 0; k < m; ++k) g[k] = amp[k] * std::exp(g[k]);
+    for (std::size_t k = 0; k < m; ++k) {
+      const double q2 = q[k] * q[k];
+      t[0][k] = -q[k] * dx[k] * g[k];
+      t[1][k] = -q[k] * dy[k] * g[k];
+      t[2][k] = (q2 * dx[k] * dx[k] - q[k]) * g[k];
+      t[3][k] = q2 * dx[k] * dy[k] * g[k];
+      t[4][k] = (q2 * dy[k] * dy[k] - q[k]) * g[k];
+    }
+    for (std::size_t k = 0; k < m; ++k) {
+      j.h += g[k];
+      j.hx += t[0][k];
+      j.hy += t[1][k];
+      j.hxx += t[2][k];
+      j.hxy += t[3][k];
+      j.hyy += t[4][k];
+    }
   }
   return j;
 }

@@ -78,6 +78,8 @@ class GaussianTerrain final : public Terrain {
  private:
   std::vector<GaussianBump> bumps_;
   std::vector<double> inv_var_;  // 1 / sigma_k^2, precomputed
+  // The bumps' fields as arrays (EvaluateSecondOrder's vectorised passes).
+  std::vector<double> amplitude_, center_x_, center_y_;
 };
 
 // One separable cosine product:
