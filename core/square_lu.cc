@@ -9,7 +9,6 @@
 
 namespace quasiroll {
 namespace {
-constexpr int kPanel = 8;  // Eigen's EIGEN_TUNE_TRIANGULAR_PANEL_WIDTH
 constexpr int kLd = SquareLu::kMaxFastSize;  // leading dimension
 
 // Eigen's partial_lu_impl::unblocked_lu, element for element. N is a
@@ -19,26 +18,38 @@ template <int N>
 void Factor(double* lu, int* transpositions) {
   for (int k = 0; k < N; ++k) {
     double* col_k = lu + k * kLd;
-    int pivot = k;
-    double biggest = std::abs(col_k[k]);
-    for (int i = k + 1; i < N; ++i) {
-      const double score = std::abs(col_k[i]);
-      if (score > biggest) {  // first of equals, as Eigen's maxCoeff
-        biggest = score;
-        pivot = i;
-      }
+    // Pivot: the first row of largest |a_ik|, as Eigen's scan with a strict
+    // '>' (for finite entries). The maximum in four independent chains, then
+    // the first row attaining it: the scan's serial compare-and-select chain
+    // was the factorisation's critical path.
+    double m0 = std::abs(col_k[k]), m1 = m0, m2 = m0, m3 = m0;
+    int i = k + 1;
+    for (; i + 4 <= N; i += 4) {
+      m0 = std::max(m0, std::abs(col_k[i]));
+      m1 = std::max(m1, std::abs(col_k[i + 1]));
+      m2 = std::max(m2, std::abs(col_k[i + 2]));
+      m3 = std::max(m3, std::abs(col_k[i + 3]));
     }
+    for (; i < N; ++i) m0 = std::max(m0, std::abs(col_k[i]));
+    const double biggest = std::max(std::max(m0, m1), std::max(m2, m3));
+    int pivot = k;
+    while (pivot < N - 1 && std::abs(col_k[pivot]) != biggest) ++pivot;
     transpositions[k] = pivot;
+    // l_k in a local array, written as it is computed: the update below
+    // then neither aliases the matrix nor reloads what was just stored.
+    double l[kLd];
     if (biggest != 0.0) {
       if (pivot != k)
         for (int j = 0; j < N; ++j)
           std::swap(lu[j * kLd + k], lu[j * kLd + pivot]);
       const double ukk = col_k[k];
-      for (int i = k + 1; i < N; ++i) col_k[i] /= ukk;
+      for (int i = k + 1; i < N; ++i) {
+        l[i] = col_k[i] / ukk;
+        col_k[i] = l[i];
+      }
+    } else {
+      for (int i = k + 1; i < N; ++i) l[i] = col_k[i];
     }
-    // A local copy of l_k lets the compiler vectorise (no aliasing).
-    double l[kLd];
-    for (int i = k + 1; i < N; ++i) l[i] = col_k[i];
     for (int j = k + 1; j < N; ++j) {
       double* col_j = lu + j * kLd;
       const double ukj = col_j[k];
@@ -47,55 +58,17 @@ void Factor(double* lu, int* transpositions) {
   }
 }
 
-// PartialPivLU::_solve_impl: x = P b, then L and U by Eigen's
-// triangular_solve_vector (column panels of kPanel, gemv for the rest).
-template <int N>
-void Solve(const double* lu, const int* transpositions, double* x) {
-  auto at = [lu](int i, int j) { return lu[j * kLd + i]; };
-  for (int k = 0; k < N; ++k) std::swap(x[k], x[transpositions[k]]);
-  // Unit lower: panels from the top.
-  for (int pi = 0; pi < N; pi += kPanel) {
-    const int end = std::min(N, pi + kPanel);
-    for (int i = pi; i < end; ++i) {
-      if (x[i] == 0.0) continue;
-      for (int r = i + 1; r < end; ++r) x[r] -= x[i] * at(r, i);
-    }
-    for (int r = end; r < N; ++r) {
-      double dot = 0.0;
-      for (int j = pi; j < end; ++j) dot += at(r, j) * x[j];
-      x[r] -= dot;
-    }
-  }
-  // Upper: panels from the bottom.
-  for (int pi = N; pi > 0; pi -= kPanel) {
-    const int start = std::max(0, pi - kPanel);
-    for (int i = pi - 1; i >= start; --i) {
-      if (x[i] == 0.0) continue;
-      x[i] /= at(i, i);
-      for (int r = start; r < i; ++r) x[r] -= x[i] * at(r, i);
-    }
-    for (int r = 0; r < start; ++r) {
-      double dot = 0.0;
-      for (int j = start; j < pi; ++j) dot += at(r, j) * x[j];
-      x[r] -= dot;
-    }
-  }
-}
-
-struct Kernels {
-  void (*factor)(double*, int*);
-  void (*solve)(const double*, const int*, double*);
-};
+using FactorKernel = void (*)(double*, int*);
 
 template <int... N>
-constexpr std::array<Kernels, sizeof...(N)> MakeKernels(
+constexpr std::array<FactorKernel, sizeof...(N)> MakeFactorKernels(
     std::integer_sequence<int, N...>) {
-  return {Kernels{&Factor<N>, &Solve<N>}...};
+  return {&Factor<N>...};
 }
 
-// kKernels[n] for n = 0..kMaxFastSize.
-constexpr auto kKernels =
-    MakeKernels(std::make_integer_sequence<int, kLd + 1>{});
+// kFactor[n] for n = 0..kMaxFastSize.
+constexpr auto kFactor =
+    MakeFactorKernels(std::make_integer_sequence<int, kLd + 1>{});
 }  // namespace
 
 void SquareLu::Compute(const Eigen::Ref<const Eigen::MatrixXd>& a) {
@@ -111,7 +84,12 @@ void SquareLu::Compute(const Eigen::Ref<const Eigen::MatrixXd>& a) {
   }
   for (int j = 0; j < n_; ++j)
     for (int i = 0; i < n_; ++i) at(i, j) = a(i, j);
-  kKernels[n_].factor(lu_.data(), transpositions_.data());
+  kFactor[n_](lu_.data(), transpositions_.data());
+  // P b = b gathered through the transpositions applied to 0..n-1 (one
+  // load per entry in Solve instead of a chain of dependent swaps).
+  for (int k = 0; k < n_; ++k) row_of_[k] = k;
+  for (int k = 0; k < n_; ++k)
+    std::swap(row_of_[k], row_of_[transpositions_[k]]);
 }
 
 void SquareLu::Solve(const Eigen::Ref<const Eigen::VectorXd>& b,
@@ -127,8 +105,16 @@ void SquareLu::Solve(const Eigen::Ref<const Eigen::VectorXd>& b,
     x = fallback_.solve(b);
     return;
   }
-  if (x.data() != b.data()) x = b;
-  kKernels[n_].solve(lu_.data(), transpositions_.data(), x.data());
+  // PartialPivLU::_solve_impl: x = P b, then Eigen's own triangular solves
+  // on the factor in place (the very code PartialPivLU runs).
+  std::array<double, kMaxFastSize> pb;
+  for (int k = 0; k < n_; ++k) pb[k] = b(row_of_[k]);
+  const Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>> lu(
+      lu_.data(), n_, n_, Eigen::OuterStride<>(kMaxFastSize));
+  Eigen::Map<Eigen::VectorXd> px(pb.data(), n_);
+  lu.triangularView<Eigen::UnitLower>().solveInPlace(px);
+  lu.triangularView<Eigen::Upper>().solveInPlace(px);
+  x = px;
 }
 
 double SquareLu::MinAbsPivot() const {

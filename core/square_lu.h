@@ -1,23 +1,25 @@
 // LU with partial pivoting of a small square matrix, P A = L U, for the hot
 // Newton and KKT-verification solves of the quasi-static problem (15 x 15 on
-// the paper scene, ~2,600 factorisations per 20 s run).
+// the paper scene, ~2,650 factorisations per 20 s run: the largest single
+// item of a step's time, docs/performance.md).
 //
 // Results are bit-identical to Eigen::PartialPivLU<Eigen::MatrixXd> (Eigen
 // 3.4), so switching to it changes no trajectory:
-//  - n <= kMaxFastSize: Eigen's unblocked right-looking algorithm, written as
-//    plain loops over a fixed column-major array: column k takes the first
-//    row of largest |a_ik|, i >= k; l_ik = a_ik / u_kk; then
-//    a_ij <- a_ij - l_ik u_kj for i, j > k. Eigen runs the same arithmetic
-//    through block expressions whose per-column overhead costs ~4x the
-//    flops at this size (callgrind: 13.3k vs ~3k instructions per 15 x 15).
-//    Solves replay Eigen's triangular_solve_vector: panels of 8 columns
-//    substituted by columns, the rows below (above) a panel updated by one
-//    sequential dot product each, rhs_r <- rhs_r - sum_j a_rj x_j.
+//  - n <= kMaxFastSize: Eigen's unblocked right-looking algorithm as plain
+//    loops over a fixed column-major array, compiled per size: column k
+//    takes the first row of largest |a_ik|, i >= k; l_ik = a_ik / u_kk;
+//    then a_ij <- a_ij - l_ik u_kj for i, j > k (the same operations on the
+//    same values as Eigen's). Faster because the pivot's maximum is taken
+//    in four independent chains before the first row attaining it is
+//    found: Eigen's serial compare-and-select scan, one per column, is the
+//    factorisation's critical path (15 x 15 on this machine: ~480 against
+//    ~750 ns per factorisation). Solves gather P b, then run Eigen's own
+//    triangular solves on the factor.
 //  - larger n: Eigen::PartialPivLU itself (it switches to a blocked
 //    algorithm there, whose rounding the loops above do not replay).
-// Both claims are tested bit-for-bit (tests/core/test_square_lu.cc); a build
-// that contracts a*b + c into FMA would make the fast path differ and fail
-// that test rather than drift silently.
+// Both claims are tested bit-for-bit for finite matrices
+// (tests/core/test_square_lu.cc); a build that contracted a*b + c into FMA
+// in one place and not the other would fail that test rather than drift.
 //
 // No heap allocation after the first Compute() of a size above kMaxFastSize
 // (the fallback's storage is kept).
@@ -55,6 +57,7 @@ class SquareLu {
   int n_ = -1;
   std::array<double, kMaxFastSize * kMaxFastSize> lu_{};
   std::array<int, kMaxFastSize> transpositions_{};
+  std::array<int, kMaxFastSize> row_of_{};  // (P b)_k = b_{row_of_k}
   Eigen::PartialPivLU<Eigen::MatrixXd> fallback_;
 };
 
