@@ -107,14 +107,17 @@ void SquareLu::Solve(const Eigen::Ref<const Eigen::VectorXd>& b,
   }
   // PartialPivLU::_solve_impl: x = P b, then Eigen's own triangular solves
   // on the factor in place (the very code PartialPivLU runs).
-  std::array<double, kMaxFastSize> pb;
-  for (int k = 0; k < n_; ++k) pb[k] = b(row_of_[k]);
+  if (x.data() == b.data()) {  // gather through a copy
+    std::array<double, kMaxFastSize> copy;
+    for (int k = 0; k < n_; ++k) copy[k] = b(k);
+    for (int k = 0; k < n_; ++k) x(k) = copy[row_of_[k]];
+  } else {
+    for (int k = 0; k < n_; ++k) x(k) = b(row_of_[k]);
+  }
   const Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>> lu(
       lu_.data(), n_, n_, Eigen::OuterStride<>(kMaxFastSize));
-  Eigen::Map<Eigen::VectorXd> px(pb.data(), n_);
-  lu.triangularView<Eigen::UnitLower>().solveInPlace(px);
-  lu.triangularView<Eigen::Upper>().solveInPlace(px);
-  x = px;
+  lu.triangularView<Eigen::UnitLower>().solveInPlace(x);
+  lu.triangularView<Eigen::Upper>().solveInPlace(x);
 }
 
 double SquareLu::MinAbsPivot() const {
