@@ -78,13 +78,16 @@ void SquareLu::Compute(const Eigen::Ref<const Eigen::MatrixXd>& a) {
                                 std::to_string(a.cols()) + ", not square");
   }
   n_ = static_cast<int>(a.rows());
+  if (abs_pivots_.size() != n_) abs_pivots_.resize(n_);
   if (!fast()) {
     fallback_.compute(a);
+    abs_pivots_ = fallback_.matrixLU().diagonal().cwiseAbs();
     return;
   }
   for (int j = 0; j < n_; ++j)
     for (int i = 0; i < n_; ++i) at(i, j) = a(i, j);
   kFactor[n_](lu_.data(), transpositions_.data());
+  for (int k = 0; k < n_; ++k) abs_pivots_(k) = std::abs(at(k, k));
   // P b = b gathered through the transpositions applied to 0..n-1 (one
   // load per entry in Solve instead of a chain of dependent swaps).
   for (int k = 0; k < n_; ++k) row_of_[k] = k;
@@ -118,22 +121,6 @@ void SquareLu::Solve(const Eigen::Ref<const Eigen::VectorXd>& b,
       lu_.data(), n_, n_, Eigen::OuterStride<>(kMaxFastSize));
   lu.triangularView<Eigen::UnitLower>().solveInPlace(x);
   lu.triangularView<Eigen::Upper>().solveInPlace(x);
-}
-
-double SquareLu::MinAbsPivot() const {
-  if (n_ <= 0) return 0.0;
-  if (!fast()) return fallback_.matrixLU().diagonal().cwiseAbs().minCoeff();
-  double m = std::abs(at(0, 0));
-  for (int k = 1; k < n_; ++k) m = std::min(m, std::abs(at(k, k)));
-  return m;
-}
-
-double SquareLu::MaxAbsPivot() const {
-  if (n_ <= 0) return 0.0;
-  if (!fast()) return fallback_.matrixLU().diagonal().cwiseAbs().maxCoeff();
-  double m = std::abs(at(0, 0));
-  for (int k = 1; k < n_; ++k) m = std::max(m, std::abs(at(k, k)));
-  return m;
 }
 
 }  // namespace quasiroll

@@ -21,8 +21,8 @@
 // (tests/core/test_square_lu.cc); a build that contracted a*b + c into FMA
 // in one place and not the other would fail that test rather than drift.
 //
-// No heap allocation after the first Compute() of a size above kMaxFastSize
-// (the fallback's storage is kept).
+// No heap allocation after the first Compute() of a given size (the pivot
+// magnitudes and, above kMaxFastSize, the fallback's storage are kept).
 #pragma once
 
 #include <Eigen/Core>
@@ -46,8 +46,8 @@ class SquareLu {
 
   int size() const { return n_; }
   // min_i |u_ii| and max_i |u_ii| (the rank test of a Newton solver).
-  double MinAbsPivot() const;
-  double MaxAbsPivot() const;
+  double MinAbsPivot() const { return n_ > 0 ? abs_pivots_.minCoeff() : 0.0; }
+  double MaxAbsPivot() const { return n_ > 0 ? abs_pivots_.maxCoeff() : 0.0; }
 
  private:
   bool fast() const { return n_ <= kMaxFastSize; }
@@ -59,6 +59,7 @@ class SquareLu {
   std::array<int, kMaxFastSize> transpositions_{};
   std::array<int, kMaxFastSize> row_of_{};  // (P b)_k = b_{row_of_k}
   Eigen::PartialPivLU<Eigen::MatrixXd> fallback_;
+  Eigen::VectorXd abs_pivots_;  // |u_kk|
 };
 
 }  // namespace quasiroll
