@@ -23,14 +23,14 @@ void Factor(double* lu, int* transpositions) {
     // the first row attaining it: the scan's serial compare-and-select chain
     // was the factorisation's critical path.
     double m0 = std::abs(col_k[k]), m1 = m0, m2 = m0, m3 = m0;
-    int i = k + 1;
-    for (; i + 4 <= N; i += 4) {
-      m0 = std::max(m0, std::abs(col_k[i]));
-      m1 = std::max(m1, std::abs(col_k[i + 1]));
-      m2 = std::max(m2, std::abs(col_k[i + 2]));
-      m3 = std::max(m3, std::abs(col_k[i + 3]));
+    int r = k + 1;
+    for (; r + 4 <= N; r += 4) {
+      m0 = std::max(m0, std::abs(col_k[r]));
+      m1 = std::max(m1, std::abs(col_k[r + 1]));
+      m2 = std::max(m2, std::abs(col_k[r + 2]));
+      m3 = std::max(m3, std::abs(col_k[r + 3]));
     }
-    for (; i < N; ++i) m0 = std::max(m0, std::abs(col_k[i]));
+    for (; r < N; ++r) m0 = std::max(m0, std::abs(col_k[r]));
     const double biggest = std::max(std::max(m0, m1), std::max(m2, m3));
     int pivot = k;
     while (pivot < N - 1 && std::abs(col_k[pivot]) != biggest) ++pivot;
