@@ -141,17 +141,28 @@ GaussianTerrain GaussianTerrain::Random(std::uint64_t seed, int count,
 }
 
 namespace {
-// One bump's terms up to second order, added to *j (Evaluate and
-// EvaluateSecondOrder sum the same terms in the same order: bit-identical).
+// One bump's first and second derivative terms (g = its height term).
+// Evaluate and EvaluateSecondOrder sum these in the same order, so their
+// first six entries are bit-identical.
+struct BumpTerms {
+  double hx, hy, hxx, hxy, hyy;
+};
+inline BumpTerms SecondOrderTerms(double q, double dx, double dy, double g) {
+  const double q2 = q * q;
+  return {-q * dx * g, -q * dy * g, (q2 * dx * dx - q) * g, q2 * dx * dy * g,
+          (q2 * dy * dy - q) * g};
+}
+
+// One bump's terms up to second order, added to *j.
 inline void AddSecondOrder(double q, double dx, double dy, double g,
                            TerrainJet* j) {
-  const double q2 = q * q;
+  const BumpTerms t = SecondOrderTerms(q, dx, dy, g);
   j->h += g;
-  j->hx += -q * dx * g;
-  j->hy += -q * dy * g;
-  j->hxx += (q2 * dx * dx - q) * g;
-  j->hxy += q2 * dx * dy * g;
-  j->hyy += (q2 * dy * dy - q) * g;
+  j->hx += t.hx;
+  j->hy += t.hy;
+  j->hxx += t.hxx;
+  j->hxy += t.hxy;
+  j->hyy += t.hyy;
 }
 }  // namespace
 
@@ -174,13 +185,14 @@ TerrainJet GaussianTerrain::Evaluate(double x, double y) const {
 
 // Evaluate()'s sums without the third-order ones, in three passes over
 // blocks of bumps so that the per-bump arithmetic vectorises: the exponents,
-// the exp calls, then each bump's terms, summed in bump order. Each value is
-// the same expression as in AddSecondOrder and the sums keep their order,
+// the exp calls, then each bump's terms (SecondOrderTerms, as
+// AddSecondOrder), summed in bump order. The sums keep their order,
 // so the result is bit-identical to Evaluate()'s first six entries
 // (tested); the terrain jet is ~25% of a paper-scene run's instructions.
 TerrainJet GaussianTerrain::EvaluateSecondOrder(double x, double y) const {
   constexpr std::size_t kBlock = 32;
-  alignas(16) double dx[kBlock], dy[kBlock], g[kBlock], t[5][kBlock];
+  alignas(16) double dx[kBlock], dy[kBlock], g[kBlock], hx[kBlock], hy[kBlock],
+      hxx[kBlock], hxy[kBlock], hyy[kBlock];
   TerrainJet j;
   const std::size_t n = bumps_.size();
   for (std::size_t k0 = 0; k0 < n; k0 += kBlock) {
@@ -195,21 +207,21 @@ TerrainJet GaussianTerrain::EvaluateSecondOrder(double x, double y) const {
       g[k] = -0.5 * q[k] * (dx[k] * dx[k] + dy[k] * dy[k]);
     }
     for (std::size_t k = 0; k < m; ++k) g[k] = amp[k] * std::exp(g[k]);
-    for (std::size_t k = 0; k < m; ++k) {
-      const double q2 = q[k] * q[k];
-      t[0][k] = -q[k] * dx[k] * g[k];
-      t[1][k] = -q[k] * dy[k] * g[k];
-      t[2][k] = (q2 * dx[k] * dx[k] - q[k]) * g[k];
-      t[3][k] = q2 * dx[k] * dy[k] * g[k];
-      t[4][k] = (q2 * dy[k] * dy[k] - q[k]) * g[k];
+    for (std::size_t k = 0; k < m; ++k) {  // arrays per term: vectorises
+      const BumpTerms t = SecondOrderTerms(q[k], dx[k], dy[k], g[k]);
+      hx[k] = t.hx;
+      hy[k] = t.hy;
+      hxx[k] = t.hxx;
+      hxy[k] = t.hxy;
+      hyy[k] = t.hyy;
     }
     for (std::size_t k = 0; k < m; ++k) {
       j.h += g[k];
-      j.hx += t[0][k];
-      j.hy += t[1][k];
-      j.hxx += t[2][k];
-      j.hxy += t[3][k];
-      j.hyy += t[4][k];
+      j.hx += hx[k];
+      j.hy += hy[k];
+      j.hxx += hxx[k];
+      j.hxy += hxy[k];
+      j.hyy += hyy[k];
     }
   }
   return j;
