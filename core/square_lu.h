@@ -44,7 +44,6 @@ class SquareLu {
   void Solve(const Eigen::Ref<const Eigen::VectorXd>& b,
              Eigen::Ref<Eigen::VectorXd> x) const;
 
-  int size() const { return n_; }
   // min_i |u_ii| and max_i |u_ii| (the rank test of a Newton solver).
   double MinAbsPivot() const { return n_ > 0 ? abs_pivots_.minCoeff() : 0.0; }
   double MaxAbsPivot() const { return n_ > 0 ? abs_pivots_.maxCoeff() : 0.0; }

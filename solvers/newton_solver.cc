@@ -19,7 +19,7 @@ struct Workspace {
   Eigen::VectorXd g, g_trial, r, r_trial, dx, dx_bar, x_trial;
   Eigen::MatrixXd jac, jac_eq, jtj, jtj_damped;
   Eigen::VectorXd jtr, jtj_diag;
-  SquareLu lu;  // bit-identical to Eigen::PartialPivLU, ~4x fewer instructions
+  SquareLu lu;  // bit-identical to Eigen::PartialPivLU, ~1.6x faster (15 x 15)
   Eigen::LLT<Eigen::MatrixXd> llt;
   std::vector<int> eq_rows;
 
