@@ -13,4 +13,13 @@ inline std::string GtestName(std::string name) {
   return name;
 }
 
+// Name generator of INSTANTIATE_TEST_SUITE_P for string parameters:
+// INSTANTIATE_TEST_SUITE_P(All, Suite, ValuesIn(names), ParamName()).
+struct ParamName {
+  template <class ParamInfo>
+  std::string operator()(const ParamInfo& info) const {
+    return GtestName(info.param);
+  }
+};
+
 }  // namespace quasiroll::testing_util

@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <Eigen/LU>
 #include <string>
+#include <vector>
 
 #include "quasiroll/core/dae.h"
 #include "quasiroll/core/initial_configuration.h"
@@ -26,6 +27,13 @@ inline SimulationOptions BuiltinOptions(const std::string& dae,
   options.coupling = coupling;
   options.dt = dt;
   return options;
+}
+
+// The names of the built-in NLP backends (registered first), for tests
+// instantiated on every backend.
+inline std::vector<std::string> BuiltinNlpBackendNames() {
+  RegisterBuiltinNlpSolvers();
+  return NlpSolverRegistry::Names();
 }
 
 // bench/scenes/<name>.yaml.

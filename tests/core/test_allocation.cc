@@ -68,9 +68,7 @@ TEST_P(WarmStep, AdvanceWithCheckpointsDoesNotAllocate) {
 
 INSTANTIATE_TEST_SUITE_P(RkBackends, WarmStep,
                          ::testing::Values("rk-projection", "rk-baumgarte"),
-                         [](const auto& info) {
-                           return testing_util::GtestName(info.param);
-                         });
+                         testing_util::ParamName());
 
 }  // namespace
 }  // namespace quasiroll

@@ -12,6 +12,7 @@
 #include "quasiroll/core/quasi_static.h"
 #include "quasiroll/core/simulator.h"
 #include "quasiroll/core/terrains.h"
+#include "tests/core/simulation_support.h"
 #include "tests/test_names.h"
 
 namespace quasiroll {
@@ -480,13 +481,8 @@ TEST_P(QuasiStaticBackends, RefineTightensTheResidualOrLeavesTheSolution) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllBackends, QuasiStaticBackends,
-                         ::testing::ValuesIn([] {
-                           RegisterBuiltinNlpSolvers();
-                           return NlpSolverRegistry::Names();
-                         }()),
-                         [](const ::testing::TestParamInfo<std::string>& info) {
-                           return testing_util::GtestName(info.param);
-                         });
+                         ::testing::ValuesIn(BuiltinNlpBackendNames()),
+                         testing_util::ParamName());
 
 }  // namespace
 }  // namespace quasiroll

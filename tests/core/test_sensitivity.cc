@@ -321,13 +321,9 @@ TEST(SensitivityWorkspace, NoAllocationAfterWarmUpAndRepeatable) {
   EXPECT_TRUE(primal.multipliers.array().isNaN().all());
 }
 
-INSTANTIATE_TEST_SUITE_P(AllBackends, Sensitivity, ::testing::ValuesIn([] {
-                           RegisterBuiltinNlpSolvers();
-                           return NlpSolverRegistry::Names();
-                         }()),
-                         [](const auto& info) {
-                           return testing_util::GtestName(info.param);
-                         });
+INSTANTIATE_TEST_SUITE_P(AllBackends, Sensitivity,
+                         ::testing::ValuesIn(BuiltinNlpBackendNames()),
+                         testing_util::ParamName());
 
 }  // namespace
 }  // namespace quasiroll

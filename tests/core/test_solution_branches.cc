@@ -171,13 +171,9 @@ TEST_P(SolutionBranches, BothRootsRemainAsEpsilonShrinks) {
   EXPECT_NEAR(upper_slip[2] / upper_slip[1], 1.0, 0.01);
 }
 
-INSTANTIATE_TEST_SUITE_P(AllBackends, SolutionBranches, ::testing::ValuesIn([] {
-                           RegisterBuiltinNlpSolvers();
-                           return NlpSolverRegistry::Names();
-                         }()),
-                         [](const ::testing::TestParamInfo<std::string>& info) {
-                           return testing_util::GtestName(info.param);
-                         });
+INSTANTIATE_TEST_SUITE_P(AllBackends, SolutionBranches,
+                         ::testing::ValuesIn(BuiltinNlpBackendNames()),
+                         testing_util::ParamName());
 
 }  // namespace
 }  // namespace quasiroll

@@ -392,9 +392,8 @@ TEST_P(BackendTest, ConvergedResultsCarryMultipliersAndComparableCounts) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllBackends, BackendTest,
-                         ::testing::ValuesIn(Backends()), [](const auto& info) {
-                           return testing_util::GtestName(info.param);
-                         });
+                         ::testing::ValuesIn(Backends()),
+                         testing_util::ParamName());
 
 // --------------------------------------------------------- newton-only ---
 // Test systems for newton: no objective, free variables; subclasses give the
