@@ -41,20 +41,21 @@ class SolutionBranches : public ::testing::TestWithParam<std::string> {
  protected:
   static void SetUpTestSuite() { RegisterBuiltinNlpSolvers(); }
 
-  // The root the backend reaches at `theta` from `start`, with its
-  // condition number; at the scene's epsilon unless one is given.
+  // The root the backend reaches at `theta` from `start`, with the
+  // condition number of its equality Jacobian; at the scene's epsilon unless
+  // one is given.
   Root SolveFrom(const Configuration& theta, const Eigen::VectorXd& start,
                  double epsilon = 0) {
-    QuasiStaticOptions options;
-    options.diagnostics = true;
     QuasiStaticParameters params = QuasiStaticParameters::FromScene(scene_);
     if (epsilon > 0) params.epsilon = epsilon;
     QuasiStaticSolver solver(model_, params,
-                             NlpSolverRegistry::Create(GetParam()), options);
+                             NlpSolverRegistry::Create(GetParam()));
     solver.SetWarmStart(start);
     Root root;
     solver.Solve(theta, &root.sol);
     root.v0 = solver.problem().v0();
+    if (root.sol.status == QuasiStaticStatus::kOk)
+      root.sol.condition_number = solver.problem().ConditionNumber(root.sol.z);
     return root;
   }
 
