@@ -366,7 +366,9 @@ def _mark_switches(ctx, run, ax):
     more = f" and {len(switches) - 8} more" if len(switches) > 8 else ""
     return (f" Dotted verticals, in the wheel's colour: the {len(switches)} "
             f"stick/slide switches of this run ({located} located to the "
-            f"switch tolerance, docs/model.md §8.6): {listed}{more}.")
+            f"switch tolerance where a wheel's friction margin crosses 5e-5, "
+            f"docs/model.md §8.6; a wheel that reaches its cone slowly starts "
+            f"to slide later than that): {listed}{more}.")
 
 
 def _wheel_force_figure(ctx, name):
