@@ -340,6 +340,23 @@ class GoodReportTest(unittest.TestCase):
             has=["paper_pvc no sliding; creep", "proportional to ε", "paper slides"],
             lacks=["less than paper", "paper_pvc slips"])
 
+    def test_total_slip_is_the_runs_located_integral(self):
+        # Fig. 14's points are runs.csv sliding_distance + creep_distance (the
+        # harness's integrals with switches located: independent of the output
+        # grid and equal to what the caption's regime text quotes), not the
+        # trapezoid over the trajectory rows.
+        runs, _ = read_runs(Fixture.good)
+        slip = self.manifest()["fig14_total_slip_vs_mu"]["data"]
+        mu = slip["compare_mu"]
+        for scene, value in slip["per_scene"].items():
+            located = [r["sliding_distance"] + r["creep_distance"]
+                       for r in sel.mu_sweep_rows(runs)
+                       if r["scene"] == scene and r["mu"] == mu and data.is_success(r)
+                       and os.path.isfile(data.trajectory_path(Fixture.good, r))]
+            self.assertTrue(located, scene)
+            self.assertAlmostEqual(value, float(np.median(located)),
+                                   delta=1e-12 * value, msg=scene)
+
     def test_blowup_is_numerical_not_friction_limit(self):
         cells = infeasible_friction_cells(self)
         for cell in cells:

@@ -431,6 +431,17 @@ def trajectory_metrics(traj):
             "total_slip": integral}
 
 
+def located_total_slip(run):
+    """The run's own ∫Σ_i ‖s_i‖ dt: runs.csv sliding_distance + creep_distance,
+    integrated by the harness with its switches and its 10 ε crossings
+    located (docs/model.md §7.5), so independent of the output grid; nan for
+    results without the columns (the trapezoid over the output rows in
+    trajectory_metrics stands in then)."""
+    sliding = run.get("sliding_distance", math.nan)
+    creep = run.get("creep_distance", math.nan)
+    return sliding + creep if is_finite(sliding) and is_finite(creep) else math.nan
+
+
 def _sweep_data(ctx):
     """(scenes, ok, metrics, failed) of the μ sweep, one entry per scene."""
     rows = sel.mu_sweep_rows(ctx.runs)
@@ -440,6 +451,10 @@ def _sweep_data(ctx):
         raise MissingData("no successful mu_sweep run with a trajectory for "
                           "figures 13-14")
     metrics = {r["run_id"]: trajectory_metrics(ctx.trajectories.get(r)) for r in ok}
+    for r in ok:
+        located = located_total_slip(r)
+        if is_finite(located):
+            metrics[r["run_id"]]["total_slip"] = located
     failed = [r for r in rows if not is_success(r)]
     scenes = sorted({r["scene"] for r in rows},
                     key=lambda s: (s != sel.PAPER_SCENE, s))
@@ -684,7 +699,10 @@ def figure_total_slip_vs_mu(ctx):
         "friction cone, and creep below it, which is the friction "
         "regularisation (proportional to ε), not physics; a pvc robot never "
         "slides, so its curve is creep only and is not compared with paper "
-        "mode's sliding." + headline
+        "mode's sliding. Each point is the run's own integral (runs.csv "
+        "sliding_distance + creep_distance, its switches located, independent "
+        "of the output grid; the trapezoid over the output rows only for "
+        "results without those columns)." + headline
         + (f" {needs} (μ_min(ref), dotted)." if needs else
            " μ_min not drawn (these results carry no ref_mu_min column).")
         + f" {_failed_text(failed)}.")
