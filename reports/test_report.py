@@ -340,6 +340,13 @@ class GoodReportTest(unittest.TestCase):
             has=["paper_pvc no sliding; creep", "proportional to ε", "paper slides"],
             lacks=["less than paper", "paper_pvc slips"])
 
+    def test_slip_figure_marks_the_creep_band(self):
+        # Creep (below 10 eps) is the regularisation, not motion: Fig. 12
+        # shades it and says so (docs/model.md §7.5).
+        caption = self.manifest()["fig12_slip"]["caption"]
+        self.assertIn("Below 10 ε = 1.00e-07 m/s a wheel creeps", caption)
+        self.assertIn("proportional to ε", caption)
+
     def test_total_slip_is_the_runs_located_integral(self):
         # Fig. 14's points are runs.csv sliding_distance + creep_distance (the
         # harness's integrals with switches located: independent of the output

@@ -391,6 +391,28 @@ def figure_lateral_traction(ctx):
     return _wheel_force_figure(ctx, "lateral_traction")
 
 
+def _mark_creep_band(run, ax, slips, log):
+    """Shades the slips below 10 ε, where a wheel creeps (docs/model.md §7.5:
+    a slip proportional to ε, the regularisation standing in for sticking),
+    and says so; "" without a finite ε or on a linear axis."""
+    eps = run.get("eps", math.nan)
+    if not (log and is_finite(eps) and eps > 0):
+        return ""
+    level = 10 * eps
+    low, high = ax.get_ylim()
+    where = "none of the wheel samples lies there"
+    if level > low:
+        ax.axhspan(low, min(level, high), color="grey", alpha=0.15,
+                   linewidth=0, label="creep (‖s‖ < 10 ε)")
+        ax.set_ylim(low, high)
+        ax.legend(loc="best")
+        share = float(np.mean(slips < level)) if slips.size else math.nan
+        where = f"shaded; {fmt(100 * share, 2)} % of the wheel samples lie there"
+    return (f" Below 10 ε = {fmt(level)} m/s a wheel creeps — its slip is "
+            "proportional to ε, the friction regularisation standing in for "
+            "sticking, not motion (docs/model.md §7.5): " + where + ".")
+
+
 def figure_slip(ctx):
     run, traj = _primary(ctx)
     slips = np.concatenate([traj[f"slip{i}"] for i in WHEELS])
@@ -405,7 +427,7 @@ def figure_slip(ctx):
         f"{fmt(float(finite.max()) if finite.size else math.nan)} m/s, median "
         f"{fmt(float(np.median(finite)) if finite.size else math.nan)} m/s"
         + ("" if log else " (all zero: linear axis)")
-        + f" ({_run_text(run)}).")
+        + f" ({_run_text(run)})." + _mark_creep_band(run, fig.axes[0], finite, log))
     return save_figure(fig, ctx.out_dir, "fig12_slip",
                        "Fig. 12 — slip speeds", caption)
 
