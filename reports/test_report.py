@@ -340,6 +340,12 @@ class GoodReportTest(unittest.TestCase):
             has=["paper_pvc no sliding; creep", "proportional to ε", "paper slides"],
             lacks=["less than paper", "paper_pvc slips"])
 
+    def test_force_figures_say_lines_join_the_samples(self):
+        for name in ("fig09_normal_forces", "fig10_longitudinal_traction",
+                     "fig11_lateral_traction"):
+            caption = self.manifest()[name]["caption"]
+            self.assertIn("Lines join the output samples (Δt = 0.05 s)", caption, name)
+
     def test_slip_figure_marks_the_creep_band(self):
         # Creep (below 10 eps) is the regularisation, not motion: Fig. 12
         # shades it and says so (docs/model.md §7.5).

@@ -376,6 +376,10 @@ def _wheel_force_figure(ctx, name):
     fig, caption = _wheel_figure(ctx, column, ylabel, paper_text, total=total)
     run, _ = _primary(ctx)
     caption += _mark_switches(ctx, run, fig.axes[0])
+    caption += (f" Lines join the output samples (Δt = {fmt(run['dt'])} s): a "
+                "change faster than that — at a switch, or the tractions' "
+                "turns between switches, whose width is proportional to ε "
+                "(docs/model.md §8.6) — shows as a slope between two samples.")
     return save_figure(fig, ctx.out_dir, stem, title, caption)
 
 
