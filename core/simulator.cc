@@ -1073,8 +1073,9 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     const double g0 = SwitchIndicator(s0, eps);
     const double g1 = SwitchIndicator(s1, eps);
     change = change || (g0 >= 0) != (g1 >= 0);  // false for a NaN
-    // A sliding wheel whose slip reverses (LocateSwitchesAndReversals).
-    change = change || (g0 >= 0 && g1 >= 0 && slip0[i].dot(slip1[i]) < 0);
+    // A wheel whose slip reverses while it slides or while it creeps
+    // (LocateSwitchesAndReversals).
+    change = change || IsReversal(slip0[i], slip1[i], eps);
     band = band || InSwitchBand(s1, eps);
     // The sliding/creep split's level (below the switches') crossed.
     regime = regime || (std::isfinite(s0) && std::isfinite(s1) &&

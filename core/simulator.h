@@ -177,7 +177,8 @@ struct SimulationResult {
   long long checkpoint_iterations = 0;
   // The located physical stop (limit "" if none).
   StopEvent event;
-  // The located stick/slide switches, in time order (locate_switches).
+  // The located stick/slide switches and creeping wheels' slip reversals
+  // (SwitchEvent::reversal), in time order (locate_switches).
   std::vector<SwitchEvent> switches;
   // Cost counters.
   int nlp_solves = 0;

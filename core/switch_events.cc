@@ -255,6 +255,17 @@ std::array<double, 3> Norms(const std::array<Eigen::Vector2d, 3>& s) {
 }
 }  // namespace
 
+bool IsReversal(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1,
+                double epsilon) {
+  const double n0 = s0.norm(), n1 = s1.norm();
+  const double g0 = SwitchIndicator(n0, epsilon);
+  const double g1 = SwitchIndicator(n1, epsilon);
+  if (std::isnan(g0) || std::isnan(g1) || !(s0.dot(s1) < 0)) return false;
+  if (g0 >= 0 && g1 >= 0) return true;
+  const double floor = kCreepReversalSlipOverEpsilon * epsilon;
+  return g0 < 0 && g1 < 0 && n0 >= floor && n1 >= floor;
+}
+
 int LocateSwitchesAndReversals(double t0, double t1,
                                const std::array<Eigen::Vector2d, 3>& slip0,
                                const std::array<Eigen::Vector2d, 3>& slip1,
@@ -271,12 +282,12 @@ int LocateSwitchesAndReversals(double t0, double t1,
   if (!(t1 > t0) || !(tolerance > 0) || !(epsilon > 0))
     return LocateSwitches(t0, t1, Norms(slip0), Norms(slip1), epsilon,
                           tolerance, norms, out);  // throws
-  // The first reversing wheel splits the interval; the pieces recurse.
+  // The first reversing wheel, sliding or creeping at both ends, splits the
+  // interval; the pieces recurse.
+  const std::size_t first = out->size();
   for (int i = 0; i < 3; ++i) {
-    if (!(SwitchIndicator(slip0[i].norm(), epsilon) >= 0) ||
-        !(SwitchIndicator(slip1[i].norm(), epsilon) >= 0) ||
-        !(slip0[i].dot(slip1[i]) < 0))
-      continue;
+    if (!IsReversal(slip0[i], slip1[i], epsilon)) continue;
+    const bool creeping = SwitchIndicator(slip0[i].norm(), epsilon) < 0;
     double a = t0, b = t1, t_at_b = t1;
     std::array<Eigen::Vector2d, 3> at_b = slip1, v;
     auto eval = [&](double t, double* f, bool* start) {
@@ -289,16 +300,31 @@ int LocateSwitchesAndReversals(double t0, double t1,
       }
       return true;
     };
-    NarrowBracket(tolerance, eval, &a, &b, slip0[i].squaredNorm(),
-                  slip1[i].dot(slip0[i]));
+    const bool located =
+        NarrowBracket(tolerance, eval, &a, &b, slip0[i].squaredNorm(),
+                      slip1[i].dot(slip0[i]));
     // The split's slips (a later point on b's side may have replaced them).
     if (b < t1 && t_at_b != b && !evaluate(b, &at_b)) break;
     if (!(b < t1)) break;  // not narrowed: no split
     if (reversed) *reversed = true;
-    const int n = LocateSwitchesAndReversals(t0, b, slip0, at_b, epsilon,
-                                             tolerance, evaluate, out);
-    return n + LocateSwitchesAndReversals(b, t1, at_b, slip1, epsilon,
-                                          tolerance, evaluate, out);
+    if (creeping) {  // the reversal is the event
+      SwitchEvent e;
+      e.wheel = i + 1;
+      e.reversal = true;
+      e.located = located;
+      e.t_lower = a;
+      e.t_upper = b;
+      e.t = b;
+      out->push_back(e);
+    }
+    LocateSwitchesAndReversals(t0, b, slip0, at_b, epsilon, tolerance, evaluate,
+                               out);
+    LocateSwitchesAndReversals(b, t1, at_b, slip1, epsilon, tolerance, evaluate,
+                               out);
+    std::stable_sort(
+        out->begin() + static_cast<std::ptrdiff_t>(first), out->end(),
+        [](const SwitchEvent& x, const SwitchEvent& y) { return x.t < y.t; });
+    return static_cast<int>(out->size() - first);
   }
   return LocateSwitches(t0, t1, Norms(slip0), Norms(slip1), epsilon, tolerance,
                         norms, out);

@@ -96,6 +96,18 @@ namespace quasiroll {
 // split's kSlidingSlipOverEpsilon of core/slip_regimes.h).
 inline constexpr double kSwitchSlipOverEpsilon = 100.0;
 
+// |s| / eps below which a creeping wheel's slip reversal is not an event:
+// its traction is then under a tenth of the cone (mu f_n c / sqrt(1 + c^2),
+// c = |s|/eps) and its slip's direction is set near round-off (on the flat
+// scene, whose wheels hardly creep, 5194 such "reversals" in 20 s).
+inline constexpr double kCreepReversalSlipOverEpsilon = 0.1;
+
+// Whether wheel slips s0 (at t0) and s1 (at t1) reverse (s0 . s1 < 0) in the
+// same class: both sliding, or both creeping with |s| >= 0.1 eps at both
+// ends (LocateSwitchesAndReversals).
+bool IsReversal(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1,
+                double epsilon);
+
 // g = (|s| - kappa eps)/(|s| + kappa eps); NaN for a NaN slip.
 double SwitchIndicator(double slip_speed, double epsilon);
 
@@ -115,7 +127,16 @@ struct SwitchEvent {
   // inside the bracket): the bracket is the part of [t0, t1] narrowed so
   // far and t = t_upper.
   bool located = false;
+  // Not a class change but a creeping wheel's slip reversal (stick ->
+  // stick): its traction turns within a time proportional to eps
+  // (LocateSwitchesAndReversals).
+  bool reversal = false;
 };
+
+// "switch" or "creep_reversal" (run.json `kind`, docs/formats.md).
+inline const char* SwitchKindName(const SwitchEvent& e) {
+  return e.reversal ? "creep_reversal" : "switch";
+}
 
 // Slip speeds |s_i| [m/s] of the three wheels at time t; false if they
 // cannot be evaluated there (e.g. a failed quasi-static solve).
@@ -142,13 +163,20 @@ using SlipVectorEvaluator =
 // 1.5 ms on the paper scene at 15.5 s, both inside one interval at
 // Delta t >= 0.2 s and so invisible to the class test), and its traction
 // -mu f_n s / sqrt(|s|^2 + eps^2) flips within ~ eps / |s'|: a jump of the
-// right-hand side as eps -> 0. Such an interval is split at the reversal,
-// located on the sign of s(t) . s(t0) to `tolerance`, and the
-// class changes of every piece are located as by LocateSwitches (slips at
-// the split from `evaluate`; the reversal's bracket narrowed as there). Without
-// a reversal this is LocateSwitches. Returns the number of events appended (in
-// time order); *reversed (if not null) receives whether a reversal was found.
-// Throws as LocateSwitches.
+// right-hand side as eps -> 0. A wheel that creeps at both ends with its
+// slip reversed is split the same way: its class does not change, but its
+// traction, -mu f_n c s^ / sqrt(1 + c^2) with c = |s|/eps, turns within a
+// time proportional to eps too (paper scene, wheel 3 at ~9.09 s: 4.3 ->
+// -3.0 N within 7.7e-3, 8.5e-4, 1.0e-4 s at eps 1e-8, 1e-9, 1e-10), and it
+// is appended as an event of its own (reversal = true, stick -> stick),
+// if its slip is at least kCreepReversalSlipOverEpsilon eps at both ends.
+// Such an interval is split at the reversal, located on the sign of
+// s(t) . s(t0) to `tolerance`, and the class changes of every piece are
+// located as by LocateSwitches (slips at the split from `evaluate`; the
+// reversal's bracket narrowed as there). Without a reversal this is
+// LocateSwitches. Returns the number of events appended (in time order);
+// *reversed (if not null) receives whether a reversal was found. Throws as
+// LocateSwitches.
 int LocateSwitchesAndReversals(double t0, double t1,
                                const std::array<Eigen::Vector2d, 3>& slip0,
                                const std::array<Eigen::Vector2d, 3>& slip1,

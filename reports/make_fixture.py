@@ -368,15 +368,19 @@ def write_inputs(out_dir):
 # Two located stick/slide switches per run, at these fractions of t_end
 # (switches/<run_id>.csv, docs/formats.md); legacy outputs have no such file.
 SWITCH_FRACTIONS = ((0.3, 1, "stick", "slide"), (0.6, 3, "slide", "stick"))
+CREEP_REVERSAL_FRACTION = 0.45  # and one creep reversal, wheel 3
 
 
 def write_switches(path, t_end):
     os.makedirs(os.path.dirname(path), exist_ok=True)
     with open(path, "w") as handle:
-        handle.write("t,wheel,from,to,located,t_lower,t_upper\n")
+        handle.write("t,wheel,from,to,located,t_lower,t_upper,kind\n")
         for fraction, wheel, before, after in SWITCH_FRACTIONS:
             t = fraction * t_end
-            handle.write(f"{t!r},{wheel},{before},{after},true,{t - 1e-9!r},{t!r}\n")
+            handle.write(f"{t!r},{wheel},{before},{after},true,{t - 1e-9!r},{t!r},switch\n")
+        # One creeping wheel's slip reversal (docs/formats.md, kind).
+        t = CREEP_REVERSAL_FRACTION * t_end
+        handle.write(f"{t!r},3,stick,stick,true,{t - 1e-9!r},{t!r},creep_reversal\n")
 
 
 def build_fixture(out_dir, seed=7, legacy=False):

@@ -227,6 +227,9 @@ class GoodReportTest(unittest.TestCase):
             self.assertIn("the 2 stick/slide switches of this run (2 located", caption)
             self.assertIn("(wheel 1 stick→slide)", caption)
             self.assertIn("(wheel 3 slide→stick)", caption)
+            # The creep reversal apart from the switches (docs/model.md §8.6).
+            self.assertIn("Dash-dotted: the 1 creep reversal(s)", caption)
+            self.assertIn("(wheel 3).", caption)
 
     def test_force_figures_say_when_switch_times_are_missing(self):
         with open(os.path.join(Fixture.legacy, "report", "figures.json")) as handle:

@@ -386,18 +386,19 @@ void WriteSwitches(const std::vector<SwitchEvent>& switches, JsonWriter* json) {
     j.Key("located").Value(e.located);
     j.Key("t_lower").Value(e.t_lower);
     j.Key("t_upper").Value(e.t_upper);
+    j.Key("kind").Value(SwitchKindName(e));
     j.EndObject();
   }
   j.EndArray();
 }
 
 std::string SwitchesCsv(const std::vector<SwitchEvent>& switches) {
-  std::string out = "t,wheel,from,to,located,t_lower,t_upper\n";
+  std::string out = "t,wheel,from,to,located,t_lower,t_upper,kind\n";
   for (const SwitchEvent& e : switches)
     out += JoinCsvRow({bench::Num(e.t), std::to_string(e.wheel),
                        RegimeName(e.from_sliding), RegimeName(e.to_sliding),
                        e.located ? "true" : "false", bench::Num(e.t_lower),
-                       bench::Num(e.t_upper)}) +
+                       bench::Num(e.t_upper), SwitchKindName(e)}) +
            "\n";
   return out;
 }

@@ -389,8 +389,10 @@ def read_trajectory(path):
 
 def read_switches(path):
     """switches/<run_id>.csv (docs/formats.md) as a list of dicts with t,
-    wheel, from, to, located; None if the file does not exist (a run from
-    before the file was written, or from a merge that did not copy it)."""
+    wheel, from, to, located and kind ("switch", or "creep_reversal"; files
+    from before the column: "switch"); None if the file does not exist (a
+    run from before the file was written, or from a merge that did not copy
+    it)."""
     if not os.path.isfile(path):
         return None
     label = "switches/" + os.path.basename(path)
@@ -402,7 +404,8 @@ def read_switches(path):
         try:
             rows.append({"t": parse_number(row["t"]), "wheel": int(row["wheel"]),
                          "from": row["from"], "to": row["to"],
-                         "located": row["located"] == "true"})
+                         "located": row["located"] == "true",
+                         "kind": row.get("kind") or "switch"})
         except ValueError:
             raise ReportError(f"{label}: a row has a non-number") from None
     return rows

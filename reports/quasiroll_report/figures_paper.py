@@ -343,21 +343,37 @@ _WHEEL_FORCE_FIGURES = {
 def _mark_switches(ctx, run, ax):
     """Vertical lines at the run's located stick/slide switches, in the
     switching wheel's colour; the caption's sentence about them."""
-    switches = ctx.trajectories.switches(run)
-    if switches is None:
+    events = ctx.trajectories.switches(run)
+    if events is None:
         return (" The run's switch times are not in the results "
                 "(no switches/ file), so none are marked.")
+    switches = [e for e in events if e["kind"] == "switch"]
+    reversals = [e for e in events if e["kind"] == "creep_reversal"]
+    colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
+    for e in reversals:
+        ax.axvline(e["t"], color=colours.get(e["wheel"], "grey"),
+                   linestyle=(0, (6, 2, 1, 2)), linewidth=0.9, alpha=0.8)
+    turns = ""
+    if reversals:
+        turns = (f" Dash-dotted: the {len(reversals)} creep reversal(s), a "
+                 "creeping wheel's slip reversing, where the tractions turn "
+                 "within a time proportional to ε (docs/model.md §8.6): "
+                 + ", ".join(f"{fmt(e['t'])} s (wheel {e['wheel']})"
+                             for e in reversals[:8]) + ".")
     if not switches:
         return (" No wheel changed between sticking and sliding in this run "
-                "(switch location on)." if run.get("locate_switches") != "false"
+                "(switch location on)." + turns
+                if run.get("locate_switches") != "false"
                 else " Switch location was off for this run.")
-    colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
     for e in switches:
         ax.axvline(e["t"], color=colours.get(e["wheel"], "grey"),
                    linestyle=(0, (1, 2)), linewidth=0.9, alpha=0.8)
     handles, labels = ax.get_legend_handles_labels()
     handles.append(Line2D([], [], color="grey", linestyle=(0, (1, 2))))
     labels.append("stick/slide switch")
+    if reversals:
+        handles.append(Line2D([], [], color="grey", linestyle=(0, (6, 2, 1, 2))))
+        labels.append("creep reversal")
     ax.legend(handles, labels, loc="best")
     located = sum(1 for e in switches if e["located"])
     listed = ", ".join(
@@ -368,7 +384,7 @@ def _mark_switches(ctx, run, ax):
             f"stick/slide switches of this run ({located} located to the "
             f"switch tolerance where a wheel's friction margin crosses 5e-5, "
             f"docs/model.md §8.6; a wheel that reaches its cone slowly starts "
-            f"to slide later than that): {listed}{more}.")
+            f"to slide later than that): {listed}{more}." + turns)
 
 
 def _wheel_force_figure(ctx, name):

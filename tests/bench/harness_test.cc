@@ -209,7 +209,7 @@ TEST_F(BenchHarness, RunsCsvHasOneRowPerGridPointAndTheDocumentedColumns) {
     // No wheel changes class in the first 0.5 s (the paper scene's first
     // switch is at 2.903 s): the switches file is its header alone.
     EXPECT_EQ(ReadAll(root_ / "j1" / "switches" / (r.at("run_id") + ".csv")),
-              "t,wheel,from,to,located,t_lower,t_upper\n");
+              "t,wheel,from,to,located,t_lower,t_upper,kind\n");
     // The machine that executed the row.
     EXPECT_EQ(r.at("host"), HostName()) << r.at("run_id");
     EXPECT_FALSE(r.at("cpu_model").empty()) << r.at("run_id");

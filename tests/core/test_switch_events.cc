@@ -193,6 +193,48 @@ TEST(SwitchEvents, AReversalOfASlidingWheelIsSplitAndBothChangesLocated) {
   EXPECT_FALSE(reversed);
 }
 
+// A creeping wheel whose slip reverses (|s| well below the sliding level at
+// both ends) is split at the reversal and recorded as a creep_reversal
+// event (stick -> stick); below kCreepReversalSlipOverEpsilon eps at an end
+// it is not (its direction is then set near round-off).
+TEST(SwitchEvents, ACreepingWheelsReversalIsLocatedAboveTheNoiseFloor) {
+  const double t0 = 9.05, t1 = 9.10, tr = 9.0933333;
+  // Wheel 3 creeps with s(t) = 2 eps (t - tr)/0.025 (0.6, -0.8): |s| = 3.5
+  // and 0.53 eps at the ends; wheels 1 and 2 keep their slips.
+  auto slips = [&](double t) -> std::array<Eigen::Vector2d, 3> {
+    return {Eigen::Vector2d(3e-9, 1e-9), Eigen::Vector2d(6e-5, 0.0),
+            2 * kEps * (t - tr) / 0.025 * Eigen::Vector2d(0.6, -0.8)};
+  };
+  SlipVectorEvaluator evaluate = [&](double t,
+                                     std::array<Eigen::Vector2d, 3>* s) {
+    *s = slips(t);
+    return true;
+  };
+  std::vector<SwitchEvent> out;
+  bool reversed = false;
+  ASSERT_EQ(LocateSwitchesAndReversals(t0, t1, slips(t0), slips(t1), kEps, 1e-9,
+                                       evaluate, &out, &reversed),
+            1);
+  EXPECT_TRUE(reversed);
+  const SwitchEvent& e = out[0];
+  EXPECT_TRUE(e.reversal);
+  EXPECT_EQ(e.wheel, 3);
+  EXPECT_FALSE(e.from_sliding);
+  EXPECT_FALSE(e.to_sliding);
+  EXPECT_TRUE(e.located);
+  EXPECT_LE(e.t_upper - e.t_lower, 1e-9);
+  EXPECT_LE(e.t_lower, tr + 1e-12);
+  EXPECT_GE(e.t_upper, tr - 1e-12);
+  EXPECT_STREQ(SwitchKindName(e), "creep_reversal");
+  // Below the floor at an end: no reversal.
+  const Eigen::Vector2d small(0.05 * kEps, 0.0), large(-2.0 * kEps, 0.0);
+  EXPECT_FALSE(IsReversal(small, large, kEps));
+  EXPECT_FALSE(IsReversal(large, small, kEps));
+  EXPECT_TRUE(IsReversal(-large, large, kEps));
+  // One end sliding: a class change, not a reversal.
+  EXPECT_FALSE(IsReversal(Eigen::Vector2d(200 * kEps, 0), large, kEps));
+}
+
 TEST(SwitchEvents, TheCreepBandLiesBelowTheSlidingThreshold) {
   const double at = kSwitchSlipOverEpsilon * kEps;
   EXPECT_FALSE(InSwitchBand(0.5 * kSwitchBandSlipOverEpsilon * kEps, kEps));
@@ -299,6 +341,33 @@ TEST(SwitchEvents, PaperSceneFirstSwitchIsLocatedInsideTheInterval) {
       EXPECT_EQ((off.samples.back().theta - r.samples.back().theta).norm(), 0);
     }
   }
+}
+
+// The paper scene's traction turn between the samples 9.05 and 9.10 s
+// (docs/model.md §8.6): wheel 3 creeps at both samples with its slip
+// reversed and its longitudinal traction flipped (4.3 -> -3.0 N); the
+// reversal is located in between, the run's only creep_reversal event up
+// to 9.2 s.
+TEST(SwitchEvents, PaperScenesCreepReversalIsLocatedAtTheTractionTurn) {
+  const SimulationResult r = RunPaper(0.05, Coupling::kZoh, true, 9.2);
+  ASSERT_TRUE(r.success()) << r.stop_reason;
+  std::vector<SwitchEvent> reversals;
+  for (const SwitchEvent& e : r.switches)
+    if (e.reversal) reversals.push_back(e);
+  ASSERT_EQ(reversals.size(), 1u);
+  const SwitchEvent& e = reversals[0];
+  EXPECT_EQ(e.wheel, 3);
+  EXPECT_TRUE(e.located);
+  EXPECT_GT(e.t_lower, 9.05);
+  EXPECT_LT(e.t_upper, 9.10);
+  const auto at = [&](double t) -> const TrajectorySample& {
+    for (const TrajectorySample& s : r.samples)
+      if (std::abs(s.t - t) < 1e-9) return s;
+    ADD_FAILURE() << "no sample at " << t;
+    return r.samples.front();
+  };
+  EXPECT_GT(at(9.05).contacts[2].traction_lon, 1.0);
+  EXPECT_LT(at(9.10).contacts[2].traction_lon, -1.0);
 }
 
 // Without a switch, a reversal, a wheel crossing the sliding/creep level
