@@ -203,6 +203,16 @@ bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
 }
 }  // namespace
 
+namespace {
+// The events appended since `first` in time order (ties by wheel).
+void SortAppended(std::size_t first, std::vector<SwitchEvent>* out) {
+  std::sort(out->begin() + static_cast<std::ptrdiff_t>(first), out->end(),
+            [](const SwitchEvent& x, const SwitchEvent& y) {
+              return x.t < y.t || (x.t == y.t && x.wheel < y.wheel);
+            });
+}
+}  // namespace
+
 int LocateSwitches(double t0, double t1, const std::array<double, 3>& slip0,
                    const std::array<double, 3>& slip1, double epsilon,
                    double tolerance, const SlipEvaluator& evaluate,
@@ -242,10 +252,7 @@ int LocateSwitches(double t0, double t1, const std::array<double, 3>& slip0,
     e.t = b;
     out->push_back(e);
   }
-  std::sort(out->begin() + static_cast<std::ptrdiff_t>(first), out->end(),
-            [](const SwitchEvent& x, const SwitchEvent& y) {
-              return x.t < y.t || (x.t == y.t && x.wheel < y.wheel);
-            });
+  SortAppended(first, out);
   return static_cast<int>(out->size() - first);
 }
 
@@ -321,9 +328,7 @@ int LocateSwitchesAndReversals(double t0, double t1,
                                out);
     LocateSwitchesAndReversals(b, t1, at_b, slip1, epsilon, tolerance, evaluate,
                                out);
-    std::stable_sort(
-        out->begin() + static_cast<std::ptrdiff_t>(first), out->end(),
-        [](const SwitchEvent& x, const SwitchEvent& y) { return x.t < y.t; });
+    SortAppended(first, out);
     return static_cast<int>(out->size() - first);
   }
   return LocateSwitches(t0, t1, Norms(slip0), Norms(slip1), epsilon, tolerance,
