@@ -340,9 +340,14 @@ _WHEEL_FORCE_FIGURES = {
 }
 
 
+# Vertical event lines of the force figures: kind -> (legend label, style).
+_EVENT_LINES = {"switch": ("stick/slide switch", (0, (1, 2))),
+                "creep_reversal": ("creep reversal", (0, (6, 2, 1, 2)))}
+
+
 def _mark_switches(ctx, run, ax):
-    """Vertical lines at the run's located stick/slide switches, in the
-    switching wheel's colour; the caption's sentence about them."""
+    """Vertical lines at the run's located stick/slide switches and creep
+    reversals, in the wheel's colour; the caption's sentences about them."""
     events = ctx.trajectories.switches(run)
     if events is None:
         return (" The run's switch times are not in the results "
@@ -350,9 +355,17 @@ def _mark_switches(ctx, run, ax):
     switches = [e for e in events if e["kind"] == "switch"]
     reversals = [e for e in events if e["kind"] == "creep_reversal"]
     colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
-    for e in reversals:
-        ax.axvline(e["t"], color=colours.get(e["wheel"], "grey"),
-                   linestyle=(0, (6, 2, 1, 2)), linewidth=0.9, alpha=0.8)
+    handles, labels = ax.get_legend_handles_labels()
+    for kind, drawn in (("switch", switches), ("creep_reversal", reversals)):
+        label, style = _EVENT_LINES[kind]
+        for e in drawn:
+            ax.axvline(e["t"], color=colours.get(e["wheel"], "grey"),
+                       linestyle=style, linewidth=0.9, alpha=0.8)
+        if drawn:
+            handles.append(Line2D([], [], color="grey", linestyle=style))
+            labels.append(label)
+    if events:
+        ax.legend(handles, labels, loc="best")
     turns = ""
     if reversals:
         turns = (f" Dash-dotted: the {len(reversals)} creep reversal(s), a "
@@ -365,16 +378,6 @@ def _mark_switches(ctx, run, ax):
                 "(switch location on)." + turns
                 if run.get("locate_switches") != "false"
                 else " Switch location was off for this run.")
-    for e in switches:
-        ax.axvline(e["t"], color=colours.get(e["wheel"], "grey"),
-                   linestyle=(0, (1, 2)), linewidth=0.9, alpha=0.8)
-    handles, labels = ax.get_legend_handles_labels()
-    handles.append(Line2D([], [], color="grey", linestyle=(0, (1, 2))))
-    labels.append("stick/slide switch")
-    if reversals:
-        handles.append(Line2D([], [], color="grey", linestyle=(0, (6, 2, 1, 2))))
-        labels.append("creep reversal")
-    ax.legend(handles, labels, loc="best")
     located = sum(1 for e in switches if e["located"])
     listed = ", ".join(
         f"{fmt(e['t'])} s (wheel {e['wheel']} {e['from']}→{e['to']})"
@@ -454,8 +457,10 @@ def figure_slip(ctx):
 
 # ------------------------------------------------------------ Figs. 13-14
 
-def trajectory_metrics(traj):
-    """Traction and slip summaries of one run for the μ-sweep figures."""
+def trajectory_metrics(traj, run):
+    """Traction and slip summaries of one run for the μ-sweep figures; the
+    total slip is the run's located one (located_total_slip) where the
+    results carry it, else the trapezoid over the output rows."""
     t = traj["t"]
     ok = np.isfinite(t)
     for i in WHEELS:
@@ -466,8 +471,10 @@ def trajectory_metrics(traj):
            for i in WHEELS]
     total = sum(np.hypot(traj[f"t{i}_lon"][ok], traj[f"t{i}_lat"][ok])
                 for i in WHEELS)
-    integral = float(np.sum(0.5 * (slip_sum[1:] + slip_sum[:-1]) * np.diff(t))) \
-        if t.size > 1 else math.nan
+    integral = located_total_slip(run)
+    if not is_finite(integral):
+        integral = float(np.sum(0.5 * (slip_sum[1:] + slip_sum[:-1]) * np.diff(t))) \
+            if t.size > 1 else math.nan
     return {"mean_abs_lon": lon,
             "mean_total_traction": float(np.mean(total)) if ok.any() else math.nan,
             "total_slip": integral}
@@ -477,8 +484,7 @@ def located_total_slip(run):
     """The run's own ∫Σ_i ‖s_i‖ dt: runs.csv sliding_distance + creep_distance,
     integrated by the harness with its switches and its 10 ε crossings
     located (docs/model.md §7.5), so independent of the output grid; nan for
-    results without the columns (the trapezoid over the output rows in
-    trajectory_metrics stands in then)."""
+    results without the columns."""
     sliding = run.get("sliding_distance", math.nan)
     creep = run.get("creep_distance", math.nan)
     return sliding + creep if is_finite(sliding) and is_finite(creep) else math.nan
@@ -492,11 +498,8 @@ def _sweep_data(ctx):
     if not ok:
         raise MissingData("no successful mu_sweep run with a trajectory for "
                           "figures 13-14")
-    metrics = {r["run_id"]: trajectory_metrics(ctx.trajectories.get(r)) for r in ok}
-    for r in ok:
-        located = located_total_slip(r)
-        if is_finite(located):
-            metrics[r["run_id"]]["total_slip"] = located
+    metrics = {r["run_id"]: trajectory_metrics(ctx.trajectories.get(r), r)
+               for r in ok}
     failed = [r for r in rows if not is_success(r)]
     scenes = sorted({r["scene"] for r in rows},
                     key=lambda s: (s != sel.PAPER_SCENE, s))
