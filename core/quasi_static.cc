@@ -608,8 +608,12 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
         out->mu_min = problem_.MinimumFriction(nullptr, &out->min_normal_force);
         out->condition_number = problem_.ConditionNumber(out->z);
       }
-    } else {
+    } else if (options_.classify_failures) {
       Classify(out);
+    } else {
+      out->z = result_.x;
+      out->status = QuasiStaticStatus::kSolverFailure;
+      out->message = "not converged (not classified)";
     }
   }
   out->wall_seconds =

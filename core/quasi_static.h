@@ -240,6 +240,11 @@ struct QuasiStaticOptions {
   // the stage states of coupled mode (5433 -> 8591), so off by default; the
   // simulator turns it on in zoh mode.
   bool extrapolate_warm_start = false;
+  // Classify a failed solve (mu_min and the statics' rank, model.md §7.7:
+  // ~1 ms in paper mode). Off only where failures are expected and carry
+  // no physical meaning: the continuation steps of core/solution_jumps.h,
+  // which then report SOLVER_FAILURE.
+  bool classify_failures = true;
   bool IsValid(std::string* why) const;
 };
 

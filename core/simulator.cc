@@ -12,6 +12,7 @@
 #include "quasiroll/core/loop_closure_ode.h"
 #include "quasiroll/core/sensitivity.h"
 #include "quasiroll/core/slip_regimes.h"
+#include "quasiroll/core/solution_jumps.h"
 
 namespace quasiroll {
 
@@ -116,6 +117,10 @@ class Simulator::RobotOde final : public LoopClosureOde {
     return &stopping_solution();
   }
   int nlp_solves() const { return nlp_solves_; }
+  // Right-hand-side solves that needed a fallback or more Newton iterations
+  // than a continuation step (coupled; a solution jump shows as one,
+  // core/solution_jumps.h).
+  int irregular_solves() const { return irregular_solves_; }
   // Max KKT residual of the accepted solves since ResetKkt() (NaN: none).
   double kkt_residual() const { return kkt_residual_; }
   void ResetKkt() { kkt_residual_ = std::numeric_limits<double>::quiet_NaN(); }
@@ -135,6 +140,8 @@ class Simulator::RobotOde final : public LoopClosureOde {
       nlp_solves_ += sol_.nlp_solves;
       nlp_iterations_ += sol_.nlp_iterations;
       nlp_iterations_native_ += sol_.nlp_iterations_native;
+      if (sol_.nlp_solves > 1 || sol_.nlp_iterations > kBranchStepIterations)
+        ++irregular_solves_;
       if (sol_.status != QuasiStaticStatus::kOk) {
         nlp_failed_ = failed_in_call_ = true;
         failed_sol_ = sol_;
@@ -234,6 +241,7 @@ class Simulator::RobotOde final : public LoopClosureOde {
   bool failed_in_call_ = false;
   QuasiStaticSolution failed_sol_;
   int nlp_solves_ = 0;
+  int irregular_solves_ = 0;
   long long nlp_iterations_ = 0;
   long long nlp_iterations_native_ = 0;
   double kkt_residual_ = std::numeric_limits<double>::quiet_NaN();
@@ -470,6 +478,22 @@ struct Simulator::Session {
   // Switches: a second solver for the probes of the location (created on
   // the first switch), so that locating leaves the run's warm starts alone.
   std::unique_ptr<QuasiStaticSolver> probe_solver;
+  // Solution jumps (core/solution_jumps.h): the continuation's solver
+  // (short local Newton solves; square-system backends only, else null),
+  // its solution and last accepted root, the jumps' brackets of the
+  // interval, and the irregular right-hand-side solves seen.
+  std::unique_ptr<QuasiStaticSolver> branch_solver;
+  QuasiStaticSolution branch_sol;
+  Eigen::VectorXd branch_z;
+  std::vector<std::array<double, 2>> slip_jumps;
+  int ode_irregular_seen = 0;
+  // The interval's dense output (DenseState).
+  struct Dense {
+    Configuration th0 = Configuration::Zero(), th1 = Configuration::Zero(),
+                  f0 = Configuration::Zero(), f1 = Configuration::Zero();
+    double t0 = 0, h = 1;
+    bool hermite = false;
+  } dense;
   // The accepted solution at the previous sample (probe warm starts).
   Eigen::VectorXd z_prev;
   bool have_z_prev = false;
@@ -570,6 +594,18 @@ void Simulator::CreateProbeSolver() {
   session_->probe_solver = std::make_unique<QuasiStaticSolver>(
       *model_, QuasiStaticParameters::FromScene(scene_),
       CreateNlp(options_, &unused), probe_options);
+  // A continuation step is a local Newton solve whose iteration count
+  // measures its contraction: square-system backends only.
+  if (!session_->probe_solver->nlp().RequiresSquareSystem()) return;
+  QuasiStaticOptions branch_options = options_.quasi_static;
+  branch_options.homotopy = false;
+  branch_options.stall_iterations = 0;
+  branch_options.max_iterations = kBranchStepIterations;
+  branch_options.classify_failures = false;
+  session_->branch_solver = std::make_unique<QuasiStaticSolver>(
+      *model_, QuasiStaticParameters::FromScene(scene_),
+      CreateNlp(options_, &unused), branch_options);
+  session_->slip_jumps.reserve(4);
 }
 
 void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
@@ -662,16 +698,8 @@ bool Simulator::Interval(SimulationResult* result) {
   result->nlp_iterations += sol.nlp_iterations;
   result->nlp_iterations_native += sol.nlp_iterations_native;
   if (s.probe_solver && s.sol_event.z.size() == 0 &&
-      sol.status == QuasiStaticStatus::kOk) {
-    // Sizes the probe solver's workspaces: one solve from the answer.
-    s.probe_solver->SetWarmStart(sol.z);
-    s.probe_solver->Solve(s.theta, &s.sol_event);
-    for (Session::KnownSolution& k : s.probe_known) k.z = sol.z;
-    s.probe_warm = sol.z;
-    result->nlp_solves += s.sol_event.nlp_solves;
-    result->nlp_iterations += s.sol_event.nlp_iterations;
-    result->nlp_iterations_native += s.sol_event.nlp_iterations_native;
-  }
+      sol.status == QuasiStaticStatus::kOk)
+    SizeProbeSolvers(result);
   if (options_.locate_switches && !pending && s.have_prev &&
       sol.status == QuasiStaticStatus::kOk)
     RestartAtSwitches(t, result);
@@ -1087,14 +1115,19 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   // integrated again, resolved (core/switch_events.h).
   const bool redo =
       coupled && band && !s.resolved_last && std::isfinite(tolerance);
-  if (!change && !redo && !regime) return;
+  const bool suspect = JumpSuspected();
+  s.slip_jumps.clear();
+  if (!change && !redo && !regime && !suspect) return;
   const Configuration th0 = s.theta_prev, th1 = s.theta;
   const double h = t - s.t_prev;
   const Vec12 w1 =
       coupled ? s.solver.problem().JointSpaceVelocity(s.sol.z) : s.w_held;
-  Configuration f0, f1;
-  const bool dense =
-      model_->Rhs(th0, s.w_held, &f0) && model_->Rhs(th1, w1, &f1);
+  Session::Dense& d = s.dense;
+  d.th0 = th0;
+  d.th1 = th1;
+  d.t0 = s.t_prev;
+  d.h = h;
+  d.hermite = model_->Rhs(th0, s.w_held, &d.f0) && model_->Rhs(th1, w1, &d.f1);
   QuasiStaticSolution& probe = s.sol_event;  // probe_solver: from Begin()
   // Each probe starts from the linear interpolation in time between the
   // nearest converged solutions on either side (the interval's ends and
@@ -1115,10 +1148,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
         return true;
       }
     }
-    const double frac = (tm - s.t_prev) / h;
-    const Configuration q = dense
-                                ? HermiteState(th0, f0, th1, f1, h, frac)
-                                : Configuration((1 - frac) * th0 + frac * th1);
+    const Configuration q = DenseState(tm);
     if (ends) s.probe_solver->SetWarmStart(InterpolateKnown(tm, t));
     s.probe_solver->Solve(q, &probe);
     if (refine) s.probe_solver->Refine(kLocationResidualTolerance, &probe);
@@ -1127,11 +1157,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     result->nlp_iterations_native += probe.nlp_iterations_native;
     if (probe.status != QuasiStaticStatus::kOk) return false;
     for (int i = 0; i < 3; ++i) (*slip)[i] = probe.contacts[i].slip;
-    Session::KnownSolution& k =
-        s.probe_known[s.probe_known_count++ % s.probe_known.size()];
-    k.t = tm;
-    k.z = probe.z;
-    k.slip = *slip;
+    RememberProbe(tm, probe);
     return true;
   };
   // One captured reference: std::function keeps it without allocating.
@@ -1144,8 +1170,14 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     LocateSwitchesAndReversals(s.t_prev, t, slip0, slip1, eps,
                                options_.event_tolerance, evaluate,
                                &result->switches);
+  // After the switches, so that their probes start as before.
+  const bool jumped = suspect && LocateSolutionJump(t, result);
+  if (jumped) SortAppended(first, &result->switches);
   refine = false;
-  if (change || regime) IntegrateSlipAcrossSwitches(t, first, evaluate, result);
+  if (change || regime || jumped)
+    IntegrateSlipAcrossSwitches(t, first, evaluate, result);
+  // A coupled interval is not restarted at a jump (model.md §8.6,
+  // "Solution jumps"): its resolved steps cross it as before.
   if (!coupled || !(change || redo)) return;
   Eigen::VectorXd& y = s.y_event;
   y = th0;
@@ -1153,7 +1185,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   for (std::size_t j = first; j <= result->switches.size(); ++j) {
     const bool end = j == result->switches.size();
     const double tb = end ? t : result->switches[j].t;
-    if (!end && (!result->switches[j].located ||
+    if (!end && (!result->switches[j].located || result->switches[j].jump ||
                  !(tb > ta + options_.event_tolerance) || !(tb < t)))
       continue;
     if (!end && std::isfinite(tolerance))
@@ -1174,6 +1206,124 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   result->nlp_iterations_native += s.sol.nlp_iterations_native;
 }
 
+// Sizes the workspaces of the probe and continuation solvers: one solve
+// each from the accepted solution s.sol.
+void Simulator::SizeProbeSolvers(SimulationResult* result) {
+  Session& s = *session_;
+  const Eigen::VectorXd& z = s.sol.z;
+  const auto count = [result](const QuasiStaticSolution& sol) {
+    result->nlp_solves += sol.nlp_solves;
+    result->nlp_iterations += sol.nlp_iterations;
+    result->nlp_iterations_native += sol.nlp_iterations_native;
+  };
+  s.probe_solver->SetWarmStart(z);
+  s.probe_solver->Solve(s.theta, &s.sol_event);
+  count(s.sol_event);
+  for (Session::KnownSolution& k : s.probe_known) k.z = z;
+  s.probe_warm = z;
+  if (!s.branch_solver) return;
+  s.branch_solver->SetWarmStart(z);
+  s.branch_solver->Solve(s.theta, &s.branch_sol);
+  count(s.branch_sol);
+  s.branch_z = z;
+}
+
+// Whether the interval ending at the sample s.sol may hold a solution jump
+// (core/solution_jumps.h): a solve of the interval was not a continuation
+// step (the sample's, or in coupled mode a right-hand side's, needed a
+// fallback or more than kBranchStepIterations iterations).
+bool Simulator::JumpSuspected() {
+  Session& s = *session_;
+  const int irregular = s.ode.irregular_solves();
+  const bool seen = irregular != s.ode_irregular_seen;
+  s.ode_irregular_seen = irregular;
+  return s.branch_solver && s.have_z_prev &&
+         s.sol.status == QuasiStaticStatus::kOk &&
+         (s.sol.nlp_solves > 1 ||
+          s.sol.nlp_iterations > kBranchStepIterations || seen);
+}
+
+Configuration Simulator::DenseState(double tm) const {
+  const Session::Dense& d = session_->dense;
+  const double frac = (tm - d.t0) / d.h;
+  return d.hermite ? HermiteState(d.th0, d.f0, d.th1, d.f1, d.h, frac)
+                   : Configuration((1 - frac) * d.th0 + frac * d.th1);
+}
+
+void Simulator::RememberProbe(double tm, const QuasiStaticSolution& sol) {
+  Session& s = *session_;
+  Session::KnownSolution& k =
+      s.probe_known[s.probe_known_count++ % s.probe_known.size()];
+  k.t = tm;
+  k.z = sol.z;
+  for (int i = 0; i < 3; ++i) k.slip[i] = sol.contacts[i].slip;
+}
+
+// Follows the root of the interval's start (s.z_prev at s.t_prev) towards t
+// by continuation (core/solution_jumps.h). Where it ends, the root of the
+// sample at t is followed back to the bracket's upper end; both roots
+// become probes (the quadrature's one-sided ends, warm-start nodes) and the
+// jump's events are appended. False (nothing appended) if the start's root
+// reaches t, or the end's root does not reach the bracket.
+bool Simulator::LocateSolutionJump(double t, SimulationResult* result) {
+  Session& s = *session_;
+  // Captures one reference: no allocation (see RestartAtSwitches).
+  struct Follow {
+    Simulator* sim;
+    SimulationResult* result;
+    double sign;        // +1 forward in time, -1 backward (u = -t)
+    double max_change;  // of a wheel's slip in one step [m/s]
+    std::array<Eigen::Vector2d, 3> slip_now;  // the last accepted root's
+  } f{this, result, 1.0, 0.0, s.slip_prev};
+  double interval_change = 0;
+  for (int i = 0; i < 3; ++i)
+    interval_change = std::max(
+        interval_change, (s.sol.contacts[i].slip - s.slip_prev[i]).norm());
+  f.max_change = kBranchStepSlipChange * interval_change +
+                 kBranchSlipFloorOverEpsilon * scene_.epsilon;
+  const BranchStep step = [&f](double u) {
+    Session& ss = *f.sim->session_;
+    const double tm = f.sign * u;
+    ss.branch_solver->SetWarmStart(ss.branch_z);
+    ss.branch_solver->Solve(f.sim->DenseState(tm), &ss.branch_sol);
+    f.result->nlp_solves += ss.branch_sol.nlp_solves;
+    f.result->nlp_iterations += ss.branch_sol.nlp_iterations;
+    f.result->nlp_iterations_native += ss.branch_sol.nlp_iterations_native;
+    if (ss.branch_sol.status != QuasiStaticStatus::kOk) return false;
+    // A jump keeps its size however short the step; a continuous root's
+    // change vanishes with the step.
+    for (int i = 0; i < 3; ++i)
+      if (!((ss.branch_sol.contacts[i].slip - f.slip_now[i]).norm() <=
+            f.max_change))
+        return false;
+    ss.branch_z = ss.branch_sol.z;
+    for (int i = 0; i < 3; ++i) f.slip_now[i] = ss.branch_sol.contacts[i].slip;
+    f.sim->RememberProbe(tm, ss.branch_sol);
+    return true;
+  };
+  const double tolerance = options_.event_tolerance;
+  s.branch_z = s.z_prev;
+  const BranchEnd forward = FollowBranch(s.t_prev, t, tolerance, step);
+  if (forward.outcome != BranchEnd::Outcome::kEnds) return false;
+  // The ended root's slips: the last accepted step's (branch_sol holds the
+  // failed one), at t_lower.
+  std::array<Eigen::Vector2d, 3> before = s.slip_prev, after;
+  const int known = std::min<int>(s.probe_known_count, s.probe_known.size());
+  for (int j = 0; j < known; ++j)
+    if (s.probe_known[j].t == forward.t_lower) before = s.probe_known[j].slip;
+  // The root the run goes on with, followed back from the sample at t.
+  f.sign = -1.0;
+  for (int i = 0; i < 3; ++i) f.slip_now[i] = s.sol.contacts[i].slip;
+  s.branch_z = s.sol.z;
+  const BranchEnd back = FollowBranch(-t, -forward.t_upper, tolerance, step);
+  if (back.outcome != BranchEnd::Outcome::kContinues) return false;
+  for (int i = 0; i < 3; ++i) after[i] = s.branch_sol.contacts[i].slip;
+  AppendSolutionJump(forward.t_lower, forward.t_upper, true, before, after,
+                     scene_.epsilon, &result->switches);
+  s.slip_jumps.push_back({forward.t_lower, forward.t_upper});
+  return true;
+}
+
 // The interval's slip integrals split at its located switches (all of
 // them located, else the trapezoid stays) for Record.
 void Simulator::IntegrateSlipAcrossSwitches(double t, std::size_t first,
@@ -1185,6 +1335,8 @@ void Simulator::IntegrateSlipAcrossSwitches(double t, std::size_t first,
   for (std::size_t j = first; j < result->switches.size(); ++j) {
     if (!result->switches[j].located) return;
     breaks.push_back(result->switches[j].t);
+    // A jump's piece ends on the ended root (s.slip_jumps).
+    if (result->switches[j].jump) breaks.push_back(result->switches[j].t_lower);
   }
   std::sort(breaks.begin(), breaks.end());
   std::array<double, 3> slip0, slip1;
@@ -1202,7 +1354,8 @@ void Simulator::IntegrateSlipAcrossSwitches(double t, std::size_t first,
   };
   int evaluations = 0;
   if (IntegrateSlipRegimes(s.t_prev, t, slip0, slip1, breaks, scene_.epsilon,
-                           speeds, &s.slip_increments, &evaluations))
+                           speeds, &s.slip_increments, &evaluations,
+                           s.slip_jumps))
     s.slip_increments_t = t;
 }
 

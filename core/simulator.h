@@ -285,8 +285,18 @@ class Simulator {
   // Switches (core/switch_events.h): locates class changes between the last
   // sample and s.sol at t; in coupled mode restarts the interval there.
   void CreateProbeSolver();
+  void SizeProbeSolvers(SimulationResult* result);
+  bool JumpSuspected();
   const Eigen::VectorXd& InterpolateKnown(double tm, double t_end);
   void RestartAtSwitches(double t, SimulationResult* result);
+  // Solution jumps (core/solution_jumps.h) between the last sample and t:
+  // appends their events; true if one was located.
+  bool LocateSolutionJump(double t, SimulationResult* result);
+  // The interval's state at tm (RestartAtSwitches: cubic Hermite on the
+  // ends' states and slopes, else linear).
+  Configuration DenseState(double tm) const;
+  // Stores a converged probe of the interval (warm-start node, slip cache).
+  void RememberProbe(double tm, const QuasiStaticSolution& sol);
   void IntegrateSlipAcrossSwitches(double t, std::size_t first,
                                    const SlipVectorEvaluator& evaluate,
                                    SimulationResult* result);

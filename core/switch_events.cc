@@ -203,15 +203,12 @@ bool NarrowBracket(double tolerance, const Eval& eval, double* a_io,
 }
 }  // namespace
 
-namespace {
-// The events appended since `first` in time order (ties by wheel).
 void SortAppended(std::size_t first, std::vector<SwitchEvent>* out) {
   std::sort(out->begin() + static_cast<std::ptrdiff_t>(first), out->end(),
             [](const SwitchEvent& x, const SwitchEvent& y) {
               return x.t < y.t || (x.t == y.t && x.wheel < y.wheel);
             });
 }
-}  // namespace
 
 int LocateSwitches(double t0, double t1, const std::array<double, 3>& slip0,
                    const std::array<double, 3>& slip1, double epsilon,
@@ -315,13 +312,8 @@ int LocateSwitchesAndReversals(double t0, double t1,
     if (!(b < t1)) break;  // not narrowed: no split
     if (reversed) *reversed = true;
     if (creeping) {  // the reversal is the event
-      SwitchEvent e;
-      e.wheel = i + 1;
+      SwitchEvent e = BracketedEvent(i + 1, a, b, located);
       e.reversal = true;
-      e.located = located;
-      e.t_lower = a;
-      e.t_upper = b;
-      e.t = b;
       out->push_back(e);
     }
     LocateSwitchesAndReversals(t0, b, slip0, at_b, epsilon, tolerance, evaluate,
@@ -524,7 +516,8 @@ bool IntegrateBetweenKinks(double a, const Slips& fa, double b, const Slips& fb,
 bool IntegrateSlipRegimes(double t0, double t1, const Slips& slip0,
                           const Slips& slip1, const std::vector<double>& breaks,
                           double epsilon, const SlipEvaluator& evaluate,
-                          SlipIncrements* out, int* evaluations) {
+                          SlipIncrements* out, int* evaluations,
+                          const std::vector<std::array<double, 2>>& jumps) {
   if (!(t1 > t0))
     throw std::invalid_argument("IntegrateSlipRegimes: t1 must be > t0");
   *out = SlipIncrements{};
@@ -561,8 +554,22 @@ bool IntegrateSlipRegimes(double t0, double t1, const Slips& slip0,
       ++*evaluations;
       if (!robust(b, &fb)) return false;
     }
-    if (!IntegrateBetweenKinks(a, fa, b, fb, epsilon, robust, out, evaluations))
+    const bool jump = std::any_of(jumps.begin(), jumps.end(),
+                                  [a, b](const std::array<double, 2>& k) {
+                                    return k[0] == a && k[1] == b;
+                                  });
+    if (jump) {  // the trapezoid on the two roots' one-sided values
+      for (int i = 0; i < 3; ++i) {
+        const double half = 0.5 * (b - a);
+        (IsSliding(fa[i], epsilon) ? (*out)[i].sliding : (*out)[i].creep) +=
+            half * fa[i];
+        (IsSliding(fb[i], epsilon) ? (*out)[i].sliding : (*out)[i].creep) +=
+            half * fb[i];
+      }
+    } else if (!IntegrateBetweenKinks(a, fa, b, fb, epsilon, robust, out,
+                                      evaluations)) {
       return false;
+    }
     a = b;
     fa = fb;
   }

@@ -131,12 +131,34 @@ struct SwitchEvent {
   // stick): its traction turns within a time proportional to eps
   // (LocateSwitchesAndReversals).
   bool reversal = false;
+  // Not a class change but the end of the root the run followed, where the
+  // solution jumps to another root (core/solution_jumps.h); its classes
+  // may be the same on both sides.
+  bool jump = false;
 };
 
-// "switch" or "creep_reversal" (run.json `kind`, docs/formats.md).
-inline const char* SwitchKindName(const SwitchEvent& e) {
-  return e.reversal ? "creep_reversal" : "switch";
+// An event of `wheel` (1-based) bracketed by [t_lower, t_upper], at
+// t = t_upper; classes and kind left to the caller.
+inline SwitchEvent BracketedEvent(int wheel, double t_lower, double t_upper,
+                                  bool located) {
+  SwitchEvent e;
+  e.wheel = wheel;
+  e.located = located;
+  e.t_lower = t_lower;
+  e.t_upper = t_upper;
+  e.t = t_upper;
+  return e;
 }
+
+// "switch", "creep_reversal" or "solution_jump" (run.json `kind`,
+// docs/formats.md).
+inline const char* SwitchKindName(const SwitchEvent& e) {
+  return e.jump ? "solution_jump" : e.reversal ? "creep_reversal" : "switch";
+}
+
+// Puts the events appended to *out since `first` in time order (ties by
+// wheel).
+void SortAppended(std::size_t first, std::vector<SwitchEvent>* out);
 
 // Slip speeds |s_i| [m/s] of the three wheels at time t; false if they
 // cannot be evaluated there (e.g. a failed quasi-static solve).
@@ -225,13 +247,19 @@ using SlipIncrements = std::array<SlipIncrement, 3>;
 // the two intervals whose pieces hold a switch's steep transition, refined
 // to the depth limit there); the 8 at the breaks (the located t_upper) are
 // answered from the simulator's cache of the location's probes: 201
-// solves. Throws std::invalid_argument for t1 <= t0.
+// solves. A piece [t_lower, t_upper] listed in `jumps` (both ends among
+// the breaks: a solution jump's bracket, core/solution_jumps.h) is not
+// evaluated inside, where the roots meet: the trapezoid on its ends' slips
+// (those of the ended root and of the next), each half credited to its own
+// regime (an error of at most the bracket's width times the slip jump).
+// Throws std::invalid_argument for t1 <= t0.
 bool IntegrateSlipRegimes(double t0, double t1,
                           const std::array<double, 3>& slip0,
                           const std::array<double, 3>& slip1,
                           const std::vector<double>& breaks, double epsilon,
                           const SlipEvaluator& evaluate, SlipIncrements* out,
-                          int* evaluations);
+                          int* evaluations,
+                          const std::vector<std::array<double, 2>>& jumps = {});
 
 // The step-doubling tolerance of a resolved piece:
 // max(floor, kSwitchToleranceRate h^4) in ||.||_inf of Theta, h the fixed

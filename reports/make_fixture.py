@@ -369,6 +369,7 @@ def write_inputs(out_dir):
 # (switches/<run_id>.csv, docs/formats.md); legacy outputs have no such file.
 SWITCH_FRACTIONS = ((0.3, 1, "stick", "slide"), (0.6, 3, "slide", "stick"))
 CREEP_REVERSAL_FRACTION = 0.45  # and one creep reversal, wheel 3
+SOLUTION_JUMP_FRACTION = 0.5  # and one solution jump, all three wheels
 
 
 def write_switches(path, t_end):
@@ -381,6 +382,11 @@ def write_switches(path, t_end):
         # One creeping wheel's slip reversal (docs/formats.md, kind).
         t = CREEP_REVERSAL_FRACTION * t_end
         handle.write(f"{t!r},3,stick,stick,true,{t - 1e-9!r},{t!r},creep_reversal\n")
+        # One solution jump: an event per wheel, one bracket (kind).
+        t = SOLUTION_JUMP_FRACTION * t_end
+        for wheel in (1, 2, 3):
+            handle.write(f"{t!r},{wheel},slide,slide,true,{t - 1e-9!r},{t!r},"
+                         "solution_jump\n")
 
 
 def build_fixture(out_dir, seed=7, legacy=False):

@@ -389,10 +389,10 @@ def read_trajectory(path):
 
 def read_switches(path):
     """switches/<run_id>.csv (docs/formats.md) as a list of dicts with t,
-    wheel, from, to, located and kind ("switch", or "creep_reversal"; files
-    from before the column: "switch"); None if the file does not exist (a
-    run from before the file was written, or from a merge that did not copy
-    it)."""
+    wheel, from, to, located and kind ("switch", "creep_reversal" or
+    "solution_jump"; files from before the column: "switch"); None if the
+    file does not exist (a run from before the file was written, or from a
+    merge that did not copy it)."""
     if not os.path.isfile(path):
         return None
     label = "switches/" + os.path.basename(path)

@@ -342,7 +342,8 @@ _WHEEL_FORCE_FIGURES = {
 
 # Vertical event lines of the force figures: kind -> (legend label, style).
 _EVENT_LINES = {"switch": ("stick/slide switch", (0, (1, 2))),
-                "creep_reversal": ("creep reversal", (0, (6, 2, 1, 2)))}
+                "creep_reversal": ("creep reversal", (0, (6, 2, 1, 2))),
+                "solution_jump": ("solution jump", (0, (8, 3)))}
 
 
 def _mark_switches(ctx, run, ax):
@@ -354,9 +355,11 @@ def _mark_switches(ctx, run, ax):
                 "(no switches/ file), so none are marked.")
     switches = [e for e in events if e["kind"] == "switch"]
     reversals = [e for e in events if e["kind"] == "creep_reversal"]
+    jumps = [e for e in events if e["kind"] == "solution_jump"]
     colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
     handles, labels = ax.get_legend_handles_labels()
-    for kind, drawn in (("switch", switches), ("creep_reversal", reversals)):
+    for kind, drawn in (("switch", switches), ("creep_reversal", reversals),
+                        ("solution_jump", jumps)):
         label, style = _EVENT_LINES[kind]
         for e in drawn:
             ax.axvline(e["t"], color=colours.get(e["wheel"], "grey"),
@@ -373,6 +376,13 @@ def _mark_switches(ctx, run, ax):
                  "within a time proportional to ε (docs/model.md §8.6): "
                  + ", ".join(f"{fmt(e['t'])} s (wheel {e['wheel']})"
                              for e in reversals[:8]) + ".")
+    times = sorted({e["t"] for e in jumps})
+    if times:
+        turns += (f" Dashed: {len(times)} solution jump(s), where the root the "
+                  "run followed ends in a fold and the slips jump to another "
+                  "root (docs/model.md §8.6; in the limit ε → 0 a wheel "
+                  "starts to slide there): "
+                  + ", ".join(f"{fmt(t)} s" for t in times[:8]) + ".")
     if not switches:
         return (" No wheel changed between sticking and sliding in this run "
                 "(switch location on)." + turns

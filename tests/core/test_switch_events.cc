@@ -317,8 +317,13 @@ TEST(SwitchEvents, PaperSceneFirstSwitchIsLocatedInsideTheInterval) {
   for (Coupling coupling : {Coupling::kCoupled, Coupling::kZoh}) {
     const SimulationResult r = RunPaper(0.4, coupling, true);
     ASSERT_TRUE(r.success()) << r.stop_reason;
-    ASSERT_GE(r.switches.size(), 2u) << ToString(coupling);
-    const SwitchEvent& e = r.switches[0];
+    // The class changes (the solution jump between them, ~4 ms after the
+    // first, is tests/core/test_solution_jumps.cc's).
+    std::vector<SwitchEvent> changes;
+    for (const SwitchEvent& e : r.switches)
+      if (!e.jump && !e.reversal) changes.push_back(e);
+    ASSERT_GE(changes.size(), 2u) << ToString(coupling);
+    const SwitchEvent& e = changes[0];
     EXPECT_EQ(e.wheel, 1);
     EXPECT_FALSE(e.from_sliding);
     EXPECT_TRUE(e.to_sliding);
@@ -329,10 +334,10 @@ TEST(SwitchEvents, PaperSceneFirstSwitchIsLocatedInsideTheInterval) {
     const double slack = coupling == Coupling::kZoh ? 0.01 : 0.0;
     EXPECT_GT(e.t, 2.9025 - slack);
     EXPECT_LT(e.t, 2.9030 + slack);
-    EXPECT_EQ(r.switches[1].wheel, 3);
-    EXPECT_TRUE(r.switches[1].from_sliding);
-    EXPECT_GT(r.switches[1].t, 2.91);
-    EXPECT_LT(r.switches[1].t, 2.93);
+    EXPECT_EQ(changes[1].wheel, 3);
+    EXPECT_TRUE(changes[1].from_sliding);
+    EXPECT_GT(changes[1].t, 2.91);
+    EXPECT_LT(changes[1].t, 2.93);
     const SimulationResult off = RunPaper(0.4, coupling, false);
     EXPECT_TRUE(off.switches.empty());
     if (coupling == Coupling::kZoh) {
@@ -381,8 +386,9 @@ TEST(SwitchEvents, NoSwitchNoChange) {
   ASSERT_EQ(on.samples.size(), off.samples.size());
   for (std::size_t k = 0; k < on.samples.size(); ++k)
     EXPECT_EQ((on.samples[k].theta - off.samples[k].theta).norm(), 0) << k;
-  // + the probe solver's one warm-up solve at the first sample.
-  EXPECT_EQ(on.nlp_solves, off.nlp_solves + 1);
+  // + the probe and continuation solvers' warm-up solves at the first
+  // sample.
+  EXPECT_EQ(on.nlp_solves, off.nlp_solves + 2);
   EXPECT_EQ(on.steps, off.steps);
 }
 
