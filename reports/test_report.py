@@ -231,7 +231,7 @@ class GoodReportTest(unittest.TestCase):
             self.assertIn("Dash-dotted: the 1 creep reversal(s)", caption)
             self.assertIn("(wheel 3).", caption)
             # The solution jump: one time for its three wheels' events.
-            self.assertIn("Dashed: 1 solution jump(s)", caption)
+            self.assertIn("Dashed black: 1 solution jump(s)", caption)
 
     def test_force_figures_say_when_switch_times_are_missing(self):
         with open(os.path.join(Fixture.legacy, "report", "figures.json")) as handle:

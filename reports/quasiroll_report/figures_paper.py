@@ -343,7 +343,7 @@ _WHEEL_FORCE_FIGURES = {
 # Vertical event lines of the force figures: kind -> (legend label, style).
 _EVENT_LINES = {"switch": ("stick/slide switch", (0, (1, 2))),
                 "creep_reversal": ("creep reversal", (0, (6, 2, 1, 2))),
-                "solution_jump": ("solution jump", (0, (8, 3)))}
+                "solution_jump": ("solution jump", (0, (4, 2)))}
 
 
 def _mark_switches(ctx, run, ax):
@@ -358,14 +358,20 @@ def _mark_switches(ctx, run, ax):
     jumps = [e for e in events if e["kind"] == "solution_jump"]
     colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
     handles, labels = ax.get_legend_handles_labels()
+    # A jump is the whole solution's (one entry per wheel, one time): one
+    # black line, not three overdrawn in the wheels' colours.
+    jump_lines = [{"t": t, "wheel": None}
+                  for t in sorted({e["t"] for e in jumps})]
     for kind, drawn in (("switch", switches), ("creep_reversal", reversals),
-                        ("solution_jump", jumps)):
+                        ("solution_jump", jump_lines)):
         label, style = _EVENT_LINES[kind]
         for e in drawn:
-            ax.axvline(e["t"], color=colours.get(e["wheel"], "grey"),
+            ax.axvline(e["t"], color=colours.get(e["wheel"], "black"),
                        linestyle=style, linewidth=0.9, alpha=0.8)
         if drawn:
-            handles.append(Line2D([], [], color="grey", linestyle=style))
+            handles.append(Line2D(
+                [], [], linestyle=style,
+                color="black" if kind == "solution_jump" else "grey"))
             labels.append(label)
     if events:
         ax.legend(handles, labels, loc="best")
@@ -376,13 +382,13 @@ def _mark_switches(ctx, run, ax):
                  "within a time proportional to ε (docs/model.md §8.6): "
                  + ", ".join(f"{fmt(e['t'])} s (wheel {e['wheel']})"
                              for e in reversals[:8]) + ".")
-    times = sorted({e["t"] for e in jumps})
-    if times:
-        turns += (f" Dashed: {len(times)} solution jump(s), where the root the "
-                  "run followed ends in a fold and the slips jump to another "
-                  "root (docs/model.md §8.6; in the limit ε → 0 a wheel "
-                  "starts to slide there): "
-                  + ", ".join(f"{fmt(t)} s" for t in times[:8]) + ".")
+    if jump_lines:
+        turns += (f" Dashed black: {len(jump_lines)} solution jump(s), where "
+                  "the root the run followed ends in a fold and the slips of "
+                  "all wheels jump to another root (docs/model.md §8.6; in the "
+                  "limit ε → 0 a wheel starts to slide there): "
+                  + ", ".join(f"{fmt(e['t'])} s" for e in jump_lines[:8])
+                  + ".")
     if not switches:
         return (" No wheel changed between sticking and sliding in this run "
                 "(switch location on)." + turns
@@ -397,7 +403,8 @@ def _mark_switches(ctx, run, ax):
             f"stick/slide switches of this run ({located} located to the "
             f"switch tolerance where a wheel's friction margin crosses 5e-5, "
             f"docs/model.md §8.6; a wheel that reaches its cone slowly starts "
-            f"to slide later than that): {listed}{more}." + turns)
+            f"to slide later than that, at a solution jump where there is "
+            f"one): {listed}{more}." + turns)
 
 
 def _wheel_force_figure(ctx, name):
