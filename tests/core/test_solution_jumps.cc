@@ -199,6 +199,39 @@ TEST(SolutionJumps, PaperSceneJumpIsTheEndOfTheLowerRoot) {
     EXPECT_LE(r.switches[k - 1].t, r.switches[k].t) << k;
 }
 
+// The located jump as the regularisation vanishes (zoh, first 3.2 s): at
+// eps = 1e-9 and 1e-10 it is still there and its time converges (measured
+// 2.9072174, 2.9072811, 2.9072952 s for eps = 1e-8, 1e-9, 1e-10: steps
+// 6.4e-5 then 1.4e-5 s), the onset of wheel 1's sliding in the limit; at
+// eps = 1e-7 the regularisation smooths the fold pair away (model.md §7.5)
+// and nothing is found.
+TEST(SolutionJumps, PaperSceneJumpConvergesAsEpsilonVanishes) {
+  std::vector<double> times;
+  for (const double eps : {1e-7, 1e-8, 1e-9, 1e-10}) {
+    Scene scene = PaperScene();
+    scene.epsilon = eps;
+    SimulationOptions o = BuiltinOptions("rk-projection", Coupling::kZoh, 0.05);
+    o.t_end = 3.2;
+    const SimulationResult r = Simulator(scene, o).Run();
+    ASSERT_TRUE(r.success()) << eps << " " << r.stop_reason;
+    std::vector<double> at;
+    for (const SwitchEvent& e : r.switches)
+      if (e.jump && e.wheel == 1) at.push_back(e.t);
+    if (eps > 5e-8) {
+      EXPECT_TRUE(at.empty()) << eps;
+      continue;
+    }
+    ASSERT_EQ(at.size(), 1u) << eps;
+    times.push_back(at[0]);
+  }
+  ASSERT_EQ(times.size(), 3u);
+  EXPECT_LT(times[0], times[1]);
+  EXPECT_LT(times[1], times[2]);
+  // Converging: each decade's step at most half the one before.
+  EXPECT_LT(times[2] - times[1], 0.5 * (times[1] - times[0]));
+  EXPECT_LT(times[2] - times[1], 3e-5);
+}
+
 // Coupled mode finds its own jump in the same interval: its states differ
 // from zoh's by the hold's error, which moves the fold (2.9070686 s, the
 // same to 4e-7 s at dt 0.1, 0.05, 0.025 and 0.0125 s). It is recorded; the
