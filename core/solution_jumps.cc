@@ -9,8 +9,7 @@ namespace quasiroll {
 
 BranchEnd FollowBranch(double t0, double t1, double tolerance,
                        const BranchStep& step, int max_steps) {
-  if (!(t1 > t0))
-    throw std::invalid_argument("FollowBranch: t1 must be > t0");
+  if (!(t1 > t0)) throw std::invalid_argument("FollowBranch: t1 must be > t0");
   if (!(tolerance > 0))
     throw std::invalid_argument("FollowBranch: tolerance must be > 0");
   if (max_steps < 1)

@@ -106,16 +106,16 @@ TEST(FollowBranch, RejectsBadArguments) {
 // least one; classes from each side's slip.
 TEST(AppendSolutionJump, OneEventPerWheelThatJumps) {
   const double eps = 1e-8;
-  const std::array<Eigen::Vector2d, 3> before{
-      Eigen::Vector2d(8.5e-6, 0), Eigen::Vector2d(0, 5e-7),
-      Eigen::Vector2d(2.0e-5, 0)};
-  const std::array<Eigen::Vector2d, 3> after{
-      Eigen::Vector2d(2.2e-5, 0), Eigen::Vector2d(0, 5.2e-7),
-      Eigen::Vector2d(0.5e-6, 0)};
+  const std::array<Eigen::Vector2d, 3> before{Eigen::Vector2d(8.5e-6, 0),
+                                              Eigen::Vector2d(0, 5e-7),
+                                              Eigen::Vector2d(2.0e-5, 0)};
+  const std::array<Eigen::Vector2d, 3> after{Eigen::Vector2d(2.2e-5, 0),
+                                             Eigen::Vector2d(0, 5.2e-7),
+                                             Eigen::Vector2d(0.5e-6, 0)};
   std::vector<SwitchEvent> events;
-  ASSERT_EQ(AppendSolutionJump(1.0, 1.0 + 1e-9, true, before, after, eps,
-                               &events),
-            2);
+  ASSERT_EQ(
+      AppendSolutionJump(1.0, 1.0 + 1e-9, true, before, after, eps, &events),
+      2);
   EXPECT_EQ(events[0].wheel, 1);
   EXPECT_EQ(events[1].wheel, 3);
   for (const SwitchEvent& e : events) {
@@ -137,9 +137,9 @@ TEST(AppendSolutionJump, OneEventPerWheelThatJumps) {
   std::array<Eigen::Vector2d, 3> small = before;
   small[1] *= 1.05;
   events.clear();
-  ASSERT_EQ(AppendSolutionJump(1.0, 1.0 + 1e-9, true, before, small, eps,
-                               &events),
-            1);
+  ASSERT_EQ(
+      AppendSolutionJump(1.0, 1.0 + 1e-9, true, before, small, eps, &events),
+      1);
   EXPECT_EQ(events[0].wheel, 2);
 }
 
