@@ -613,7 +613,7 @@ QuasiStaticStatus QuasiStaticSolver::Solve(const Configuration& theta,
     } else {
       out->z = result_.x;
       out->status = QuasiStaticStatus::kSolverFailure;
-      out->message = "not converged (not classified)";
+      out->message = "unclassified";  // short: no allocation (SSO)
     }
   }
   out->wall_seconds =
