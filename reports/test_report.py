@@ -357,6 +357,8 @@ class GoodReportTest(unittest.TestCase):
         caption = self.manifest()["fig12_slip"]["caption"]
         self.assertIn("Below 10 ε = 1.00e-07 m/s a wheel creeps", caption)
         self.assertIn("proportional to ε", caption)
+        # The fixture's solution jump: where the slips jump (model.md §8.6).
+        self.assertIn("Dashed black: 1 solution jump(s)", caption)
 
     def test_total_slip_is_the_runs_located_integral(self):
         # Fig. 14's points are runs.csv sliding_distance + creep_distance (the

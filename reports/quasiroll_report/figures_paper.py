@@ -346,6 +346,39 @@ _EVENT_LINES = {"switch": ("stick/slide switch", (0, (1, 2))),
                 "solution_jump": ("solution jump", (0, (4, 2)))}
 
 
+def _jump_lines(jumps):
+    """One line per solution jump time: a jump is the whole solution's (one
+    entry per wheel, one bracket), drawn black, not overdrawn in the wheels'
+    colours."""
+    return [{"t": t, "wheel": None} for t in sorted({e["t"] for e in jumps})]
+
+
+def _jump_sentence(jump_lines):
+    if not jump_lines:
+        return ""
+    return (f" Dashed black: {len(jump_lines)} solution jump(s), where the "
+            "root the run followed ends in a fold and the slips of all wheels "
+            "jump to another root (docs/model.md §8.6; in the limit ε → 0 a "
+            "wheel starts to slide there): "
+            + ", ".join(f"{fmt(e['t'])} s" for e in jump_lines[:8]) + ".")
+
+
+def _mark_jumps(ctx, run, ax):
+    """The run's solution jumps as black dashed verticals (labelled for the
+    legend); the caption's sentence, "" when there are none or no
+    switches/ file."""
+    events = ctx.trajectories.switches(run)
+    lines = _jump_lines([e for e in events or ()
+                         if e["kind"] == "solution_jump"])
+    label, style = _EVENT_LINES["solution_jump"]
+    for k, e in enumerate(lines):
+        ax.axvline(e["t"], color="black", linestyle=style, linewidth=0.9,
+                   alpha=0.8, label=label if k == 0 else None)
+    if lines:
+        ax.legend(loc="best")
+    return _jump_sentence(lines)
+
+
 def _mark_switches(ctx, run, ax):
     """Vertical lines at the run's located stick/slide switches and creep
     reversals, in the wheel's colour; the caption's sentences about them."""
@@ -358,10 +391,7 @@ def _mark_switches(ctx, run, ax):
     jumps = [e for e in events if e["kind"] == "solution_jump"]
     colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
     handles, labels = ax.get_legend_handles_labels()
-    # A jump is the whole solution's (one entry per wheel, one time): one
-    # black line, not three overdrawn in the wheels' colours.
-    jump_lines = [{"t": t, "wheel": None}
-                  for t in sorted({e["t"] for e in jumps})]
+    jump_lines = _jump_lines(jumps)
     for kind, drawn in (("switch", switches), ("creep_reversal", reversals),
                         ("solution_jump", jump_lines)):
         label, style = _EVENT_LINES[kind]
@@ -382,13 +412,7 @@ def _mark_switches(ctx, run, ax):
                  "within a time proportional to ε (docs/model.md §8.6): "
                  + ", ".join(f"{fmt(e['t'])} s (wheel {e['wheel']})"
                              for e in reversals[:8]) + ".")
-    if jump_lines:
-        turns += (f" Dashed black: {len(jump_lines)} solution jump(s), where "
-                  "the root the run followed ends in a fold and the slips of "
-                  "all wheels jump to another root (docs/model.md §8.6; in the "
-                  "limit ε → 0 a wheel starts to slide there): "
-                  + ", ".join(f"{fmt(e['t'])} s" for e in jump_lines[:8])
-                  + ".")
+    turns += _jump_sentence(jump_lines)
     if not switches:
         return (" No wheel changed between sticking and sliding in this run "
                 "(switch location on)." + turns
@@ -461,13 +485,16 @@ def figure_slip(ctx):
         ctx, "slip{i}", "slip speed ‖s_i‖ [m/s]", "", log=log,
         absolute=True)
     finite = slips[np.isfinite(slips)]
+    jumps = _mark_jumps(ctx, run, fig.axes[0])
     caption = (
         "Fig. 12 — the paper shows that the wheels roll with (near-)zero slip "
         "when friction suffices (μ = 0.5). This run: max slip "
         f"{fmt(float(finite.max()) if finite.size else math.nan)} m/s, median "
         f"{fmt(float(np.median(finite)) if finite.size else math.nan)} m/s"
         + ("" if log else " (all zero: linear axis)")
-        + f" ({_run_text(run)})." + _mark_creep_band(run, fig.axes[0], finite, log))
+        + f" ({_run_text(run)})." + _mark_creep_band(run, fig.axes[0], finite, log)
+        + jumps + (" The lines join the output samples: a jump shows as a "
+                   "slope over the interval that holds it." if jumps else ""))
     return save_figure(fig, ctx.out_dir, "fig12_slip",
                        "Fig. 12 — slip speeds", caption)
 
