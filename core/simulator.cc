@@ -1231,7 +1231,8 @@ void Simulator::SizeProbeSolvers(SimulationResult* result) {
 // Whether the interval ending at the sample s.sol may hold a solution jump
 // (core/solution_jumps.h): a solve of the interval was not a continuation
 // step (the sample's, or in coupled mode a right-hand side's, needed a
-// fallback or more than kBranchStepIterations iterations).
+// fallback or more than kBranchStepIterations iterations). Marks the
+// right-hand side's irregular solves so far as seen.
 bool Simulator::JumpSuspected() {
   Session& s = *session_;
   const int irregular = s.ode.irregular_solves();

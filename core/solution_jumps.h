@@ -14,14 +14,16 @@
 //
 // Location: natural-parameter continuation of the root in time, each step a
 // short local solve (the caller's: a square-system Newton method limited to
-// a few iterations, no fallbacks) from the last accepted root. A step that
-// converges is accepted; one that does not is either too long for Newton's
-// basin or beyond the end of the root. FollowBranch doubles the step after
-// a success and, after a failure at b, bisects [a, b] (a the last accepted
-// time); a failure from a over a step of at most `tolerance` ends the root
-// in (a, a + step]; a success at b shows that b's failure was the basin's
-// and the doubling resumes. Every bracket it reports was failed from its own
-// lower end. Paper scene: the fold bracketed to 1e-9 s in ~60 solves.
+// a few iterations, no fallbacks) from the last accepted root. A step is
+// accepted if it converges and its slips moved little (the criterion
+// below); one that is not is either too long for Newton's basin or beyond
+// the end of the root. FollowBranch doubles the step after a success and,
+// after a failure at b, bisects [a, b] (a the last accepted time); a
+// failure from a over a step of at most `tolerance` ends the root in
+// (a, a + step]; a success at b shows that b's failure was the basin's and
+// the doubling resumes. Every bracket it reports was failed from its own
+// lower end. Paper scene: the fold bracketed to 1e-9 s in 31 steps (the
+// end sample's root followed back to it in 5).
 #pragma once
 
 #include <Eigen/Core>
