@@ -1305,7 +1305,10 @@ bool Simulator::LocateSolutionJump(double t, SimulationResult* result) {
   const double tolerance = options_.event_tolerance;
   s.branch_z = s.z_prev;
   const BranchEnd forward = FollowBranch(s.t_prev, t, tolerance, step);
-  if (forward.outcome != BranchEnd::Outcome::kEnds) return false;
+  // An end not narrowed inside the interval (a tolerance as long as it) is
+  // not located.
+  if (forward.outcome != BranchEnd::Outcome::kEnds || !(forward.t_upper < t))
+    return false;
   // The ended root's slips: the last accepted step's (branch_sol holds the
   // failed one), at t_lower.
   std::array<Eigen::Vector2d, 3> before = s.slip_prev, after;

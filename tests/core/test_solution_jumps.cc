@@ -232,6 +232,17 @@ TEST(SolutionJumps, PaperSceneJumpConvergesAsEpsilonVanishes) {
   EXPECT_LT(times[2] - times[1], 3e-5);
 }
 
+// An event tolerance as long as the interval cannot narrow the end inside
+// it: nothing is recorded, and the run goes on (no exception).
+TEST(SolutionJumps, ATolerancePastTheIntervalLocatesNothing) {
+  SimulationOptions o = BuiltinOptions("rk-projection", Coupling::kZoh, 0.05);
+  o.t_end = 3.2;
+  o.event_tolerance = 0.1;
+  const SimulationResult r = Simulator(PaperScene(), o).Run();
+  ASSERT_TRUE(r.success()) << r.stop_reason;
+  for (const SwitchEvent& e : r.switches) EXPECT_FALSE(e.jump) << e.t;
+}
+
 // Coupled mode finds its own jump in the same interval: its states differ
 // from zoh's by the hold's error, which moves the fold (2.9070686 s, the
 // same to 4e-7 s at dt 0.1, 0.05, 0.025 and 0.0125 s). It is recorded; the
