@@ -1280,6 +1280,7 @@ bool Simulator::LocateSolutionJump(double t, SimulationResult* result) {
   for (int i = 0; i < 3; ++i)
     interval_change = std::max(
         interval_change, (s.sol.contacts[i].slip - s.slip_prev[i]).norm());
+  if (!std::isfinite(interval_change)) return false;
   f.max_change = kBranchStepSlipChange * interval_change +
                  kBranchSlipFloorOverEpsilon * scene_.epsilon;
   const BranchStep step = [&f](double u) {
