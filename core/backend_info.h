@@ -17,6 +17,10 @@ enum class BackendRole {
   kDefault,         // used when a command, suite or script names none
   kReference,       // the fixed-step scheme of numerical references
   kReferenceCheck,  // the independent check of an adaptive reference
+  // NLP only: the square-system Newton method whose short solves follow a
+  // root in time to locate solution jumps (core/solution_jumps.h), whatever
+  // the run's backend.
+  kContinuation,
 };
 
 struct BackendInfo {

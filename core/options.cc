@@ -357,6 +357,8 @@ const char* ToString(BackendRole role) {
       return "reference";
     case BackendRole::kReferenceCheck:
       return "reference_check";
+    case BackendRole::kContinuation:
+      return "continuation";
   }
   return "?";
 }

@@ -121,6 +121,7 @@ class Simulator::RobotOde final : public LoopClosureOde {
   // than a continuation step (coupled; a solution jump shows as one,
   // core/solution_jumps.h).
   int irregular_solves() const { return irregular_solves_; }
+  void set_iteration_watch(int iterations) { iteration_watch_ = iterations; }
   // Max KKT residual of the accepted solves since ResetKkt() (NaN: none).
   double kkt_residual() const { return kkt_residual_; }
   void ResetKkt() { kkt_residual_ = std::numeric_limits<double>::quiet_NaN(); }
@@ -140,7 +141,7 @@ class Simulator::RobotOde final : public LoopClosureOde {
       nlp_solves_ += sol_.nlp_solves;
       nlp_iterations_ += sol_.nlp_iterations;
       nlp_iterations_native_ += sol_.nlp_iterations_native;
-      if (sol_.nlp_solves > 1 || sol_.nlp_iterations > kBranchStepIterations)
+      if (sol_.nlp_solves > 1 || sol_.nlp_iterations > iteration_watch_)
         ++irregular_solves_;
       if (sol_.status != QuasiStaticStatus::kOk) {
         nlp_failed_ = failed_in_call_ = true;
@@ -242,6 +243,7 @@ class Simulator::RobotOde final : public LoopClosureOde {
   QuasiStaticSolution failed_sol_;
   int nlp_solves_ = 0;
   int irregular_solves_ = 0;
+  int iteration_watch_ = kBranchStepIterations;
   long long nlp_iterations_ = 0;
   long long nlp_iterations_native_ = 0;
   double kkt_residual_ = std::numeric_limits<double>::quiet_NaN();
@@ -403,6 +405,22 @@ std::unique_ptr<NlpSolver> CreateNlp(const SimulationOptions& options,
   std::unique_ptr<NlpSolver> nlp = NlpSolverRegistry::Create(options.nlp);
   nlp->SetBackendOptions(options.nlp_options);
   *used = nlp->backend_options();
+  return nlp;
+}
+// The solution-jump continuation's backend (core/solution_jumps.h): the one
+// with BackendRole::kContinuation, a square-system Newton method; the run's
+// options when the run uses it, else its defaults; null when none is
+// registered.
+std::unique_ptr<NlpSolver> ContinuationNlp(const SimulationOptions& options) {
+  std::string name;
+  for (const std::string& n : NlpSolverRegistry::Names())
+    if (NlpSolverRegistry::Info(n).HasRole(BackendRole::kContinuation))
+      name = n;
+  if (name.empty()) return nullptr;
+  std::unique_ptr<NlpSolver> nlp = NlpSolverRegistry::Create(name);
+  if (!nlp->RequiresSquareSystem()) return nullptr;
+  nlp->SetBackendOptions(name == options.nlp ? options.nlp_options
+                                             : GivenOptions{});
   return nlp;
 }
 std::unique_ptr<Integrator> CreateIntegrator(const SimulationOptions& options,
@@ -595,17 +613,25 @@ void Simulator::CreateProbeSolver() {
       *model_, QuasiStaticParameters::FromScene(scene_),
       CreateNlp(options_, &unused), probe_options);
   // A continuation step is a local Newton solve whose iteration count
-  // measures its contraction: square-system backends only.
-  if (!session_->probe_solver->nlp().RequiresSquareSystem()) return;
+  // measures its contraction: the backend with the continuation role (the
+  // run's own, with its options, when it is that one), whatever the run's.
+  std::unique_ptr<NlpSolver> nlp = ContinuationNlp(options_);
+  if (!nlp) return;
   QuasiStaticOptions branch_options = options_.quasi_static;
   branch_options.homotopy = false;
   branch_options.stall_iterations = 0;
   branch_options.max_iterations = kBranchStepIterations;
   branch_options.classify_failures = false;
   session_->branch_solver = std::make_unique<QuasiStaticSolver>(
-      *model_, QuasiStaticParameters::FromScene(scene_),
-      CreateNlp(options_, &unused), branch_options);
+      *model_, QuasiStaticParameters::FromScene(scene_), std::move(nlp),
+      branch_options);
   session_->slip_jumps.reserve(4);
+  // Iteration counts measure contraction only for a Newton method: other
+  // backends' solves count as irregular on a fallback alone.
+  session_->ode.set_iteration_watch(
+      session_->probe_solver->nlp().RequiresSquareSystem()
+          ? kBranchStepIterations
+          : std::numeric_limits<int>::max());
 }
 
 void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
@@ -1115,7 +1141,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   // integrated again, resolved (core/switch_events.h).
   const bool redo =
       coupled && band && !s.resolved_last && std::isfinite(tolerance);
-  const bool suspect = JumpSuspected();
+  const bool suspect = JumpSuspected(change || regime);
   s.slip_jumps.clear();
   if (!change && !redo && !regime && !suspect) return;
   const Configuration th0 = s.theta_prev, th1 = s.theta;
@@ -1231,17 +1257,23 @@ void Simulator::SizeProbeSolvers(SimulationResult* result) {
 // Whether the interval ending at the sample s.sol may hold a solution jump
 // (core/solution_jumps.h): a solve of the interval was not a continuation
 // step (the sample's, or in coupled mode a right-hand side's, needed a
-// fallback or more than kBranchStepIterations iterations). Marks the
-// right-hand side's irregular solves so far as seen.
-bool Simulator::JumpSuspected() {
+// fallback or, with a Newton backend, more than kBranchStepIterations
+// iterations), or, with another backend, `structure_changed` (a wheel's
+// class or regime changed). Marks the right-hand side's irregular solves so
+// far as seen.
+bool Simulator::JumpSuspected(bool structure_changed) {
   Session& s = *session_;
   const int irregular = s.ode.irregular_solves();
   const bool seen = irregular != s.ode_irregular_seen;
   s.ode_irregular_seen = irregular;
+  // Other backends' iteration counts do not measure contraction: there a
+  // change of a wheel's class or regime in the interval counts too.
+  const bool newton = s.probe_solver->nlp().RequiresSquareSystem();
   return s.branch_solver && s.have_z_prev &&
          s.sol.status == QuasiStaticStatus::kOk &&
-         (s.sol.nlp_solves > 1 ||
-          s.sol.nlp_iterations > kBranchStepIterations || seen);
+         (s.sol.nlp_solves > 1 || seen ||
+          (newton ? s.sol.nlp_iterations > kBranchStepIterations
+                  : structure_changed));
 }
 
 Configuration Simulator::DenseState(double tm) const {

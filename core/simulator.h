@@ -286,7 +286,7 @@ class Simulator {
   // sample and s.sol at t; in coupled mode restarts the interval there.
   void CreateProbeSolver();
   void SizeProbeSolvers(SimulationResult* result);
-  bool JumpSuspected();
+  bool JumpSuspected(bool structure_changed);
   const Eigen::VectorXd& InterpolateKnown(double tm, double t_end);
   void RestartAtSwitches(double t, SimulationResult* result);
   // Solution jumps (core/solution_jumps.h) between the last sample and t:

@@ -35,7 +35,8 @@ void RegisterBuiltinNlpSolvers() {
     BackendInfo newton =
         Info("damped Newton with dense LU on square equality systems", "Newton",
              "", "", 1.0);
-    newton.roles = {BackendRole::kDefault, BackendRole::kReference};
+    newton.roles = {BackendRole::kDefault, BackendRole::kReference,
+                    BackendRole::kContinuation};
     NlpSolverRegistry::Register("newton", std::move(newton),
                                 [] { return MakeNewtonSolver(); });
 #ifdef QUASIROLL_HAVE_IPOPT

@@ -44,6 +44,7 @@ TEST(BackendInfo, EveryBuiltinDescribesItself) {
   // Each role is held by exactly one backend (defaults, references).
   EXPECT_EQ(CountRole<NlpSolverRegistry>(BackendRole::kDefault), 1);
   EXPECT_EQ(CountRole<NlpSolverRegistry>(BackendRole::kReference), 1);
+  EXPECT_EQ(CountRole<NlpSolverRegistry>(BackendRole::kContinuation), 1);
   EXPECT_EQ(CountRole<IntegratorRegistry>(BackendRole::kDefault), 1);
   EXPECT_EQ(CountRole<IntegratorRegistry>(BackendRole::kReference), 1);
   EXPECT_LE(CountRole<IntegratorRegistry>(BackendRole::kReferenceCheck), 1);
