@@ -407,6 +407,13 @@ std::unique_ptr<NlpSolver> CreateNlp(const SimulationOptions& options,
   *used = nlp->backend_options();
   return nlp;
 }
+// Adds a quasi-static solve's counters to the run's.
+void AddSolveCounts(const QuasiStaticSolution& sol, SimulationResult* result) {
+  result->nlp_solves += sol.nlp_solves;
+  result->nlp_iterations += sol.nlp_iterations;
+  result->nlp_iterations_native += sol.nlp_iterations_native;
+}
+
 // The solution-jump continuation's backend (core/solution_jumps.h): the one
 // with BackendRole::kContinuation, a square-system Newton method; the run's
 // options when the run uses it, else its defaults; null when none is
@@ -498,12 +505,14 @@ struct Simulator::Session {
   std::unique_ptr<QuasiStaticSolver> probe_solver;
   // Solution jumps (core/solution_jumps.h): the continuation's solver
   // (short local Newton solves; square-system backends only, else null),
-  // its solution and last accepted root, the jumps' brackets of the
-  // interval, and the irregular right-hand-side solves seen.
+  // its solution and last accepted root, the interval's jump brackets for
+  // the slip quadrature, whether the run's backend is a Newton method, and
+  // the irregular right-hand-side solves seen.
   std::unique_ptr<QuasiStaticSolver> branch_solver;
   QuasiStaticSolution branch_sol;
   Eigen::VectorXd branch_z;
   std::vector<std::array<double, 2>> slip_jumps;
+  bool newton_run = false;
   int ode_irregular_seen = 0;
   // The interval's dense output (DenseState).
   struct Dense {
@@ -628,10 +637,10 @@ void Simulator::CreateProbeSolver() {
   session_->slip_jumps.reserve(4);
   // Iteration counts measure contraction only for a Newton method: other
   // backends' solves count as irregular on a fallback alone.
-  session_->ode.set_iteration_watch(
-      session_->probe_solver->nlp().RequiresSquareSystem()
-          ? kBranchStepIterations
-          : std::numeric_limits<int>::max());
+  session_->newton_run = session_->probe_solver->nlp().RequiresSquareSystem();
+  session_->ode.set_iteration_watch(session_->newton_run
+                                        ? kBranchStepIterations
+                                        : std::numeric_limits<int>::max());
 }
 
 void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
@@ -720,9 +729,7 @@ bool Simulator::Interval(SimulationResult* result) {
   if (s.have_z_prev) s.z_prev = s.sol.z;
   s.solver.Solve(s.theta, &s.sol);
   QuasiStaticSolution& sol = s.sol;
-  result->nlp_solves += sol.nlp_solves;
-  result->nlp_iterations += sol.nlp_iterations;
-  result->nlp_iterations_native += sol.nlp_iterations_native;
+  AddSolveCounts(sol, result);
   if (s.probe_solver && s.sol_event.z.size() == 0 &&
       sol.status == QuasiStaticStatus::kOk)
     SizeProbeSolvers(result);
@@ -1142,7 +1149,6 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   const bool redo =
       coupled && band && !s.resolved_last && std::isfinite(tolerance);
   const bool suspect = JumpSuspected(change || regime);
-  s.slip_jumps.clear();
   if (!change && !redo && !regime && !suspect) return;
   const Configuration th0 = s.theta_prev, th1 = s.theta;
   const double h = t - s.t_prev;
@@ -1178,9 +1184,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     if (ends) s.probe_solver->SetWarmStart(InterpolateKnown(tm, t));
     s.probe_solver->Solve(q, &probe);
     if (refine) s.probe_solver->Refine(kLocationResidualTolerance, &probe);
-    result->nlp_solves += probe.nlp_solves;
-    result->nlp_iterations += probe.nlp_iterations;
-    result->nlp_iterations_native += probe.nlp_iterations_native;
+    AddSolveCounts(probe, result);
     if (probe.status != QuasiStaticStatus::kOk) return false;
     for (int i = 0; i < 3; ++i) (*slip)[i] = probe.contacts[i].slip;
     RememberProbe(tm, probe);
@@ -1227,9 +1231,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   s.checkpoints.InInterval(s.t_prev, th0, s.sol, s.w_held, t, s.theta, t,
                            &result->checkpoints);
   s.solver.Solve(s.theta, &s.sol);
-  result->nlp_solves += s.sol.nlp_solves;
-  result->nlp_iterations += s.sol.nlp_iterations;
-  result->nlp_iterations_native += s.sol.nlp_iterations_native;
+  AddSolveCounts(s.sol, result);
 }
 
 // Sizes the workspaces of the probe and continuation solvers: one solve
@@ -1237,20 +1239,15 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
 void Simulator::SizeProbeSolvers(SimulationResult* result) {
   Session& s = *session_;
   const Eigen::VectorXd& z = s.sol.z;
-  const auto count = [result](const QuasiStaticSolution& sol) {
-    result->nlp_solves += sol.nlp_solves;
-    result->nlp_iterations += sol.nlp_iterations;
-    result->nlp_iterations_native += sol.nlp_iterations_native;
-  };
   s.probe_solver->SetWarmStart(z);
   s.probe_solver->Solve(s.theta, &s.sol_event);
-  count(s.sol_event);
+  AddSolveCounts(s.sol_event, result);
   for (Session::KnownSolution& k : s.probe_known) k.z = z;
   s.probe_warm = z;
   if (!s.branch_solver) return;
   s.branch_solver->SetWarmStart(z);
   s.branch_solver->Solve(s.theta, &s.branch_sol);
-  count(s.branch_sol);
+  AddSolveCounts(s.branch_sol, result);
   s.branch_z = z;
 }
 
@@ -1268,12 +1265,11 @@ bool Simulator::JumpSuspected(bool structure_changed) {
   s.ode_irregular_seen = irregular;
   // Other backends' iteration counts do not measure contraction: there a
   // change of a wheel's class or regime in the interval counts too.
-  const bool newton = s.probe_solver->nlp().RequiresSquareSystem();
   return s.branch_solver && s.have_z_prev &&
          s.sol.status == QuasiStaticStatus::kOk &&
          (s.sol.nlp_solves > 1 || seen ||
-          (newton ? s.sol.nlp_iterations > kBranchStepIterations
-                  : structure_changed));
+          (s.newton_run ? s.sol.nlp_iterations > kBranchStepIterations
+                        : structure_changed));
 }
 
 Configuration Simulator::DenseState(double tm) const {
@@ -1320,9 +1316,7 @@ bool Simulator::LocateSolutionJump(double t, SimulationResult* result) {
     const double tm = f.sign * u;
     ss.branch_solver->SetWarmStart(ss.branch_z);
     ss.branch_solver->Solve(f.sim->DenseState(tm), &ss.branch_sol);
-    f.result->nlp_solves += ss.branch_sol.nlp_solves;
-    f.result->nlp_iterations += ss.branch_sol.nlp_iterations;
-    f.result->nlp_iterations_native += ss.branch_sol.nlp_iterations_native;
+    AddSolveCounts(ss.branch_sol, f.result);
     if (ss.branch_sol.status != QuasiStaticStatus::kOk) return false;
     // A jump keeps its size however short the step; a continuous root's
     // change vanishes with the step.
@@ -1342,22 +1336,16 @@ bool Simulator::LocateSolutionJump(double t, SimulationResult* result) {
   // not located.
   if (forward.outcome != BranchEnd::Outcome::kEnds || !(forward.t_upper < t))
     return false;
-  // The ended root's slips: the last accepted step's (branch_sol holds the
-  // failed one), at t_lower.
-  std::array<Eigen::Vector2d, 3> before = s.slip_prev, after;
-  const int known = std::min<int>(s.probe_known_count, s.probe_known.size());
-  for (int j = 0; j < known; ++j)
-    if (s.probe_known[j].t == forward.t_lower) before = s.probe_known[j].slip;
+  // The ended root's slips: the last accepted step's, at t_lower.
+  const std::array<Eigen::Vector2d, 3> before = f.slip_now;
   // The root the run goes on with, followed back from the sample at t.
   f.sign = -1.0;
   for (int i = 0; i < 3; ++i) f.slip_now[i] = s.sol.contacts[i].slip;
   s.branch_z = s.sol.z;
   const BranchEnd back = FollowBranch(-t, -forward.t_upper, tolerance, step);
   if (back.outcome != BranchEnd::Outcome::kContinues) return false;
-  for (int i = 0; i < 3; ++i) after[i] = s.branch_sol.contacts[i].slip;
-  AppendSolutionJump(forward.t_lower, forward.t_upper, true, before, after,
+  AppendSolutionJump(forward.t_lower, forward.t_upper, true, before, f.slip_now,
                      scene_.epsilon, &result->switches);
-  s.slip_jumps.push_back({forward.t_lower, forward.t_upper});
   return true;
 }
 
@@ -1368,12 +1356,17 @@ void Simulator::IntegrateSlipAcrossSwitches(double t, std::size_t first,
                                             SimulationResult* result) {
   Session& s = *session_;
   std::vector<double>& breaks = s.slip_breaks;
+  std::vector<std::array<double, 2>>& jumps = s.slip_jumps;
   breaks.clear();
+  jumps.clear();
   for (std::size_t j = first; j < result->switches.size(); ++j) {
-    if (!result->switches[j].located) return;
-    breaks.push_back(result->switches[j].t);
-    // A jump's piece ends on the ended root (s.slip_jumps).
-    if (result->switches[j].jump) breaks.push_back(result->switches[j].t_lower);
+    const SwitchEvent& e = result->switches[j];
+    if (!e.located) return;
+    breaks.push_back(e.t);
+    if (!e.jump) continue;
+    // A jump's pieces end on either root, its bracket between them.
+    breaks.push_back(e.t_lower);
+    jumps.push_back({e.t_lower, e.t_upper});
   }
   std::sort(breaks.begin(), breaks.end());
   std::array<double, 3> slip0, slip1;
@@ -1391,8 +1384,7 @@ void Simulator::IntegrateSlipAcrossSwitches(double t, std::size_t first,
   };
   int evaluations = 0;
   if (IntegrateSlipRegimes(s.t_prev, t, slip0, slip1, breaks, scene_.epsilon,
-                           speeds, &s.slip_increments, &evaluations,
-                           s.slip_jumps))
+                           speeds, &s.slip_increments, &evaluations, jumps))
     s.slip_increments_t = t;
 }
 

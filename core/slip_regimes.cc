@@ -18,11 +18,8 @@ void AccumulateSlipDistances(const TrajectorySample& previous, double epsilon,
       now.creep_distance += (*increments)[i].creep;
       continue;
     }
-    for (const double slip : {before.slip, now.slip}) {
-      if (!std::isfinite(slip)) continue;
-      (IsSliding(slip, epsilon) ? now.sliding_distance : now.creep_distance) +=
-          half_dt * slip;
-    }
+    CreditTrapezoid(half_dt, before.slip, now.slip, epsilon,
+                    &now.sliding_distance, &now.creep_distance);
   }
 }
 

@@ -20,6 +20,7 @@
 // where the slip's kink is.
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "quasiroll/core/simulator.h"
@@ -31,6 +32,17 @@ inline constexpr double kSlidingSlipOverEpsilon = 10.0;
 
 inline bool IsSliding(double slip_speed, double epsilon) {
   return slip_speed >= kSlidingSlipOverEpsilon * epsilon;
+}
+
+// The trapezoid over an interval of length 2 half_dt with end slip speeds
+// s0, s1: each end's half credited to its own regime (a non-finite slip
+// adds nothing).
+inline void CreditTrapezoid(double half_dt, double s0, double s1,
+                            double epsilon, double* sliding, double* creep) {
+  for (const double slip : {s0, s1}) {
+    if (!std::isfinite(slip)) continue;
+    *(IsSliding(slip, epsilon) ? sliding : creep) += half_dt * slip;
+  }
 }
 
 // The per-wheel cumulative distances of `current` (ContactSample::

@@ -559,13 +559,9 @@ bool IntegrateSlipRegimes(double t0, double t1, const Slips& slip0,
                                     return k[0] == a && k[1] == b;
                                   });
     if (jump) {  // the trapezoid on the two roots' one-sided values
-      for (int i = 0; i < 3; ++i) {
-        const double half = 0.5 * (b - a);
-        (IsSliding(fa[i], epsilon) ? (*out)[i].sliding : (*out)[i].creep) +=
-            half * fa[i];
-        (IsSliding(fb[i], epsilon) ? (*out)[i].sliding : (*out)[i].creep) +=
-            half * fb[i];
-      }
+      for (int i = 0; i < 3; ++i)
+        CreditTrapezoid(0.5 * (b - a), fa[i], fb[i], epsilon,
+                        &(*out)[i].sliding, &(*out)[i].creep);
     } else if (!IntegrateBetweenKinks(a, fa, b, fb, epsilon, robust, out,
                                       evaluations)) {
       return false;
