@@ -38,11 +38,18 @@ class ConstrainedOde {
 
   // y' = F(t, y). Returns false if F cannot be evaluated at (t, y) (e.g. the
   // quasi-static problem behind it has no solution there). Explicit backends
-  // then stop with IntegratorStatus::kRhsFailure; `ida` first retries with
-  // smaller steps (the point may be a trial point off the path) and stops
-  // with kRhsFailure only when the retries fail too.
+  // then stop with IntegratorStatus::kRhsFailure (adaptive ones retry a
+  // recoverable failure first, below); `ida` first retries with smaller steps
+  // (the point may be a trial point off the path) and stops with kRhsFailure
+  // only when the retries fail too.
   virtual bool Rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                    Eigen::Ref<Eigen::VectorXd> ydot) = 0;
+  // Whether the latest Rhs that returned false failed for numerical reasons
+  // a nearby point may not share (a solve that missed its tolerance), not
+  // because F does not exist there. Adaptive explicit backends then reject
+  // the trial step and retry it smaller, as `ida` and `cvode-projection` do
+  // with every failure; otherwise they stop. Default: not recoverable.
+  virtual bool RhsFailureIsRecoverable() const { return false; }
 
   // H(y), num_constraints() rows. Problems without constraints return 0 rows.
   virtual void Constraints(const Eigen::Ref<const Eigen::VectorXd>& y,

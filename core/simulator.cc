@@ -90,6 +90,12 @@ class Simulator::RobotOde final : public LoopClosureOde {
   void ClearFailure() { nlp_failed_ = failed_in_call_ = false; }
   const QuasiStaticSolution& last_solution() const { return sol_; }
   bool nlp_failed() const { return nlp_failed_; }
+  // A coupled solve that failed numerically (SOLVER_FAILURE: mu > mu_min
+  // with regular statics, model.md §7.7) may succeed at a nearby trial
+  // point; a physical failure (no quasi-static solution) would not.
+  bool RhsFailureIsRecoverable() const override {
+    return nlp_failed_ && sol_.status == QuasiStaticStatus::kSolverFailure;
+  }
   // Every Integrate() call starts here: a call's failed solves are its own.
   void MakeConsistent(double /*t0*/,
                       Eigen::Ref<Eigen::VectorXd> /*y*/) override {
@@ -128,7 +134,14 @@ class Simulator::RobotOde final : public LoopClosureOde {
   long long nlp_iterations() const { return nlp_iterations_; }
   long long nlp_iterations_native() const { return nlp_iterations_native_; }
 
-  bool Rhs(double /*t*/, const Eigen::Ref<const Eigen::VectorXd>& y,
+  // Forget the coupled right-hand sides' roots (a new run).
+  void ForgetPastRoots() { past_roots_.Clear(); }
+  // A root at time t for the coupled right-hand sides' warm starts.
+  void RememberRoot(double t, const Eigen::VectorXd& z) {
+    past_roots_.Remember(t, z);
+  }
+
+  bool Rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
            Eigen::Ref<Eigen::VectorXd> ydot) override {
     // nlp_failed_ describes the latest call only: an implicit integrator may
     // recover from a failed solve at a trial point (see core/dae.h).
@@ -137,6 +150,8 @@ class Simulator::RobotOde final : public LoopClosureOde {
     if (!q.allFinite()) return false;
     Vec12 w = w_;
     if (coupling_ == Coupling::kCoupled) {
+      if (const Eigen::VectorXd* z0 = past_roots_.StartFor(t))
+        solver_->SetWarmStart(*z0);
       solver_->Solve(q, &sol_);
       nlp_solves_ += sol_.nlp_solves;
       nlp_iterations_ += sol_.nlp_iterations;
@@ -149,6 +164,7 @@ class Simulator::RobotOde final : public LoopClosureOde {
         return false;
       }
       kkt_residual_ = std::fmax(kkt_residual_, sol_.kkt_residual);
+      RememberRoot(t, sol_.z);
       w = solver_->problem().JointSpaceVelocity(sol_.z);
     }
     Configuration qd;
@@ -221,9 +237,11 @@ class Simulator::RobotOde final : public LoopClosureOde {
   // (preallocated workspaces: no allocation once warmed up).
   void Probe(const Configuration& theta, RobotOdeProbe* out) {
     probe_y_ = theta;
-    out->rhs_ok = Rhs(0.0, probe_y_, probe_f_);
+    // No time: the solve starts from the last one, not from a past root.
+    constexpr double kNoTime = std::numeric_limits<double>::quiet_NaN();
+    out->rhs_ok = Rhs(kNoTime, probe_y_, probe_f_);
     if (out->rhs_ok) out->rhs = probe_f_;
-    out->jacobian_ok = RhsJacobian(0.0, probe_y_, probe_jac_);
+    out->jacobian_ok = RhsJacobian(kNoTime, probe_y_, probe_jac_);
     if (out->jacobian_ok) out->jacobian = probe_jac_;
     out->jacobian_fallbacks = jacobian_fallbacks_;
   }
@@ -233,6 +251,9 @@ class Simulator::RobotOde final : public LoopClosureOde {
     ++jacobian_fallbacks_;
     return false;
   }
+  // Coupled right-hand sides start from the root at the latest earlier
+  // time (model.md §7.5), not from the last evaluation.
+  PastRoots past_roots_;
   Coupling coupling_;
   QuasiStaticSolver* solver_;
   Vec12 w_ = Vec12::Zero();
@@ -652,6 +673,7 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   if (options_.locate_switches && !s.probe_solver) CreateProbeSolver();
   s.solver.Reset();
   s.ode.ClearFailure();
+  s.ode.ForgetPastRoots();
   s.ires = IntegratorResult{};
   s.theta = theta0;
   s.k = 0;
@@ -730,6 +752,10 @@ bool Simulator::Interval(SimulationResult* result) {
   s.solver.Solve(s.theta, &s.sol);
   QuasiStaticSolution& sol = s.sol;
   AddSolveCounts(sol, result);
+  // Coupled: the interval's first right-hand side is at this very state.
+  if (options_.coupling == Coupling::kCoupled &&
+      sol.status == QuasiStaticStatus::kOk)
+    s.ode.RememberRoot(t, sol.z);
   if (s.probe_solver && s.sol_event.z.size() == 0 &&
       sol.status == QuasiStaticStatus::kOk)
     SizeProbeSolvers(result);

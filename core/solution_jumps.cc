@@ -87,4 +87,24 @@ int AppendSolutionJump(double t_lower, double t_upper, bool located,
   return appended;
 }
 
+void PastRoots::Remember(double t, const Eigen::VectorXd& z) {
+  if (std::isnan(t)) return;
+  const int slot = count_ < kCapacity ? count_++ : next_;
+  if (count_ == kCapacity) next_ = (slot + 1) % kCapacity;
+  t_[slot] = t;
+  order_[slot] = ++stored_;
+  z_[slot] = z;
+}
+
+const Eigen::VectorXd* PastRoots::StartFor(double t) const {
+  int best = -1;
+  for (int i = 0; i < count_; ++i) {
+    if (!(t_[i] <= t)) continue;
+    if (best < 0 || t_[i] > t_[best] ||
+        (t_[i] == t_[best] && order_[i] > order_[best]))
+      best = i;
+  }
+  return best < 0 ? nullptr : &z_[best];
+}
+
 }  // namespace quasiroll

@@ -97,4 +97,30 @@ int AppendSolutionJump(double t_lower, double t_upper, bool located,
                        const std::array<Eigen::Vector2d, 3>& after,
                        double epsilon, std::vector<SwitchEvent>* out);
 
+// The roots of the last few solves along a run, by time, for warm starts
+// that follow a root forward: a solve at t starts from the root at the
+// latest time <= t (ties: the latest stored). An integrator evaluates its
+// right-hand side out of time order (a step's later stages before a
+// rejection, step doubling's whole step after its halves); starting from
+// the most recent evaluation instead can cross a fold backwards and land
+// on another root where two coexist (model.md §7.5, "More than one root").
+// The oldest entry is overwritten once kCapacity are stored; no allocation
+// once every slot has held a root of the run's size.
+class PastRoots {
+ public:
+  static constexpr int kCapacity = 8;
+  void Clear() { count_ = next_ = 0; }
+  // Ignored for a NaN t (a solve without a time).
+  void Remember(double t, const Eigen::VectorXd& z);
+  // The root to start a solve at t from; null if none is at or before t.
+  const Eigen::VectorXd* StartFor(double t) const;
+
+ private:
+  std::array<double, kCapacity> t_{};
+  std::array<long long, kCapacity> order_{};
+  std::array<Eigen::VectorXd, kCapacity> z_;
+  int count_ = 0, next_ = 0;
+  long long stored_ = 0;
+};
+
 }  // namespace quasiroll

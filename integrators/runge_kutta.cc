@@ -110,7 +110,9 @@ OptionTable RkOptionTable(OptionTable own) {
           .AtMost(1),
       OptionSpec::Double("stage_failure_shrink", 0.25,
                          "step factor after a trial step whose constraint "
-                         "correction failed (singular J D J^T at a stage)")
+                         "correction failed (singular J D J^T at a stage) or "
+                         "whose stage's right-hand side failed recoverably "
+                         "(a coupled solve that missed its tolerance)")
           .GreaterThan(0)
           .LessThan(1),
   };
@@ -364,11 +366,14 @@ bool RungeKuttaDriver::NextTrial(const IntegratorOptions& options,
 }
 
 bool RungeKuttaDriver::RetrySmaller(double h_try, IntegratorStatus failure,
+                                    bool rhs_failure_recoverable,
                                     const IntegratorOptions& options,
                                     const RkSettings& settings, RunState* s,
                                     IntegratorResult* result) const {
-  if (!s->adaptive || failure != IntegratorStatus::kConstraintFailure)
-    return false;
+  const bool retry =
+      failure == IntegratorStatus::kConstraintFailure ||
+      (failure == IntegratorStatus::kRhsFailure && rhs_failure_recoverable);
+  if (!s->adaptive || !retry) return false;
   const double h_new = h_try * settings.stage_failure_shrink;
   if (h_new < options.min_step) {
     std::ostringstream os;
@@ -468,11 +473,14 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
       return finish(IntegratorStatus::kStepSizeTooSmall);
 
     // A trial step whose correction failed (J D J^T singular at a stage, a
-    // projection that did not converge) is rejected and retried smaller
-    // unless that falls below min_step (then the failure stands).
+    // projection that did not converge) or whose stage hit a recoverable Rhs
+    // failure is rejected and retried smaller unless that falls below
+    // min_step (then the failure stands).
     status = Step(system, tab, s.t, h_try, result);
     if (status != IntegratorStatus::kSuccess) {
-      if (RetrySmaller(h_try, status, options, settings, &s, result)) continue;
+      if (RetrySmaller(h_try, status, ode.RhsFailureIsRecoverable(), options,
+                       settings, &s, result))
+        continue;
       return finish(status);
     }
     if (s.adaptive) {
@@ -485,7 +493,9 @@ void RungeKuttaDriver::Run(RkSystem& system, ConstrainedOde& ode, double t0,
     bool moved = false;
     status = system.PostStep(t_new, y_new_, result, &moved);
     if (status != IntegratorStatus::kSuccess) {
-      if (RetrySmaller(h_try, status, options, settings, &s, result)) continue;
+      if (RetrySmaller(h_try, status, /*rhs_failure_recoverable=*/false,
+                       options, settings, &s, result))
+        continue;
       return finish(status);
     }
 

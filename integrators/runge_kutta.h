@@ -136,10 +136,12 @@ class RungeKuttaDriver {
   bool NextTrial(const IntegratorOptions& options, const RunState& s,
                  double* t_new, double* h_try, IntegratorResult* result) const;
   // A trial step of an adaptive pair whose correction failed with
-  // kConstraintFailure: true if it is rejected and retried with
+  // kConstraintFailure, or whose stage failed with kRhsFailure that the ODE
+  // calls recoverable: true if it is rejected and retried with
   // h_try * stage_failure_shrink; false if the failure stands (another
   // status, RK4, or the new step below min_step; message extended).
   bool RetrySmaller(double h_try, IntegratorStatus failure,
+                    bool rhs_failure_recoverable,
                     const IntegratorOptions& options,
                     const RkSettings& settings, RunState* s,
                     IntegratorResult* result) const;

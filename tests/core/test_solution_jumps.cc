@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -289,6 +290,35 @@ TEST(SolutionJumps, CoupledRunRecordsItsOwnJump) {
     EXPECT_LE(e.t_upper - e.t_lower, o.event_tolerance);
   }
   EXPECT_EQ(jumps, 3);
+}
+
+// A solve at t starts from the root stored at the latest time <= t, the
+// latest stored among equal times; the oldest entry goes first once full;
+// a NaN time is neither stored nor matched.
+TEST(PastRoots, StartsFromTheLatestRootAtOrBeforeTheTime) {
+  PastRoots past;
+  const auto root = [](double v) { return Eigen::VectorXd::Constant(3, v); };
+  EXPECT_EQ(past.StartFor(1.0), nullptr);
+  past.Remember(1.0, root(10));
+  past.Remember(2.0, root(20));  // a later stage evaluated first
+  past.Remember(1.5, root(15));
+  EXPECT_EQ(past.StartFor(0.5), nullptr);
+  ASSERT_NE(past.StartFor(1.7), nullptr);
+  EXPECT_EQ((*past.StartFor(1.7))(0), 15);  // not the latest stored (20)
+  EXPECT_EQ((*past.StartFor(2.0))(0), 20);
+  past.Remember(1.5, root(16));  // the same time again: the newer wins
+  EXPECT_EQ((*past.StartFor(1.9))(0), 16);
+  past.Remember(std::numeric_limits<double>::quiet_NaN(), root(99));
+  EXPECT_EQ(past.StartFor(std::numeric_limits<double>::quiet_NaN()), nullptr);
+  EXPECT_EQ((*past.StartFor(1e9))(0), 20);
+  // 4 stored: 4 more fill the slots, the 9th replaces t = 1.0's root.
+  for (int i = 0; i < PastRoots::kCapacity - 4; ++i)
+    past.Remember(3.0 + i, root(30 + i));
+  EXPECT_EQ((*past.StartFor(1.2))(0), 10);
+  past.Remember(0.1, root(1));
+  EXPECT_EQ((*past.StartFor(1.2))(0), 1);  // t = 1.0's root was evicted
+  past.Clear();
+  EXPECT_EQ(past.StartFor(1e9), nullptr);
 }
 
 }  // namespace

@@ -108,6 +108,77 @@ TEST(SevenBodyMechanism, SingularStageOfAWholeIntervalStepIsRetriedSmaller) {
   EXPECT_LE(error, 1e-7);
 }
 
+// The harmonic oscillator whose Rhs fails on one call (counted from 1),
+// calling the failure recoverable or not (ConstrainedOde::
+// RhsFailureIsRecoverable: a quasi-static solve that missed its tolerance
+// at a trial point).
+class OneFailingCallOde : public HarmonicOde {
+ public:
+  OneFailingCallOde(int failing_call, bool recoverable)
+      : failing_call_(failing_call), recoverable_(recoverable) {}
+  bool Rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+           Eigen::Ref<Eigen::VectorXd> ydot) override {
+    failed_ = ++calls_ == failing_call_;
+    return !failed_ && HarmonicOde::Rhs(t, y, ydot);
+  }
+  bool RhsFailureIsRecoverable() const override {
+    return failed_ && recoverable_;
+  }
+
+ private:
+  int failing_call_;
+  bool recoverable_;
+  int calls_ = 0;
+  bool failed_ = false;
+};
+
+// A recoverable failure at a stage of an adaptive pair's trial step rejects
+// the step and retries it smaller (as a failed correction does); the
+// integration then reaches t1 within its tolerance. A failure that is not
+// recoverable, or one under fixed-step RK4, stops the integration at the
+// last accepted state.
+TEST(RkStageFailure, RecoverableFailureIsRetriedSmallerByAdaptivePairs) {
+  RegisterBuiltinIntegrators();
+  for (const char* backend : {"rk-projection", "rk-baumgarte"}) {
+    SCOPED_TRACE(backend);
+    auto integrator = IntegratorRegistry::Create(backend);
+    IntegratorOptions o;
+    o.step = 0.01;  // no starting-step heuristic: call 1 is stage 0 at t0
+    o.rtol = 1e-9;
+    o.atol = 1e-11;
+    const Eigen::Vector2d y0(1.0, 0.0);
+    integrator->SetBackendOptions({{"rk_method", "dp54"}});
+    OneFailingCallOde never(/*failing_call=*/0, true);
+    Eigen::VectorXd y_never = y0;
+    IntegratorResult r_never;
+    ASSERT_EQ(integrator->Integrate(never, 0.0, 2.0, y_never, o, &r_never),
+              IntegratorStatus::kSuccess);
+    for (const bool recoverable : {true, false}) {
+      OneFailingCallOde ode(/*failing_call=*/3, recoverable);
+      Eigen::VectorXd y = y0;
+      IntegratorResult r;
+      const IntegratorStatus st =
+          integrator->Integrate(ode, 0.0, 2.0, y, o, &r);
+      if (!recoverable) {
+        EXPECT_EQ(st, IntegratorStatus::kRhsFailure);
+        EXPECT_EQ(r.t_reached, 0.0);
+        continue;
+      }
+      ASSERT_EQ(st, IntegratorStatus::kSuccess) << r.message;
+      EXPECT_EQ(r.rejected_steps, r_never.rejected_steps + 1);
+      // rtol 1e-9 on |y| = 1 over [0, 2]: the run without the failure
+      // errs by ~1e-10; 1e-8 leaves the retried run a factor 100.
+      EXPECT_LE((y - ode.Exact(2.0, y0)).lpNorm<Eigen::Infinity>(), 1e-8);
+    }
+    integrator->SetBackendOptions({{"rk_method", "rk4"}});
+    OneFailingCallOde ode(/*failing_call=*/3, /*recoverable=*/true);
+    Eigen::VectorXd y = y0;
+    IntegratorResult r;
+    EXPECT_EQ(integrator->Integrate(ode, 0.0, 2.0, y, o, &r),
+              IntegratorStatus::kRhsFailure);
+  }
+}
+
 // Every adaptive backend integrates the mechanism from its default start
 // (step = 0: the method's own starting step) to the reference.
 class SevenBodyAdaptive : public ::testing::TestWithParam<std::string> {};
