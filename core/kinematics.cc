@@ -141,6 +141,20 @@ void KinematicModel::ContactVelocities(const ChainState& s, int chain,
   L->middleCols<2>(6 + 2 * chain) = rotated.rightCols<2>();
 }
 
+Vec6 KinematicModel::ContactTwist(const ChainState& s, int chain,
+                                  const Vec12& w) const {
+  const double q0 = w(6 + 2 * chain), q1 = w(7 + 2 * chain);
+  const Vec3 w_platform = s.R * w.segment<3>(3);
+  const Vec3 v_world = s.R * w.head<3>() + w_platform.cross(s.p_c - s.p) +
+                       q0 * s.axis[0].cross(s.p_c - s.point[0]) +
+                       q1 * s.axis[1].cross(s.p_c - s.point[1]);
+  const Vec3 w_world = w_platform + q0 * s.axis[0] + q1 * s.axis[1];
+  Vec6 twist;
+  twist.head<3>().noalias() = s.R_GCW.transpose() * v_world;
+  twist.tail<3>().noalias() = s.R_GCW.transpose() * w_world;
+  return twist;
+}
+
 bool KinematicModel::ContactRates(const ChainState& s, const Vec6& twist,
                                   EtaRates* eta_rates) const {
   const Vec2 vt = twist.head<2>();
@@ -187,11 +201,8 @@ Vec6 KinematicModel::PlatformVelocity(const ChainState& s,
 bool KinematicModel::ChainRates(const Configuration& theta, int chain,
                                 const Vec12& w, EtaRates* rates) const {
   ChainState s;
-  ContactVelocityMap L;
   EvaluateChain(theta, chain, &s);
-  ContactVelocities(s, chain, &L);
-  const Vec6 twist = L * w;
-  return ContactRates(s, twist, rates);
+  return ContactRates(s, ContactTwist(s, chain, w), rates);
 }
 
 bool KinematicModel::Rhs(const Configuration& theta, const Vec12& w,

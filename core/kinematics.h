@@ -126,6 +126,12 @@ class KinematicModel {
   // L_i of model.md §4 (6 x 12; columns of other chains' joints are zero).
   void ContactVelocities(const ChainState& chain_state, int chain,
                          ContactVelocityMap* L) const;
+  // L_i w without forming L_i (the right-hand side's kernel): the contact
+  // point's world velocity R V + (R W) x (p_c - p) + sum_k qdot_k a_k x
+  // (p_c - o_k) and the wheel's world angular velocity R W + sum_k qdot_k
+  // a_k, both rotated into {C_W}. Equal to L_i w up to round-off.
+  Vec6 ContactTwist(const ChainState& chain_state, int chain,
+                    const Vec12& w) const;
 
   // Montana (model.md §5): relative twist (v, w) in {C_W} -> eta rates.
   // Returns false if K is singular (relative curvature lost).

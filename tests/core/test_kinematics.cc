@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 
@@ -186,6 +187,29 @@ TEST(Kinematics, ContactVelocityMapMatchesFiniteDifferencedMotion) {
         << "wheel " << i;
     EXPECT_LT((twist.tail<3>() - s.R_GCW.transpose() * fd.w).norm(), 1e-8)
         << "wheel " << i;
+  }
+}
+
+// The right-hand side's kernel ContactTwist equals L_i w to round-off
+// (a few ulps of the largest term, |w| ~ 1 here) for every chain, on random
+// twists and joint rates.
+TEST(Kinematics, ContactTwistEqualsTheMapTimesTheTwist) {
+  const KinematicModel model = RoughModel();
+  const Configuration theta = RoughStart(model);
+  std::srand(7);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Vec12 w = Vec12::Random();
+    for (int i = 0; i < 3; ++i) {
+      ChainState s;
+      model.EvaluateChain(theta, i, &s);
+      ContactVelocityMap L;
+      model.ContactVelocities(s, i, &L);
+      const Vec6 by_map = L * w;
+      EXPECT_LT(
+          (model.ContactTwist(s, i, w) - by_map).lpNorm<Eigen::Infinity>(),
+          1e-15 * (1 + by_map.lpNorm<Eigen::Infinity>()))
+          << "wheel " << i << " trial " << trial;
+    }
   }
 }
 
