@@ -1229,6 +1229,10 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   // After the switches, so that their probes start as before.
   const bool jumped = suspect && LocateSolutionJump(t, result);
   if (jumped) SortAppended(first, &result->switches);
+  // The zoh samples' linear predictor would extrapolate across the jump
+  // (from the ended root through the new one): the next sample starts from
+  // this one's root instead.
+  if (jumped && !coupled) s.solver.SetWarmStart(s.sol.z);
   refine = false;
   if (change || regime || jumped)
     IntegrateSlipAcrossSwitches(t, first, evaluate, result);
