@@ -1147,6 +1147,14 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
 // sliding/creep level (IntegrateSlipAcrossSwitches). Coupled mode then
 // integrates the interval again from s.theta_prev with a restart at every
 // located switch and re-solves at t; zoh keeps its trajectory.
+namespace {
+// Whether events[first..] holds a creep reversal.
+bool AnyReversal(const std::vector<SwitchEvent>& events, std::size_t first) {
+  return std::any_of(events.begin() + first, events.end(),
+                     [](const SwitchEvent& e) { return e.reversal; });
+}
+}  // namespace
+
 void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   Session& s = *session_;
   if (result->samples.empty() || !(t > s.t_prev)) return;
@@ -1229,10 +1237,13 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   // After the switches, so that their probes start as before.
   const bool jumped = suspect && LocateSolutionJump(t, result);
   if (jumped) SortAppended(first, &result->switches);
-  // The zoh samples' linear predictor would extrapolate across the jump
-  // (from the ended root through the new one): the next sample starts from
-  // this one's root instead.
-  if (jumped && !coupled) s.solver.SetWarmStart(s.sol.z);
+  // The zoh samples' linear predictor would extrapolate across a jump (from
+  // the ended root through the new one) or a creep reversal (a slip
+  // direction that turned within the interval): the next sample starts
+  // from this one's root instead (model.md §7.3; at stick/slide switches
+  // the predictor is kept: dropping it there cost more than it saved).
+  if (!coupled && (jumped || AnyReversal(result->switches, first)))
+    s.solver.SetWarmStart(s.sol.z);
   refine = false;
   if (change || regime || jumped)
     IntegrateSlipAcrossSwitches(t, first, evaluate, result);
