@@ -1137,6 +1137,14 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
   return true;
 }
 
+namespace {
+// Whether events[first..] holds a creep reversal.
+bool AnyReversal(const std::vector<SwitchEvent>& events, std::size_t first) {
+  return std::any_of(events.begin() + first, events.end(),
+                     [](const SwitchEvent& e) { return e.reversal; });
+}
+}  // namespace
+
 // The solve s.sol at the sample time t follows the interval [s.t_prev, t]
 // (start s.theta_prev, held twist s.w_held). A wheel whose class
 // (core/switch_events.h) differs from the last recorded sample's is
@@ -1147,14 +1155,6 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
 // sliding/creep level (IntegrateSlipAcrossSwitches). Coupled mode then
 // integrates the interval again from s.theta_prev with a restart at every
 // located switch and re-solves at t; zoh keeps its trajectory.
-namespace {
-// Whether events[first..] holds a creep reversal.
-bool AnyReversal(const std::vector<SwitchEvent>& events, std::size_t first) {
-  return std::any_of(events.begin() + first, events.end(),
-                     [](const SwitchEvent& e) { return e.reversal; });
-}
-}  // namespace
-
 void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   Session& s = *session_;
   if (result->samples.empty() || !(t > s.t_prev)) return;
