@@ -134,11 +134,17 @@ class Simulator::RobotOde final : public LoopClosureOde {
   long long nlp_iterations() const { return nlp_iterations_; }
   long long nlp_iterations_native() const { return nlp_iterations_native_; }
 
-  // Forget the coupled right-hand sides' roots (a new run).
-  void ForgetPastRoots() { past_roots_.Clear(); }
+  // Forget the coupled right-hand sides' roots (a new run) and set whether
+  // the run's solves start from them (model.md §7.5: Newton backends; a
+  // least-squares or optimisation backend started on an ended root can
+  // return the residual's minimum past the fold, below the tolerance).
+  void ForgetPastRoots(bool follow) {
+    past_roots_.Clear();
+    follow_past_ = follow;
+  }
   // A root at time t for the coupled right-hand sides' warm starts.
   void RememberRoot(double t, const Eigen::VectorXd& z) {
-    past_roots_.Remember(t, z);
+    if (follow_past_) past_roots_.Remember(t, z);
   }
 
   bool Rhs(double t, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -150,8 +156,9 @@ class Simulator::RobotOde final : public LoopClosureOde {
     if (!q.allFinite()) return false;
     Vec12 w = w_;
     if (coupling_ == Coupling::kCoupled) {
-      if (const Eigen::VectorXd* z0 = past_roots_.StartFor(t))
-        solver_->SetWarmStart(*z0);
+      const Eigen::VectorXd* z0 =
+          follow_past_ ? past_roots_.StartFor(t) : nullptr;
+      if (z0) solver_->SetWarmStart(*z0);
       solver_->Solve(q, &sol_);
       nlp_solves_ += sol_.nlp_solves;
       nlp_iterations_ += sol_.nlp_iterations;
@@ -254,6 +261,7 @@ class Simulator::RobotOde final : public LoopClosureOde {
   // Coupled right-hand sides start from the root at the latest earlier
   // time (model.md §7.5), not from the last evaluation.
   PastRoots past_roots_;
+  bool follow_past_ = false;
   Coupling coupling_;
   QuasiStaticSolver* solver_;
   Vec12 w_ = Vec12::Zero();
@@ -673,7 +681,7 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   if (options_.locate_switches && !s.probe_solver) CreateProbeSolver();
   s.solver.Reset();
   s.ode.ClearFailure();
-  s.ode.ForgetPastRoots();
+  s.ode.ForgetPastRoots(s.solver.nlp().RequiresSquareSystem());
   s.ires = IntegratorResult{};
   s.theta = theta0;
   s.k = 0;

@@ -104,8 +104,10 @@ int AppendSolutionJump(double t_lower, double t_upper, bool located,
 // rejection, step doubling's whole step after its halves); starting from
 // the most recent evaluation instead can cross a fold backwards and land
 // on another root where two coexist (model.md §7.5, "More than one root").
-// The oldest entry is overwritten once kCapacity are stored; no allocation
-// once every slot has held a root of the run's size.
+// Meant for a local Newton method, which converges to roots only (the
+// simulator uses it with Newton backends). The oldest entry is overwritten
+// once kCapacity are stored; no allocation once every slot has held a root
+// of the run's size.
 class PastRoots {
  public:
   static constexpr int kCapacity = 8;
