@@ -1145,14 +1145,6 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
   return true;
 }
 
-namespace {
-// Whether events[first..] holds a creep reversal.
-bool AnyReversal(const std::vector<SwitchEvent>& events, std::size_t first) {
-  return std::any_of(events.begin() + first, events.end(),
-                     [](const SwitchEvent& e) { return e.reversal; });
-}
-}  // namespace
-
 // The solve s.sol at the sample time t follows the interval [s.t_prev, t]
 // (start s.theta_prev, held twist s.w_held). A wheel whose class
 // (core/switch_events.h) differs from the last recorded sample's is
@@ -1245,13 +1237,11 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   // After the switches, so that their probes start as before.
   const bool jumped = suspect && LocateSolutionJump(t, result);
   if (jumped) SortAppended(first, &result->switches);
-  // The zoh samples' linear predictor would extrapolate across a jump (from
-  // the ended root through the new one) or a creep reversal (a slip
-  // direction that turned within the interval): the next sample starts
-  // from this one's root instead (model.md §7.3; at stick/slide switches
-  // the predictor is kept: dropping it there cost more than it saved).
-  if (!coupled && (jumped || AnyReversal(result->switches, first)))
-    s.solver.SetWarmStart(s.sol.z);
+  // The zoh samples' linear predictor would extrapolate across the jump
+  // (from the ended root through the new one): the next sample starts from
+  // this one's root instead (model.md §7.3; kept across switches and creep
+  // reversals, where dropping it cost more than it saved).
+  if (jumped && !coupled) s.solver.SetWarmStart(s.sol.z);
   refine = false;
   if (change || regime || jumped)
     IntegrateSlipAcrossSwitches(t, first, evaluate, result);

@@ -373,10 +373,6 @@ TEST(SwitchEvents, PaperScenesCreepReversalIsLocatedAtTheTractionTurn) {
   };
   EXPECT_GT(at(9.05).contacts[2].traction_lon, 1.0);
   EXPECT_LT(at(9.10).contacts[2].traction_lon, -1.0);
-  // The next sample starts from the 9.10 s root, not the linear predictor
-  // across the turn (model.md §7.3): measured 6 Newton iterations, 37 with
-  // the homotopy before.
-  EXPECT_LE(at(9.15).nlp_iterations, 10);
 }
 
 // Without a switch, a reversal, a wheel crossing the sliding/creep level
