@@ -134,14 +134,13 @@ class Simulator::RobotOde final : public LoopClosureOde {
   long long nlp_iterations() const { return nlp_iterations_; }
   long long nlp_iterations_native() const { return nlp_iterations_native_; }
 
-  // Forget the coupled right-hand sides' roots (a new run) and set whether
-  // the run's solves start from them (model.md §7.5: Newton backends; a
-  // least-squares or optimisation backend started on an ended root can
-  // return the residual's minimum past the fold, below the tolerance).
-  void ForgetPastRoots(bool follow) {
-    past_roots_.Clear();
-    follow_past_ = follow;
-  }
+  // Whether coupled solves start from the past roots (model.md §7.5:
+  // Newton backends; a least-squares or optimisation backend started on an
+  // ended root can return the residual's minimum past the fold, below the
+  // tolerance).
+  void set_follow_past_roots(bool follow) { follow_past_ = follow; }
+  // Forget the coupled right-hand sides' roots (a new run).
+  void ForgetPastRoots() { past_roots_.Clear(); }
   // A root at time t for the coupled right-hand sides' warm starts.
   void RememberRoot(double t, const Eigen::VectorXd& z) {
     if (follow_past_) past_roots_.Remember(t, z);
@@ -159,10 +158,7 @@ class Simulator::RobotOde final : public LoopClosureOde {
       const Eigen::VectorXd* z0 =
           follow_past_ ? past_roots_.StartFor(t) : nullptr;
       if (z0) solver_->SetWarmStart(*z0);
-      solver_->Solve(q, &sol_);
-      nlp_solves_ += sol_.nlp_solves;
-      nlp_iterations_ += sol_.nlp_iterations;
-      nlp_iterations_native_ += sol_.nlp_iterations_native;
+      Solve(q);
       if (sol_.nlp_solves > 1 || sol_.nlp_iterations > iteration_watch_)
         ++irregular_solves_;
       if (sol_.status != QuasiStaticStatus::kOk) {
@@ -210,10 +206,7 @@ class Simulator::RobotOde final : public LoopClosureOde {
           solver_->problem().configuration() != q ||
           sol_.status != QuasiStaticStatus::kOk) {
         have_solved_ = false;
-        solver_->Solve(q, &sol_);
-        nlp_solves_ += sol_.nlp_solves;
-        nlp_iterations_ += sol_.nlp_iterations;
-        nlp_iterations_native_ += sol_.nlp_iterations_native;
+        Solve(q);
         if (sol_.status != QuasiStaticStatus::kOk) return Fallback();
         kkt_residual_ = std::fmax(kkt_residual_, sol_.kkt_residual);
         solved_q_ = q;
@@ -257,6 +250,13 @@ class Simulator::RobotOde final : public LoopClosureOde {
   bool Fallback() {
     ++jacobian_fallbacks_;
     return false;
+  }
+  // The quasi-static solve at q into sol_, counted.
+  void Solve(const Configuration& q) {
+    solver_->Solve(q, &sol_);
+    nlp_solves_ += sol_.nlp_solves;
+    nlp_iterations_ += sol_.nlp_iterations;
+    nlp_iterations_native_ += sol_.nlp_iterations_native;
   }
   // Coupled right-hand sides start from the root at the latest earlier
   // time (model.md §7.5), not from the last evaluation.
@@ -481,6 +481,8 @@ struct Simulator::Session {
         checkpoints(*sim.model_, sim.options_.coupling) {
     iopts = sim.options_.integrator;
     if (iopts.step <= 0) iopts.step = sim.dt_;
+    newton_run = solver.nlp().RequiresSquareSystem();
+    ode.set_follow_past_roots(newton_run);
     // Coupled checkpoints: a solver of their own (core/checkpoints.h).
     if (sim.options_.coupling == Coupling::kCoupled &&
         !sim.options_.checkpoints.empty()) {
@@ -535,7 +537,8 @@ struct Simulator::Session {
   // Solution jumps (core/solution_jumps.h): the continuation's solver
   // (short local Newton solves; square-system backends only, else null),
   // its solution and last accepted root, the interval's jump brackets for
-  // the slip quadrature, whether the run's backend is a Newton method, and
+  // the slip quadrature, whether the run's backend is a Newton method (also
+  // for the coupled warm starts, RobotOde::set_follow_past_roots), and
   // the irregular right-hand-side solves seen.
   std::unique_ptr<QuasiStaticSolver> branch_solver;
   QuasiStaticSolution branch_sol;
@@ -666,7 +669,6 @@ void Simulator::CreateProbeSolver() {
   session_->slip_jumps.reserve(4);
   // Iteration counts measure contraction only for a Newton method: other
   // backends' solves count as irregular on a fallback alone.
-  session_->newton_run = session_->probe_solver->nlp().RequiresSquareSystem();
   session_->ode.set_iteration_watch(session_->newton_run
                                         ? kBranchStepIterations
                                         : std::numeric_limits<int>::max());
@@ -681,7 +683,7 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   if (options_.locate_switches && !s.probe_solver) CreateProbeSolver();
   s.solver.Reset();
   s.ode.ClearFailure();
-  s.ode.ForgetPastRoots(s.solver.nlp().RequiresSquareSystem());
+  s.ode.ForgetPastRoots();
   s.ires = IntegratorResult{};
   s.theta = theta0;
   s.k = 0;

@@ -121,6 +121,15 @@ Configuration RoughStart(const KinematicModel& model) {
                                    {0.2, 0.4, 0.05, -0.3, -0.08, 1.1});
 }
 
+// Chain i's state at theta into *s, and its contact velocity map L_i.
+ContactVelocityMap ChainMap(const KinematicModel& model,
+                            const Configuration& theta, int i, ChainState* s) {
+  model.EvaluateChain(theta, i, s);
+  ContactVelocityMap L;
+  model.ContactVelocities(*s, i, &L);
+  return L;
+}
+
 TEST(Kinematics, LoopClosureJacobianMatchesCentralDifferences) {
   const KinematicModel model = RoughModel();
   Configuration theta = RoughStart(model);
@@ -155,9 +164,7 @@ TEST(Kinematics, ContactVelocityMapMatchesFiniteDifferencedMotion) {
   w << 0.05, -0.01, 0.02, 0.03, -0.02, 0.04, 0.1, 0.6, -0.2, 0.5, 0.3, 0.7;
   for (int i = 0; i < 3; ++i) {
     ChainState s;
-    model.EvaluateChain(theta, i, &s);
-    ContactVelocityMap L;
-    model.ContactVelocities(s, i, &L);
+    const ContactVelocityMap L = ChainMap(model, theta, i, &s);
     const Vec6 twist = L * w;
     // Material point of the wheel at the contact, fixed in {W}.
     Mat3 R_PW0;
@@ -201,9 +208,7 @@ TEST(Kinematics, ContactTwistEqualsTheMapTimesTheTwist) {
     const Vec12 w = Vec12::Random();
     for (int i = 0; i < 3; ++i) {
       ChainState s;
-      model.EvaluateChain(theta, i, &s);
-      ContactVelocityMap L;
-      model.ContactVelocities(s, i, &L);
+      const ContactVelocityMap L = ChainMap(model, theta, i, &s);
       const Vec6 by_map = L * w;
       EXPECT_LT(
           (model.ContactTwist(s, i, w) - by_map).lpNorm<Eigen::Infinity>(),
@@ -223,9 +228,7 @@ TEST(Kinematics, MontanaIsConsistentWithChainForwardKinematics) {
   w << 0.06, 0.01, -0.01, 0.02, 0.03, -0.05, 0.2, 0.6, 0.1, 0.6, -0.1, 0.6;
   for (int i = 0; i < 3; ++i) {
     ChainState s;
-    model.EvaluateChain(theta, i, &s);
-    ContactVelocityMap L;
-    model.ContactVelocities(s, i, &L);
+    const ContactVelocityMap L = ChainMap(model, theta, i, &s);
     // Make contact persist for this chain: remove the v_z component along the
     // platform z velocity direction of row 2 (least-norm correction).
     Vec12 wi = w;
