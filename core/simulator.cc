@@ -522,6 +522,9 @@ struct Simulator::Session {
   double t_stop = kNaN, t_lower = kNaN, t_upper = kNaN;
   const char* pending_limit = "";
   bool done_located = false;  // LocateIntegratorStop recorded the stop
+  // Where the last interval's resolved march stopped at a quasi-static
+  // limit (t NaN: it did not); s.y holds the state there.
+  ResolvedStop resolved_stop;
   // Relative-curvature margins at the last two samples (trend check).
   std::array<double, 3> curvature_now{kNaN, kNaN, kNaN},
       curvature_before{kNaN, kNaN, kNaN};
@@ -828,7 +831,11 @@ bool Simulator::Interval(SimulationResult* result) {
   if (st != IntegratorStatus::kSuccess) {
     result->t_reached = s.ires.t_reached;
     if (s.ode.SolveStopped(st)) {
-      if (LocateIntegratorStop(t, t_next, result)) return !s.done_located;
+      const bool resolved = !std::isnan(s.resolved_stop.t);
+      if (resolved ? LocateIntegratorStop(s.resolved_stop.t, s.y,
+                                          s.resolved_stop.t_failed, result)
+                   : LocateIntegratorStop(t, s.theta, t_next, result))
+        return !s.done_located;
       const QuasiStaticSolution& f = s.ode.stopping_solution();
       result->status = ToString(f.status);
       result->stop_configuration = s.solver.problem().configuration();
@@ -1095,10 +1102,11 @@ bool Simulator::LocateSampleStop(double* t, SimulationResult* result) {
 }
 
 // A quasi-static solve failed inside the integrator (coupled mode) on
-// [t0, t1]: locates the first time the integrator cannot reach, records a
-// sample at the last reachable one and stops. Returns true if it did.
-bool Simulator::LocateIntegratorStop(double t0, double t1,
-                                     SimulationResult* result) {
+// [t0, t1] (from theta0 at t0): locates the first time the integrator
+// cannot reach, records a sample at the last reachable one and stops.
+// Returns true if it did.
+bool Simulator::LocateIntegratorStop(double t0, const Configuration& theta0,
+                                     double t1, SimulationResult* result) {
   Session& s = *session_;
   if (!options_.locate_events ||
       s.ode.stopping_solution().status == QuasiStaticStatus::kSolverFailure)
@@ -1106,9 +1114,9 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
   const QuasiStaticSolution first = s.ode.stopping_solution();
   Bracket br;
   br.a = t0;
-  br.theta_a = s.theta;
+  br.theta_a = theta0;
   br.b = t1;
-  Bisect(t0, s.theta, false, &br);
+  Bisect(t0, theta0, false, &br);
   s.t_lower = br.a;
   s.t_upper = br.b;
   if (br.have_b) {
@@ -1125,7 +1133,7 @@ bool Simulator::LocateIntegratorStop(double t0, double t1,
   // Reproduce the failure at b for its solution and stage state. Where the
   // NLP gives up before the limit (SOLVER_FAILURE: mu > mu_min there) the
   // integrator cannot go on towards it: the limit that stopped it stands.
-  const IntegratorStatus st = Reintegrate(t0, s.theta, br.b);
+  const IntegratorStatus st = Reintegrate(t0, theta0, br.b);
   const QuasiStaticSolution* stop =
       st == IntegratorStatus::kSuccess ? nullptr : s.ode.PhysicalStop(st);
   s.sol = stop ? *stop : first;  // else the failure that started the search
@@ -1464,11 +1472,23 @@ IntegratorStatus Simulator::IntegrateInterval(double t, double t_next) {
   for (int i = 0; watch && i < 3; ++i)
     band = band || InSwitchBand(s.sol.contacts[i].slip.norm(), scene_.epsilon);
   s.resolved_last = false;
+  s.resolved_stop = ResolvedStop{};
   if (t < s.resolve_until || band) {
-    if (IntegrateResolved(t, t_next, tolerance, kSwitchMinStep, Advance(),
-                          &s.y)) {
+    ResolvedStop stop;
+    if (IntegrateResolved(t, t_next, tolerance, kSwitchMinStep, Advance(), &s.y,
+                          &stop)) {
       s.resolved_last = std::isfinite(tolerance);
       return IntegratorStatus::kSuccess;
+    }
+    // The march cannot step past a quasi-static limit (a wheel's friction
+    // use -> 1: the creep's square-root singularity makes the steps shrink
+    // towards it): the stop is where the march got, located from there;
+    // one unresolved step over the interval would jump the limit from
+    // off-path stage states (model.md §8.6, "Quasi-static limits").
+    if (!std::isnan(stop.t) && s.ode.PhysicalStop(s.ires.status)) {
+      s.resolved_stop = stop;
+      s.ires.t_reached = stop.t;
+      return s.ires.status;
     }
     s.y = s.theta;
   }

@@ -280,7 +280,8 @@ class Simulator {
   bool CheckIntervalEvents(double t0, double t1);
   bool ScanInterval(double t0, double t1);
   bool LocateSampleStop(double* t, SimulationResult* result);
-  bool LocateIntegratorStop(double t0, double t1, SimulationResult* result);
+  bool LocateIntegratorStop(double t0, const Configuration& theta0, double t1,
+                            SimulationResult* result);
   void SetStopEvent(double t, SimulationResult* result) const;
   // Switches (core/switch_events.h): locates class changes between the last
   // sample and s.sol at t; in coupled mode restarts the interval there.

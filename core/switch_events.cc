@@ -328,28 +328,48 @@ int LocateSwitchesAndReversals(double t0, double t1,
 }
 
 bool IntegrateResolved(double a, double b, double tolerance, double min_step,
-                       const SegmentAdvance& advance, Eigen::VectorXd* y) {
+                       const SegmentAdvance& advance, Eigen::VectorXd* y,
+                       ResolvedStop* stop) {
   if (!(b > a)) throw std::invalid_argument("IntegrateResolved: b must be > a");
   if (!(min_step > 0))
     throw std::invalid_argument("IntegrateResolved: min_step must be > 0");
-  if (!(tolerance < std::numeric_limits<double>::infinity()))
-    return advance(a, b, y);
+  Eigen::VectorXd one, two;
+  auto fail = [stop](double t, double t_failed) {
+    if (stop) *stop = {t, t_failed};
+    return false;
+  };
+  if (!(tolerance < std::numeric_limits<double>::infinity())) {
+    two = *y;
+    if (!advance(a, b, &two)) return fail(a, b);
+    *y = two;
+    return true;
+  }
   // March forward (warm starts of the solves along the way stay near the
   // state): try h as two half steps, then as one; accept the two halves
   // when they agree with the one step, then try 2h; else halve h. A state
   // from which no step of min_step succeeds (a quasi-static solve that
   // cannot meet its tolerance there, seen at the centre of a transition) is
   // left by redoing the step that reached it at 0.6, 0.36, ... of its size
-  // (up to kMaxBackups times), so that the march lands elsewhere.
+  // (up to kMaxBackups times), so that the march lands elsewhere. The count
+  // restarts only once the march gets past the failed piece's end (`wall`):
+  // short of a limit that no step passes (a wheel's friction use -> 1), the
+  // backups would otherwise crawl towards it in ever shorter steps.
   constexpr int kMaxBackups = 8;
   double t = a, h = b - a;
   double t_back = a, h_back = 0;
-  Eigen::VectorXd one, two, y_back = *y;
+  double wall = -std::numeric_limits<double>::infinity();
+  Eigen::VectorXd y_back = *y;
   int backups = 0;
   while (t < b) {
     h = std::min(h, b - t);
     const double m = t + 0.5 * h, e = h >= b - t ? b : t + h;
-    if (!(m > t && m < e)) return e > t ? advance(t, e, y) : true;  // ulps
+    if (!(m > t && m < e)) {  // a piece of a few ulps
+      if (e < b) return fail(t, std::min(b, t + min_step));  // stalled
+      two = *y;
+      if (!advance(t, e, &two)) return fail(t, e);
+      *y = two;
+      return true;
+    }
     two = *y;
     const bool ok_two = advance(t, m, &two) && advance(m, e, &two);
     one = *y;
@@ -357,7 +377,7 @@ bool IntegrateResolved(double a, double b, double tolerance, double min_step,
     const bool last = h <= min_step;
     if (ok_two && (last || (ok_one && (one - two).lpNorm<Eigen::Infinity>() <=
                                           tolerance))) {
-      if (t > t_back || backups == 0) backups = 0;
+      if (e > wall) backups = 0;
       t_back = t;
       h_back = e - t;
       y_back = *y;
@@ -365,7 +385,8 @@ bool IntegrateResolved(double a, double b, double tolerance, double min_step,
       t = e;
       h *= 2.0;
     } else if (last) {
-      if (!(h_back > 0) || ++backups > kMaxBackups) return false;
+      wall = std::max(wall, e);
+      if (!(h_back > 0) || ++backups > kMaxBackups) return fail(t, e);
       t = t_back;
       *y = y_back;
       h = std::pow(0.6, backups) * h_back;

@@ -302,11 +302,21 @@ inline bool InSwitchBand(double slip_speed, double epsilon) {
 using SegmentAdvance =
     std::function<bool(double a, double b, Eigen::VectorXd* y)>;
 
+// Where a failed IntegrateResolved got to: the last time it reached (*y
+// holds the state there) and the end of the piece that then failed
+// (t_failed - t <= min_step unless tolerance = +inf).
+struct ResolvedStop {
+  double t = std::numeric_limits<double>::quiet_NaN();
+  double t_failed = std::numeric_limits<double>::quiet_NaN();
+};
+
 // Integrates *y from a to b with `advance`, refined by step doubling as
 // above (tolerance = +inf: one call). False if a call fails on a piece of
-// min_step or shorter (*y then unspecified). Throws std::invalid_argument
-// for b <= a or min_step <= 0.
+// min_step or shorter; *y is then the state at stop->t (when given), where
+// the march stood. Throws std::invalid_argument for b <= a or
+// min_step <= 0.
 bool IntegrateResolved(double a, double b, double tolerance, double min_step,
-                       const SegmentAdvance& advance, Eigen::VectorXd* y);
+                       const SegmentAdvance& advance, Eigen::VectorXd* y,
+                       ResolvedStop* stop = nullptr);
 
 }  // namespace quasiroll

@@ -302,6 +302,37 @@ TEST(SwitchEvents, ResolvedIntegrationAcrossAKinkMeetsTheTolerance) {
                std::invalid_argument);
 }
 
+// A limit that no step passes (y' = 1/sqrt(t_s - t), no state beyond t_s:
+// the creep's square-root blow-up as a wheel's friction use -> 1): the
+// march fails within min_step of it with the state where it stood, instead
+// of crawling towards t_s in ever shorter pieces until they are a few ulps
+// long (which used to count as reaching b).
+TEST(SwitchEvents, ResolvedIntegrationStopsShortOfALimitNoStepPasses) {
+  const double ts = 0.3, a = 0.0, b = 0.5, min_step = 1e-7;
+  auto f = [ts](double t) { return 1.0 / std::sqrt(ts - t); };
+  int calls = 0;
+  SegmentAdvance simpson = [&](double t0, double t1, Eigen::VectorXd* y) {
+    ++calls;
+    if (!(t1 < ts)) return false;
+    const double h = t1 - t0;
+    (*y)(0) += h / 6 * (f(t0) + 4 * f(t0 + h / 2) + f(t1));
+    return true;
+  };
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(1);
+  ResolvedStop stop;
+  EXPECT_FALSE(IntegrateResolved(a, b, 1e-10, min_step, simpson, &y, &stop));
+  EXPECT_LT(stop.t, ts);
+  EXPECT_GE(stop.t_failed, ts);
+  EXPECT_LE(stop.t_failed - stop.t, min_step);
+  // y is the state at stop.t: the integral 2 (sqrt(ts) - sqrt(ts - t)).
+  // The pieces within a few min_step of ts are accepted without the test;
+  // the integrand's whole mass there, int_{ts-h}^{ts} f = 2 sqrt(h), bounds
+  // their error.
+  const double exact = 2 * (std::sqrt(ts) - std::sqrt(ts - stop.t));
+  EXPECT_NEAR(y(0), exact, 2 * std::sqrt(min_step));
+  EXPECT_LT(calls, 3000);
+}
+
 SimulationResult RunPaper(double dt, Coupling coupling, bool locate,
                           double t_end = 3.2) {
   SimulationOptions o = BuiltinOptions("rk-projection", coupling, dt);
@@ -636,6 +667,35 @@ TEST(SwitchEvents, PaperSceneCoupledRk4LadderHasOrderFourAboveTheFloor) {
 // jumps): 28.2 % rejections when each restart tried h0 = dt; with the carried
 // initial step (model.md §8.5) one per restart remains, the one ending IDA's
 // order-raising start (10.8 %, asserted in [5 %, 20 %]).
+// pvc mode at mu = 0.3: wheel 2's friction use reaches 1 at ~14.2569 s
+// (the paper's Fig. 14 stop). A coupled run approaches it in resolved steps
+// that shrink like the creep's square root; the stop is located where the
+// path meets the limit, independent of the output grid (it used to be
+// recorded at the next sample time, 14.3 s at dt 0.05 and 14.2625 s at
+// dt 0.0125, with the state of the limit). Agreement of the two grids to
+// 1e-6 s: ten of the resolved march's shortest pieces (kSwitchMinStep).
+TEST(SwitchEvents, CoupledRunStopsWhereAWheelsFrictionSaturates) {
+  Scene scene = PaperScene();
+  scene.mode = ActuationMode::kPvc;
+  scene.mu = 0.3;
+  std::vector<double> stops;
+  for (double dt : {0.05, 0.0125}) {
+    SimulationOptions o =
+        BuiltinOptions("rk-projection", Coupling::kCoupled, dt);
+    o.t_end = 15.0;
+    const SimulationResult r = Simulator(scene, o).Run();
+    ASSERT_EQ(r.status, "INFEASIBLE_FRICTION") << dt << ": " << r.stop_reason;
+    EXPECT_EQ(r.critical_contact, 2);
+    EXPECT_TRUE(r.event.located) << dt;
+    EXPECT_NEAR(r.mu_min_at_stop, scene.mu, 1e-8) << dt;
+    const double off_grid = std::remainder(r.t_reached, dt);
+    EXPECT_GT(std::abs(off_grid), 1e-3) << dt << ": " << r.t_reached;
+    stops.push_back(r.t_reached);
+  }
+  EXPECT_NEAR(stops[0], stops[1], 1e-6);
+  EXPECT_NEAR(stops[0], 14.2569, 1e-3);
+}
+
 TEST(SwitchEvents, PaperSceneIdaKeepsItsHistoryInCoupledMode) {
   RegisterBuiltinIntegrators();
   if (!IntegratorRegistry::Has("ida")) GTEST_SKIP() << "built without SUNDIALS";
