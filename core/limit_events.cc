@@ -1,6 +1,7 @@
 #include "quasiroll/core/limit_events.h"
 
 #include <cmath>
+#include <limits>
 
 #include "quasiroll/core/surface_forms.h"
 
@@ -76,9 +77,20 @@ double SecondContactClearance(const KinematicModel& model,
   return kSecondContactTolerance + worst;
 }
 
+bool RelativeCurvatureCertain(const KinematicModel& model,
+                              const Configuration& theta, int wheel) {
+  const double bound = model.terrain().HessianNormBound();
+  if (!(bound < std::numeric_limits<double>::infinity())) return false;
+  const RobotGeometry& g = model.geometry();
+  const double cv = std::cos(theta(ConfigIndex::Eta(wheel) + 1));
+  const double wheel_min = std::fmin(cv / (g.major_radius + g.tube_radius * cv),
+                                     1.0 / g.tube_radius);
+  return wheel_min > bound * (1.0 + 1e-9);
+}
+
 void EvaluateLimitIndicators(const KinematicModel& model,
                              const Configuration& theta, bool second_contact,
-                             LimitIndicators* out) {
+                             LimitIndicators* out, IndicatorDetail detail) {
   out->violated = "";
   out->wheel = -1;
   auto flag = [out](const char* limit, int wheel) {
@@ -96,14 +108,20 @@ void EvaluateLimitIndicators(const KinematicModel& model,
       flag("outside_terrain", i);
       continue;
     }
-    const Mat2 k = RelativeCurvature(model, theta, i);
-    out->relative_curvature[i] = SmallestEigenvalue(k);
     // The tests of CheckValidity (core/initial_configuration.cc), so that a
     // located state fails the quasi-static solve's validity check too.
-    if (!(out->tread_angle[i] > 0)) {
-      flag("tread_angle", i);
-    } else if (!(k(0, 0) > 0 && k.determinant() > 0)) {
-      flag("relative_curvature", i);
+    if (detail == IndicatorDetail::kVerdict &&
+        RelativeCurvatureCertain(model, theta, i)) {
+      out->relative_curvature[i] = LimitIndicators::kNaN;
+      if (!(out->tread_angle[i] > 0)) flag("tread_angle", i);
+    } else {
+      const Mat2 k = RelativeCurvature(model, theta, i);
+      out->relative_curvature[i] = SmallestEigenvalue(k);
+      if (!(out->tread_angle[i] > 0)) {
+        flag("tread_angle", i);
+      } else if (!(k(0, 0) > 0 && k.determinant() > 0)) {
+        flag("relative_curvature", i);
+      }
     }
     if (second_contact) {
       out->second_contact[i] = SecondContactClearance(model, theta, i);

@@ -60,11 +60,25 @@ struct LimitIndicators {
   bool ok() const { return violated[0] == '\0'; }
 };
 
+// What EvaluateLimitIndicators computes: every value, or what decides
+// `violated`: a wheel that RelativeCurvatureCertain() clears keeps
+// relative_curvature NaN (no terrain evaluation); `violated` and `wheel`
+// are the same either way.
+enum class IndicatorDetail { kValues, kVerdict };
+
 // Evaluates the indicators at theta (allocation-free). The second-contact
 // clearance only when `second_contact`.
 void EvaluateLimitIndicators(const KinematicModel& model,
                              const Configuration& theta, bool second_contact,
-                             LimitIndicators* out);
+                             LimitIndicators* out,
+                             IndicatorDetail detail = IndicatorDetail::kValues);
+
+// Whether wheel i's relative-curvature test certainly passes at theta
+// whatever the terrain under it (model.md §3.2): lambda_min(K_w) exceeds
+// the terrain's Hessian norm bound B by a relative 1e-9 (the rounding of
+// K is ~1e-16 |K|), so lambda_min(K_w + r K_g r) >= lambda_min(K_w) - B > 0.
+bool RelativeCurvatureCertain(const KinematicModel& model,
+                              const Configuration& theta, int wheel);
 
 // lambda_min of K_w + r_psi K_g r_psi for wheel i [1/m]; NaN if the terrain
 // does not contain the contact.

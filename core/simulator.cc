@@ -904,7 +904,8 @@ void Simulator::Bisect(double t0, const Configuration& theta0, bool solve,
              s.sol_event.status == QuasiStaticStatus::kSolverFailure;
       if (good && contact) good = CheckValidity(*model_, y, true).ok();
     } else if (good) {
-      EvaluateLimitIndicators(*model_, y, contact, &s.ind);
+      EvaluateLimitIndicators(*model_, y, contact, &s.ind,
+                              IndicatorDetail::kVerdict);
       good = s.ind.ok();
     }
     if (good) {
@@ -950,7 +951,11 @@ bool Simulator::CheckIntervalEvents(double t0, double t1) {
   double fa = 0.0, fb = kNaN;
   for (int j = 1; j <= m + 1; ++j) {
     const double frac = static_cast<double>(j) / (m + 1);
-    EvaluateLimitIndicators(*model_, state(frac), false, &s.ind);
+    // The interior points' verdicts are all that is used; the end's values
+    // feed the trend check below (from the chain cache: no terrain).
+    EvaluateLimitIndicators(
+        *model_, state(frac), false, &s.ind,
+        frac < 1.0 ? IndicatorDetail::kVerdict : IndicatorDetail::kValues);
     if (!s.ind.ok()) {
       fb = frac;
       break;
@@ -977,7 +982,8 @@ bool Simulator::CheckIntervalEvents(double t0, double t1) {
   while ((fb - fa) * h > options_.event_tolerance) {
     const double fm = 0.5 * (fa + fb);
     if (!(fm > fa && fm < fb)) break;  // round-off
-    EvaluateLimitIndicators(*model_, state(fm), false, &s.ind);
+    EvaluateLimitIndicators(*model_, state(fm), false, &s.ind,
+                            IndicatorDetail::kVerdict);
     if (s.ind.ok()) {
       fa = fm;
     } else {
@@ -1017,7 +1023,8 @@ bool Simulator::ScanInterval(double t0, double t1) {
     const double tj = t0 + (t1 - t0) * j / kScanPoints;
     const bool reached = Reintegrate(t0, th0, tj) == IntegratorStatus::kSuccess;
     if (reached) {
-      EvaluateLimitIndicators(*model_, s.y_event, false, &s.ind);
+      EvaluateLimitIndicators(*model_, s.y_event, false, &s.ind,
+                              IndicatorDetail::kVerdict);
       if (s.ind.ok()) {
         br.a = tj;
         br.theta_a = s.y_event;

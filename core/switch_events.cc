@@ -338,12 +338,10 @@ bool IntegrateResolved(double a, double b, double tolerance, double min_step,
     if (stop) *stop = {t, t_failed};
     return false;
   };
-  if (!(tolerance < std::numeric_limits<double>::infinity())) {
-    two = *y;
-    if (!advance(a, b, &two)) return fail(a, b);
-    *y = two;
-    return true;
-  }
+  // One call on *y itself: an integrator that keeps its history across
+  // calls (IDA) continues only from the state it returned.
+  if (!(tolerance < std::numeric_limits<double>::infinity()))
+    return advance(a, b, y);
   // March forward (warm starts of the solves along the way stay near the
   // state): try h as two half steps, then as one; accept the two halves
   // when they agree with the one step, then try 2h; else halve h. A state

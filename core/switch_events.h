@@ -304,14 +304,15 @@ using SegmentAdvance =
 
 // Where a failed IntegrateResolved got to: the last time it reached (*y
 // holds the state there) and the end of the piece that then failed
-// (t_failed - t <= min_step unless tolerance = +inf).
+// (t_failed - t <= min_step).
 struct ResolvedStop {
   double t = std::numeric_limits<double>::quiet_NaN();
   double t_failed = std::numeric_limits<double>::quiet_NaN();
 };
 
 // Integrates *y from a to b with `advance`, refined by step doubling as
-// above (tolerance = +inf: one call). False if a call fails on a piece of
+// above (tolerance = +inf: one call on *y, which a failure leaves
+// unspecified, with *stop untouched). False if a call fails on a piece of
 // min_step or shorter; *y is then the state at stop->t (when given), where
 // the march stood. Throws std::invalid_argument for b <= a or
 // min_step <= 0.

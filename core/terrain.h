@@ -7,6 +7,7 @@
 // continuous along a path.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -36,6 +37,14 @@ class Terrain {
   virtual double Height(double x, double y) const { return Evaluate(x, y).h; }
   // False outside a bounded domain (heightmap); true everywhere otherwise.
   virtual bool Contains(double /*x*/, double /*y*/) const { return true; }
+  // An upper bound on the spectral norm of the Hessian of h over the whole
+  // plane [1/m] (+inf: none known). It bounds the terrain's curvature form:
+  // ||K_g||_2 <= ||hess h||_2 (model.md §3.2), so wheel states whose own
+  // curvature exceeds it pass the relative-curvature test without a
+  // terrain evaluation (core/limit_events.h).
+  virtual double HessianNormBound() const {
+    return std::numeric_limits<double>::infinity();
+  }
   // One-line human-readable description, e.g. "incline beta=10deg gamma=0deg".
   virtual std::string Describe() const = 0;
 };

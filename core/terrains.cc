@@ -93,6 +93,7 @@ GaussianTerrain::GaussianTerrain(std::vector<GaussianBump> bumps)
                        Num(b.sigma));
     }
     inv_var_.push_back(1.0 / (b.sigma * b.sigma));
+    hessian_norm_bound_ += std::abs(b.amplitude) * inv_var_.back();
     amplitude_.push_back(b.amplitude);
     center_x_.push_back(b.x);
     center_y_.push_back(b.y);
@@ -292,6 +293,16 @@ TerrainJet SinusoidTerrain::Evaluate(double x, double y) const {
     j.hyyy += A * X[0] * Y[3];
   }
   return j;
+}
+
+double SinusoidTerrain::HessianNormBound() const {
+  constexpr double kTwoPi = 2.0 * std::numbers::pi;
+  double bound = 0.0;
+  for (const SinusoidComponent& c : components_) {
+    const double kx = kTwoPi / c.wavelength_x, ky = kTwoPi / c.wavelength_y;
+    bound += std::abs(c.amplitude) * (kx * kx + ky * ky);
+  }
+  return bound;
 }
 
 std::string SinusoidTerrain::Describe() const {

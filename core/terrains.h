@@ -20,6 +20,7 @@ class PlaneTerrain final : public Terrain {
  public:
   explicit PlaneTerrain(double height = 0.0);
   TerrainJet Evaluate(double x, double y) const override;
+  double HessianNormBound() const override { return 0.0; }
   std::string Describe() const override;
   double height() const { return height_; }
 
@@ -34,6 +35,7 @@ class InclineTerrain final : public Terrain {
  public:
   InclineTerrain(double beta_rad, double gamma_rad, double height = 0.0);
   TerrainJet Evaluate(double x, double y) const override;
+  double HessianNormBound() const override { return 0.0; }
   std::string Describe() const override;
   double beta() const { return beta_; }
   double gamma() const { return gamma_; }
@@ -73,6 +75,11 @@ class GaussianTerrain final : public Terrain {
   TerrainJet EvaluateSecondOrder(double x, double y) const override;
   double Height(double x, double y) const override;
   std::string Describe() const override;
+  // sum_k |A_k| / s_k^2: a bump's Hessian is g_k (d d^T / s^4 - I / s^2)
+  // (d the offset from its centre), whose eigenvalues
+  // g_k (|d|^2 / s^2 - 1) / s^2 and -g_k / s^2 are at most |A_k| / s_k^2 in
+  // size (|u - 1| e^(-u/2) <= 1 for u >= 0).
+  double HessianNormBound() const override { return hessian_norm_bound_; }
   const std::vector<GaussianBump>& bumps() const { return bumps_; }
 
  private:
@@ -80,6 +87,7 @@ class GaussianTerrain final : public Terrain {
   std::vector<double> inv_var_;  // 1 / sigma_k^2, precomputed
   // The bumps' fields as arrays (EvaluateSecondOrder's vectorised passes).
   std::vector<double> amplitude_, center_x_, center_y_;
+  double hessian_norm_bound_ = 0.0;
 };
 
 // One separable cosine product:
@@ -103,6 +111,9 @@ class SinusoidTerrain final : public Terrain {
                            double height = 0.0);
   TerrainJet Evaluate(double x, double y) const override;
   std::string Describe() const override;
+  // sum_k |A_k| (kx_k^2 + ky_k^2), k = 2 pi / wavelength: the Frobenius
+  // norm of a component's Hessian.
+  double HessianNormBound() const override;
   const std::vector<SinusoidComponent>& components() const {
     return components_;
   }

@@ -7,10 +7,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
+#include <random>
 
 #include "quasiroll/core/initial_configuration.h"
 #include "quasiroll/core/limit_events.h"
 #include "quasiroll/core/simulator.h"
+#include "quasiroll/core/terrains.h"
 #include "simulation_support.h"
 
 namespace quasiroll {
@@ -106,6 +109,87 @@ TEST(LimitEvents, IndicatorsAgreeWithCheckValidity) {
     ++checked;
   }
   EXPECT_GT(checked, 300);
+}
+
+// Terrain::HessianNormBound bounds ||hess h||_2 everywhere (checked on a
+// grid against the eigenvalues of the evaluated Hessian), and is attained
+// by a single bump at its centre. Where RelativeCurvatureCertain clears a
+// wheel, the evaluated lambda_min of K_w + r K_g r is at least
+// lambda_min(K_w) - B > 0 (Weyl, model.md §3.2), and the verdict-only
+// indicators name the same violation as the full ones. States: random
+// contact coordinates (seeded), tread angles up to the tread limit.
+TEST(LimitEvents, CurvatureBoundClearsOnlyWheelsThatPass) {
+  auto hessian_norm = [](const Terrain& t, double x, double y) {
+    const TerrainJet j = t.EvaluateSecondOrder(x, y);
+    Mat2 h;
+    h << j.hxx, j.hxy, j.hxy, j.hyy;
+    return Eigen::SelfAdjointEigenSolver<Mat2>(h)
+        .eigenvalues()
+        .cwiseAbs()
+        .maxCoeff();
+  };
+  const GaussianTerrain one({{0.004, 0.3, -0.2, 0.015}});
+  EXPECT_DOUBLE_EQ(one.HessianNormBound(), 0.004 / (0.015 * 0.015));
+  EXPECT_NEAR(hessian_norm(one, 0.3, -0.2), one.HessianNormBound(), 1e-12);
+  const Scene paper = PaperScene(), dip = DipScene(), bumpy = BumpyScene();
+  const SinusoidTerrain waves(
+      {{0.01, 0.5, 0.8, 0.3, 1.1},
+       {0.004, 0.3, std::numeric_limits<double>::infinity(), 0, 0}});
+  EXPECT_EQ(PlaneTerrain().HessianNormBound(), 0.0);
+  EXPECT_EQ(InclineTerrain(0.2, 0.3).HessianNormBound(), 0.0);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int certain = 0, evaluated = 0;
+  for (const Terrain* t :
+       {static_cast<const Terrain*>(&one), paper.terrain.get(),
+        dip.terrain.get(), bumpy.terrain.get(),
+        static_cast<const Terrain*>(&waves)}) {
+    const double bound = t->HessianNormBound();
+    for (int k = 0; k < 2000; ++k) {
+      const double x = -0.8 + 3.3 * unit(rng), y = -1.3 + 2.6 * unit(rng);
+      EXPECT_LE(hessian_norm(*t, x, y), bound * (1 + 1e-12)) << x << " " << y;
+    }
+  }
+  for (const Scene* scene : {&paper, &dip, &bumpy}) {
+    const KinematicModel model(scene->geometry, scene->terrain);
+    const double bound = scene->terrain->HessianNormBound();
+    const RobotGeometry& g = scene->geometry;
+    for (int k = 0; k < 3000; ++k) {
+      Configuration theta = Configuration::Zero();
+      for (int i = 0; i < 3; ++i) {
+        const int e = ConfigIndex::Eta(i);
+        theta(e) = 2 * M_PI * unit(rng);
+        theta(e + 1) = (M_PI / 2 - 0.05) * (2 * unit(rng) - 1);
+        theta(e + 2) = 0.2 + 1.0 * unit(rng);
+        theta(e + 3) = -0.4 + 0.8 * unit(rng);
+        theta(e + 4) = 2 * M_PI * unit(rng);
+      }
+      LimitIndicators full, verdict;
+      EvaluateLimitIndicators(model, theta, false, &full);
+      EvaluateLimitIndicators(model, theta, false, &verdict,
+                              IndicatorDetail::kVerdict);
+      EXPECT_STREQ(full.violated, verdict.violated);
+      EXPECT_EQ(full.wheel, verdict.wheel);
+      for (int i = 0; i < 3; ++i) {
+        const double cv = std::cos(theta(ConfigIndex::Eta(i) + 1));
+        const double wheel_min = std::fmin(
+            cv / (g.major_radius + g.tube_radius * cv), 1.0 / g.tube_radius);
+        if (RelativeCurvatureCertain(model, theta, i)) {
+          ++certain;
+          EXPECT_TRUE(std::isnan(verdict.relative_curvature[i]));
+          EXPECT_GE(full.relative_curvature[i], wheel_min - bound - 1e-12);
+          EXPECT_GT(full.relative_curvature[i], 0.0);
+        } else {
+          ++evaluated;
+          EXPECT_EQ(verdict.relative_curvature[i], full.relative_curvature[i]);
+        }
+      }
+    }
+  }
+  // Both branches are exercised (the dip's 17.8 1/m exceeds every wheel
+  // curvature but the tube's; R1's 5.27 1/m clears upright wheels).
+  EXPECT_GT(certain, 1000);
+  EXPECT_GT(evaluated, 1000);
 }
 
 // The indicators take an end state's curvature from the chain cache
