@@ -153,9 +153,10 @@ void SetReference(const Reference* ref, const std::string& error,
 
 void SetNanMetrics(RowBuilder* b) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  for (const char* c : {"err_pos_rms", "err_pos_max", "err_final",
-                        "err_final_rot", "err_rot_max", "err_force_rms",
-                        "err_slip", "drift_max", "drift_final", "gap_max"})
+  for (const char* c :
+       {"err_pos_rms", "err_pos_max", "err_final", "err_final_rot",
+        "err_rot_max", "err_force_rms", "err_slip", "drift_max", "drift_final",
+        "gap_max", "err_stop_t"})
     b->Set(c, nan);
   b->SetInt("common_samples", 0);
   b->SetInt("checkpoints", 0);
@@ -278,6 +279,11 @@ std::vector<std::string> MakeRow(const RunSpec& run,
   const FailureCause cause = ClassifyFailure(e);
   b.Set("cause", cause.cause);
   b.Set("cause_detail", cause.detail);
+  // Both stopped at the limit: how far apart (the reference's last sample
+  // is its located stop).
+  if (cause.cause == "physical" && e.has_reference && e.ref_status &&
+      *e.ref_status != RunStatus::kSuccess)
+    b.Set("err_stop_t", result.t_reached - e.ref_t_reached);
   b.Set("t_reached_frac", result.t_reached / run.t_end);
   b.Set("wall_s_median", timing.median);
   b.Set("wall_s_min", timing.min);

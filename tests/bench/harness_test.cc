@@ -440,12 +440,22 @@ TEST(BenchVerdicts, BlowUpIsNumericalFrictionStopIsPhysical) {
   EXPECT_EQ(friction.at("cause_detail"), "friction_limit");
   EXPECT_GT(std::stod(friction.at("t_reached")), 14.0);
   EXPECT_GE(std::stod(friction.at("ref_mu_min")), 0.3);  // reached mu
+  // Where the zoh run stops against the reference's located stop, 14.2568653
+  // s (the coupled location, tests/core/test_switch_events.cc
+  // CoupledRunStopsWhereAWheelsFrictionSaturates): the hold's lag, ~1.3 ms.
+  const double err_stop_t = std::stod(friction.at("err_stop_t"));
+  EXPECT_NEAR(err_stop_t, std::stod(friction.at("t_reached")) - 14.2568653,
+              1e-6);
+  EXPECT_GT(err_stop_t, 1e-4);
+  EXPECT_LT(err_stop_t, 5e-3);
+  EXPECT_EQ(blowup.at("err_stop_t"), "nan");  // numerical: no common limit
 
   const auto& tight = t.rows[2];
   EXPECT_EQ(tight.at("status"), "drift_exceeded");
   EXPECT_EQ(tight.at("cause"), "numerical");
   EXPECT_EQ(tight.at("cause_detail"), "drift_blowup");
   EXPECT_EQ(tight.at("t_reached_frac"), "1");
+  EXPECT_EQ(tight.at("err_stop_t"), "nan");
   EXPECT_NE(tight.at("stop_reason").find("bounds.drift"), std::string::npos);
   // Three repeats: three timings, wall_s their minimum.
   std::vector<double> walls;
