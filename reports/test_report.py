@@ -1197,6 +1197,33 @@ def main():
     return 0 if failed == 0 and result.testsRun > 0 else 1
 
 
+class FailedTextTest(unittest.TestCase):
+    """The μ-sweep captions' failure summary: with runs.csv err_stop_t
+    (t_reached − t_ref of a physical stop) it says how far the methods
+    stopped from the reference's located stop; older files without the
+    column keep the plain count."""
+
+    def rows(self, lags):
+        return [dict(scene="paper_pvc", mu=0.3, status="INFEASIBLE_FRICTION",
+                     cause="physical", cause_detail="friction_limit",
+                     method=f"m{k}", err_stop_t=lag)
+                for k, lag in enumerate(lags)]
+
+    def test_stop_lags_are_spanned(self):
+        from quasiroll_report import figures_paper
+        text = figures_paper._failed_text(self.rows([1.31e-3, 4e-8]))
+        self.assertEqual(text, "failed: paper_pvc μ=0.3 physical friction_limit "
+                         "(2 methods, stop − reference's stop 4.00e-08 to 0.00131 s)")
+
+    def test_without_the_column_the_count_stays(self):
+        from quasiroll_report import figures_paper
+        rows = self.rows([float("nan"), float("nan")])
+        for r in rows[1:]:
+            del r["err_stop_t"]
+        self.assertEqual(figures_paper._failed_text(rows),
+                         "failed: paper_pvc μ=0.3 physical friction_limit (2 methods)")
+
+
 if __name__ == "__main__":
     sys.exit(main())
 

@@ -596,6 +596,18 @@ def _mu_min_line(ax, mu_min):
     return None
 
 
+def _stop_lag_text(rows):
+    """', stops <a>–<b> s after the reference's' from the rows' err_stop_t
+    (runs.csv: t_reached − t_ref of a physical stop); '' without any."""
+    lags = [r.get("err_stop_t") for r in rows]
+    lags = [v for v in lags if is_finite(v)]
+    if not lags:
+        return ""
+    lo, hi = min(lags), max(lags)
+    span = fmt(lo) if lo == hi else f"{fmt(lo)} to {fmt(hi)}"
+    return f", stop − reference's stop {span} s"
+
+
 def _failed_text(failed):
     if not failed:
         return "no μ failed"
@@ -603,9 +615,10 @@ def _failed_text(failed):
     for r in failed:
         cls, detail = sel.failure_cause(r)
         what = r["status"] if cls == sel.UNKNOWN else f"{cls} {detail}"
-        parts.setdefault((r["scene"], r["mu"], what), []).append(r["method"])
-    return "failed: " + "; ".join(f"{scene} μ={fmt(mu)} {what} ({len(m)} methods)"
-                                  for (scene, mu, what), m in sorted(parts.items()))
+        parts.setdefault((r["scene"], r["mu"], what), []).append(r)
+    return "failed: " + "; ".join(
+        f"{scene} μ={fmt(mu)} {what} ({len(rows)} methods{_stop_lag_text(rows)})"
+        for (scene, mu, what), rows in sorted(parts.items()))
 
 
 def _mu_min_needs(panels):
