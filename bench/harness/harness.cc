@@ -145,6 +145,8 @@ void SetReference(const Reference* ref, const std::string& error,
     b->Set("reference_stop", ref->stop);
     if (!std::isnan(ref->mu_min_max)) b->Set("ref_mu_min", ref->mu_min_max);
     if (!std::isnan(ref->err_est)) b->Set("ref_err_est", ref->err_est);
+    if (!std::isnan(ref->check_t_diff))
+      b->Set("ref_check_t_diff", ref->check_t_diff);
   } else {
     b->Set("ref_kind", "none");
     b->Set("ref_status", error.empty() ? "none" : "error");

@@ -529,6 +529,9 @@ bool LoadCachedReference(const std::string& csv_path,
     bool has_mu = false, has_err = false, has_rescues = false;
     ref->mu_min_max = NumberMember(json, "ref_mu_min", &has_mu);
     ref->err_est = NumberMember(json, "ref_err_est", &has_err);
+    bool present = false;  // absent or null: NaN, and so is the difference
+    ref->check_t_diff = NumberMember(json, "t_reached", &present) -
+                        NumberMember(json, "check_t_reached", &present);
     ref->rescues =
         static_cast<int>(NumberMember(json, "rescues", &has_rescues));
     if (ac != AnalyticCase::kNone) ref->analytic.emplace(scene, terrain, ac);
@@ -595,6 +598,7 @@ void RunCheckReference(const Scene& scene, const ReferenceSettings& settings,
     info->check_rescues = check_log.rescues;
     info->check_status = check.status;
     info->check_t_reached = check.t_reached;
+    ref->check_t_diff = result.t_reached - check.t_reached;
     info->check_wall = check.wall_seconds;
     ref->err_est =
         CompareTrajectories(result.samples, check.samples, false).pos_max;

@@ -92,6 +92,10 @@ struct Reference {
   // Estimated position error [m]: max |p_ref - p_check| against a check
   // reference of another method family (runs.csv ref_err_est); NaN if none.
   double err_est = std::numeric_limits<double>::quiet_NaN();
+  // Where the reference ended minus where its check ended [s] (runs.csv
+  // ref_check_t_diff): 0 when both reach t_end; for a stop, how far the
+  // check confirms it. NaN if no check ran.
+  double check_t_diff = std::numeric_limits<double>::quiet_NaN();
   std::string method;        // how it was computed (method, step/tolerance)
   std::string check_method;  // the check reference's ("" if none)
   std::vector<TrajectorySample> samples;  // on the reference output grid

@@ -448,6 +448,11 @@ TEST(BenchVerdicts, BlowUpIsNumericalFrictionStopIsPhysical) {
               1e-6);
   EXPECT_GT(err_stop_t, 1e-4);
   EXPECT_LT(err_stop_t, 5e-3);
+  // The reference's DP5(4) check stops within 1e-5 s of it (its adaptive
+  // stages first fail a few µs short of the limit); the blow-up's reference
+  // and its check both reach t_end.
+  EXPECT_LT(std::abs(std::stod(friction.at("ref_check_t_diff"))), 1e-5);
+  EXPECT_EQ(std::stod(blowup.at("ref_check_t_diff")), 0.0);
   EXPECT_EQ(blowup.at("err_stop_t"), "nan");  // numerical: no common limit
 
   const auto& tight = t.rows[2];
