@@ -82,10 +82,10 @@ bool RelativeCurvatureCertain(const KinematicModel& model,
   const double bound = model.terrain().HessianNormBound();
   if (!(bound < std::numeric_limits<double>::infinity())) return false;
   const RobotGeometry& g = model.geometry();
-  const double cv = std::cos(theta(ConfigIndex::Eta(wheel) + 1));
-  const double wheel_min = std::fmin(cv / (g.major_radius + g.tube_radius * cv),
-                                     1.0 / g.tube_radius);
-  return wheel_min > bound * (1.0 + 1e-9);
+  const Vec2 k_w =
+      TorusCurvatures(g.major_radius, g.tube_radius,
+                      std::cos(theta(ConfigIndex::Eta(wheel) + 1)));
+  return k_w.minCoeff() > bound * (1.0 + 1e-9);
 }
 
 void EvaluateLimitIndicators(const KinematicModel& model,
@@ -110,18 +110,18 @@ void EvaluateLimitIndicators(const KinematicModel& model,
     }
     // The tests of CheckValidity (core/initial_configuration.cc), so that a
     // located state fails the quasi-static solve's validity check too.
-    if (detail == IndicatorDetail::kVerdict &&
-        RelativeCurvatureCertain(model, theta, i)) {
-      out->relative_curvature[i] = LimitIndicators::kNaN;
-      if (!(out->tread_angle[i] > 0)) flag("tread_angle", i);
-    } else {
+    bool curvature_ok = true;  // certain, or K_w + r K_g r is positive definite
+    out->relative_curvature[i] = LimitIndicators::kNaN;
+    if (detail == IndicatorDetail::kValues ||
+        !RelativeCurvatureCertain(model, theta, i)) {
       const Mat2 k = RelativeCurvature(model, theta, i);
       out->relative_curvature[i] = SmallestEigenvalue(k);
-      if (!(out->tread_angle[i] > 0)) {
-        flag("tread_angle", i);
-      } else if (!(k(0, 0) > 0 && k.determinant() > 0)) {
-        flag("relative_curvature", i);
-      }
+      curvature_ok = k(0, 0) > 0 && k.determinant() > 0;
+    }
+    if (!(out->tread_angle[i] > 0)) {
+      flag("tread_angle", i);
+    } else if (!curvature_ok) {
+      flag("relative_curvature", i);
     }
     if (second_contact) {
       out->second_contact[i] = SecondContactClearance(model, theta, i);

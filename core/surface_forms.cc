@@ -15,7 +15,7 @@ SurfaceForms TorusForms(double major_radius, double tube_radius, double u,
   f.frame.col(1) = Vec3(-sv * cu, -sv * su, cv);
   f.frame.col(2) = Vec3(cv * cu, cv * su, sv);
   f.A << rho, 0.0, 0.0, tube_radius;
-  f.K << cv / rho, 0.0, 0.0, 1.0 / tube_radius;
+  f.K = TorusCurvatures(major_radius, tube_radius, cv).asDiagonal();
   f.tau << sv, 0.0;
   return f;
 }

@@ -32,6 +32,13 @@ struct SurfaceForms {
   Eigen::RowVector2d tau;  // connection form
 };
 
+// The torus's principal curvatures at tube angle v (cos_v = cos v), the
+// diagonal of TorusForms().K: along the rolling circle and around the tube.
+inline Vec2 TorusCurvatures(double major_radius, double tube_radius,
+                            double cos_v) {
+  return Vec2(cos_v / (major_radius + tube_radius * cos_v), 1.0 / tube_radius);
+}
+
 SurfaceForms TorusForms(double major_radius, double tube_radius, double u,
                         double v);
 
