@@ -836,6 +836,13 @@ bool Simulator::Interval(SimulationResult* result) {
                                           s.resolved_stop.t_failed, result)
                    : LocateIntegratorStop(t, s.theta, t_next, result))
         return !s.done_located;
+      // The solve gave up where the march stands (IntegrateInterval).
+      if (resolved && s.ode.stopping_solution().status ==
+                          QuasiStaticStatus::kSolverFailure) {
+        RecordIntegratorStop(s.resolved_stop.t, s.y, s.ode.stopping_solution(),
+                             "the resolved march's last state", result);
+        return false;
+      }
       const QuasiStaticSolution& f = s.ode.stopping_solution();
       result->status = ToString(f.status);
       result->stop_configuration = s.solver.problem().configuration();
@@ -1143,23 +1150,34 @@ bool Simulator::LocateIntegratorStop(double t0, const Configuration& theta0,
   const IntegratorStatus st = Reintegrate(t0, theta0, br.b);
   const QuasiStaticSolution* stop =
       st == IntegratorStatus::kSuccess ? nullptr : s.ode.PhysicalStop(st);
-  s.sol = stop ? *stop : first;  // else the failure that started the search
+  RecordIntegratorStop(br.a, br.theta_a, stop ? *stop : first, "located",
+                       result);
+  return true;
+}
+
+// Ends the run at t with the reached state theta: the last sample carries
+// sol, the solve the integrator could not get past (`where` goes into
+// stop_reason).
+void Simulator::RecordIntegratorStop(double t, const Configuration& theta,
+                                     const QuasiStaticSolution& sol,
+                                     const char* where,
+                                     SimulationResult* result) {
+  Session& s = *session_;
+  s.sol = sol;
   result->stop_configuration = s.solver.problem().configuration();
-  s.theta = br.theta_a;
-  const QuasiStaticSolution& sol = s.sol;
-  Record(br.a, s.theta, sol, result, s.k);
+  s.theta = theta;
+  Record(t, s.theta, s.sol, result, s.k);
   s.checkpoints.AtSample(result->samples.back(), &result->checkpoints);
   s.done_located = true;
-  result->t_reached = br.a;
-  result->status = ToString(sol.status);
-  result->mu_min_at_stop = sol.mu_min;
+  result->t_reached = t;
+  result->status = ToString(s.sol.status);
+  result->mu_min_at_stop = s.sol.mu_min;
   result->critical_contact =
-      sol.critical_contact >= 0 ? sol.critical_contact + 1 : -1;
-  result->stop_reason = "t=" + std::to_string(br.a) +
-                        " s: " + ToString(sol.status) +
-                        " inside the integrator (located): " + sol.message;
-  SetStopEvent(br.a, result);
-  return true;
+      s.sol.critical_contact >= 0 ? s.sol.critical_contact + 1 : -1;
+  result->stop_reason =
+      "t=" + std::to_string(t) + " s: " + ToString(s.sol.status) +
+      " inside the integrator (" + where + "): " + s.sol.message;
+  SetStopEvent(t, result);
 }
 
 // The solve s.sol at the sample time t follows the interval [s.t_prev, t]
@@ -1465,23 +1483,26 @@ SegmentAdvance Simulator::Advance() {
 
 // Integrates s.theta over [t, t_next] into s.y: resolved (step doubling)
 // within kSwitchResolveWindow after a located switch in coupled mode,
-// falling back to one call of the integrator if that fails.
+// falling back to one call of the integrator if that fails; a coupled
+// fixed-step call that fails on a solve which gives up is followed by the
+// resolved march too (its stop in s.resolved_stop).
 IntegratorStatus Simulator::IntegrateInterval(double t, double t_next) {
   Session& s = *session_;
   s.y = s.theta;
   const double tolerance = s.switch_tolerance;
+  const bool coupled = options_.coupling == Coupling::kCoupled;
   // Fixed-step, coupled, locating: a wheel in the creep band at t makes
   // the interval resolved.
-  const bool watch = options_.locate_switches &&
-                     options_.coupling == Coupling::kCoupled &&
-                     std::isfinite(tolerance);
+  const bool watch =
+      options_.locate_switches && coupled && std::isfinite(tolerance);
   bool band = false;
   for (int i = 0; watch && i < 3; ++i)
     band = band || InSwitchBand(s.sol.contacts[i].slip.norm(), scene_.epsilon);
   s.resolved_last = false;
   s.resolved_stop = ResolvedStop{};
-  if (t < s.resolve_until || band) {
-    ResolvedStop stop;
+  ResolvedStop stop;
+  const bool resolved_first = t < s.resolve_until || band;
+  if (resolved_first) {
     if (IntegrateResolved(t, t_next, tolerance, kSwitchMinStep, Advance(), &s.y,
                           &stop)) {
       s.resolved_last = std::isfinite(tolerance);
@@ -1492,14 +1513,39 @@ IntegratorStatus Simulator::IntegrateInterval(double t, double t_next) {
     // towards it): the stop is where the march got, located from there;
     // one unresolved step over the interval would jump the limit from
     // off-path stage states (model.md §8.6, "Quasi-static limits").
-    if (!std::isnan(stop.t) && s.ode.PhysicalStop(s.ires.status)) {
-      s.resolved_stop = stop;
-      s.ires.t_reached = stop.t;
-      return s.ires.status;
-    }
+    if (!std::isnan(stop.t) && s.ode.PhysicalStop(s.ires.status))
+      return StopResolved(stop);
     s.y = s.theta;
   }
-  return s.integrator->Integrate(s.ode, t, t_next, s.y, s.iopts, &s.ires);
+  const IntegratorStatus st =
+      s.integrator->Integrate(s.ode, t, t_next, s.y, s.iopts, &s.ires);
+  // A coupled fixed-step interval whose step failed on a solve that gave
+  // up (SOLVER_FAILURE: the step's stage states may lie off the path, past
+  // a point the solves cannot pass) is marched resolved instead, and stops
+  // where the march does, not at the last sample (model.md §8.6, "A solve
+  // that gives up"). A physical stop keeps its bisection from t.
+  if (st == IntegratorStatus::kSuccess || s.ode.PhysicalStop(st) ||
+      !s.ode.SolveStopped(st) || resolved_first || !coupled ||
+      !options_.locate_events || !std::isfinite(tolerance))
+    return st;
+  s.y = s.theta;
+  if (IntegrateResolved(t, t_next, tolerance, kSwitchMinStep, Advance(), &s.y,
+                        &stop)) {
+    s.resolved_last = true;
+    return IntegratorStatus::kSuccess;
+  }
+  if (!std::isnan(stop.t) && stop.t > t) return StopResolved(stop);
+  s.ires.t_reached = t;
+  return s.ires.status;
+}
+
+// The resolved march failed at stop (s.y: its state at stop.t): the
+// interval ends there with the march's failure.
+IntegratorStatus Simulator::StopResolved(const ResolvedStop& stop) {
+  Session& s = *session_;
+  s.resolved_stop = stop;
+  s.ires.t_reached = stop.t;
+  return s.ires.status;
 }
 
 namespace {

@@ -282,6 +282,9 @@ class Simulator {
   bool LocateSampleStop(double* t, SimulationResult* result);
   bool LocateIntegratorStop(double t0, const Configuration& theta0, double t1,
                             SimulationResult* result);
+  void RecordIntegratorStop(double t, const Configuration& theta,
+                            const QuasiStaticSolution& sol, const char* where,
+                            SimulationResult* result);
   void SetStopEvent(double t, SimulationResult* result) const;
   // Switches (core/switch_events.h): locates class changes between the last
   // sample and s.sol at t; in coupled mode restarts the interval there.
@@ -304,6 +307,7 @@ class Simulator {
   double SwitchStepTolerance() const;
   SegmentAdvance Advance();
   IntegratorStatus IntegrateInterval(double t, double t_next);
+  IntegratorStatus StopResolved(const ResolvedStop& stop);
   void Record(double t, const Configuration& theta,
               const QuasiStaticSolution& sol, SimulationResult* result,
               int index, const SlipIncrements* increments = nullptr) const;
