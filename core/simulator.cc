@@ -1115,6 +1115,12 @@ bool Simulator::LocateSampleStop(double* t, SimulationResult* result) {
   return true;
 }
 
+namespace {
+// mu_min - mu at a located friction stop above which the stop is taken for
+// a step's stages jumping a point where the path ends (LocateIntegratorStop).
+constexpr double kFrictionJump = 1e-6;
+}  // namespace
+
 // A quasi-static solve failed inside the integrator (coupled mode) on
 // [t0, t1] (from theta0 at t0): locates the first time the integrator
 // cannot reach, records a sample at the last reachable one and stops.
@@ -1150,8 +1156,40 @@ bool Simulator::LocateIntegratorStop(double t0, const Configuration& theta0,
   const IntegratorStatus st = Reintegrate(t0, theta0, br.b);
   const QuasiStaticSolution* stop =
       st == IntegratorStatus::kSuccess ? nullptr : s.ode.PhysicalStop(st);
-  RecordIntegratorStop(br.a, br.theta_a, stop ? *stop : first, "located",
-                       result);
+  const QuasiStaticSolution located = stop ? *stop : first;
+  // A friction limit the path meets has mu_min -> mu at the located stop
+  // (measured 1e-11..1.3e-8 over mu); single steps whose stages jump a
+  // point where the solutions change abruptly certify mu_min well above mu
+  // (5.8e-5..2.1e-4): march instead (model.md §8.6, "A solve that gives up").
+  if (located.status == QuasiStaticStatus::kInfeasibleFriction &&
+      located.mu_min - scene_.mu > kFrictionJump &&
+      MarchToStop(t0, theta0, t1, result))
+    return true;
+  RecordIntegratorStop(br.a, br.theta_a, located, "located", result);
+  return true;
+}
+
+// Integrates [t0, t1] from theta0 by the resolved march (coupled,
+// fixed-step) and stops where it gives up: a certified limit is located
+// from the march's state, a solve that gives up stops the run there. False
+// (nothing recorded) if the march does not apply or gets to t1.
+bool Simulator::MarchToStop(double t0, const Configuration& theta0, double t1,
+                            SimulationResult* result) {
+  Session& s = *session_;
+  const double tolerance = s.switch_tolerance;
+  if (options_.coupling != Coupling::kCoupled || !std::isfinite(tolerance) ||
+      !(t1 - t0 > kSwitchMinStep))
+    return false;
+  s.y = theta0;
+  ResolvedStop stop;
+  if (IntegrateResolved(t0, t1, tolerance, kSwitchMinStep, Advance(), &s.y,
+                        &stop) ||
+      std::isnan(stop.t) || !s.ode.SolveStopped(s.ires.status))
+    return false;
+  if (s.ode.PhysicalStop(s.ires.status))
+    return LocateIntegratorStop(stop.t, s.y, stop.t_failed, result);
+  RecordIntegratorStop(stop.t, s.y, s.ode.stopping_solution(),
+                       "the resolved march's last state", result);
   return true;
 }
 

@@ -282,6 +282,8 @@ class Simulator {
   bool LocateSampleStop(double* t, SimulationResult* result);
   bool LocateIntegratorStop(double t0, const Configuration& theta0, double t1,
                             SimulationResult* result);
+  bool MarchToStop(double t0, const Configuration& theta0, double t1,
+                   SimulationResult* result);
   void RecordIntegratorStop(double t, const Configuration& theta,
                             const QuasiStaticSolution& sol, const char* where,
                             SimulationResult* result);

@@ -1224,6 +1224,37 @@ class FailedTextTest(unittest.TestCase):
                          "failed: paper_pvc μ=0.3 physical friction_limit (2 methods)")
 
 
+class StopLocationFindingsTest(unittest.TestCase):
+    """The key finding on located stops: per coupling, the span of
+    err_stop_t, and the runs farther from the reference's stop than the
+    reference's own check (|ref_check_t_diff|) puts it."""
+
+    def row(self, coupling, lag, check, method="newton + rk-projection"):
+        return dict(coupling=coupling, err_stop_t=lag, ref_check_t_diff=check,
+                    method=method, scene="paper_pvc", suite_group="mu_sweep")
+
+    def test_spans_per_coupling_and_flags_runs_beyond_the_check(self):
+        from quasiroll_report import findings
+        runs = [self.row("coupled", 3.6e-8, 6e-6), self.row("coupled", -2.6e-4, 2.4e-4),
+                self.row("zoh", 1.3e-3, 6e-6, method="newton + ida"),
+                self.row("zoh", 9e-4, 6e-6),
+                self.row("zoh", float("nan"), 6e-6)]  # not a physical stop
+        text = findings.stop_location_findings(runs)
+        self.assertEqual(len(text), 2)
+        self.assertEqual(
+            text[0], "Located physical stops, coupled: 2 runs stop -2.60e-04 to 3.60e-08 s "
+            "from the reference's stop (median |difference| 1.30e-04 s); 1 farther than "
+            "the reference's own check (|ref_check_t_diff|), the farthest newton + "
+            "rk-projection on paper_pvc (mu_sweep): -2.60e-04 s.")
+        self.assertIn("zoh: 2 runs stop 9.00e-04 to 0.0013 s", text[1])
+        self.assertIn("2 farther than the reference's own check", text[1])
+        self.assertIn("the farthest newton + ida", text[1])
+
+    def test_without_the_columns_nothing_is_said(self):
+        from quasiroll_report import findings
+        self.assertEqual(findings.stop_location_findings([dict(coupling="zoh")]), [])
+
+
 if __name__ == "__main__":
     sys.exit(main())
 

@@ -124,6 +124,34 @@ def stability_findings(runs, references):
     return out
 
 
+def stop_location_findings(runs):
+    """Per coupling, how far the located physical stops lie from the
+    reference's (runs.csv err_stop_t = t_reached − t_ref), and how many lie
+    farther than the reference's stop is itself certain (|ref_check_t_diff|,
+    its check's stop): a stop one output interval early or late passes the
+    same-place verdict, which is two output intervals wide."""
+    rows = [r for r in runs if is_finite(r.get("err_stop_t", math.nan))]
+    out = []
+    for coupling in sorted({r["coupling"] for r in rows}):
+        sub = [r for r in rows if r["coupling"] == coupling]
+        lags = [r["err_stop_t"] for r in sub]
+        lo, hi = min(lags), max(lags)
+        span = fmt(lo) if lo == hi else f"{fmt(lo)} to {fmt(hi)}"
+        median = float(np.median(np.abs(lags)))
+        text = (f"Located physical stops, {coupling}: {len(sub)} runs stop {span} s "
+                f"from the reference's stop (median |difference| {fmt(median)} s)")
+        beyond = [r for r in sub if is_finite(r.get("ref_check_t_diff", math.nan))
+                  and abs(r["err_stop_t"]) > abs(r["ref_check_t_diff"])]
+        if beyond:
+            worst = max(beyond, key=lambda r: abs(r["err_stop_t"]))
+            text += (f"; {len(beyond)} farther than the reference's own check "
+                     f"(|ref_check_t_diff|), the farthest {worst['method']} on "
+                     f"{worst['scene']} ({worst.get('suite_group', '')}): "
+                     f"{fmt(worst['err_stop_t'])} s")
+        out.append(text + ".")
+    return out
+
+
 def _motion_counts(run):
     """Whether a run's qs_inertia_ratio measures the problem's motion: every
     run up to its t_reached, failed ones included, except numerical failures
@@ -383,6 +411,7 @@ def key_findings(ctx, records):
             + implicit_findings(ctx.runs, ctx.references) + mu_findings(records)
             + epsilon_findings(ctx.runs)
             + stability_findings(ctx.runs, ctx.references)
+            + stop_location_findings(ctx.runs)
             + qs_findings(ctx.runs, ctx.references, ctx.meta) + kkt_findings(ctx.runs))
 
 

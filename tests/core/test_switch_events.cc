@@ -697,31 +697,34 @@ TEST(SwitchEvents, CoupledRunStopsWhereAWheelsFrictionSaturates) {
 }
 
 // The paper scene on its terrain at 8x the bumps' heights (the default
-// suite's stability_roughness), coupled RK4 at dt = 0.1 s: the step over
+// suite's stability_roughness), coupled RK4. At dt = 0.1 s the step over
 // [5.8, 5.9] s fails on a solve that gives up (SOLVER_FAILURE: Newton
-// stalls at a scaled residual ~3e-8, mu_min ~0.49988 < mu) at a stage state
-// past the point where the path's solves stop converging. The run used to
-// stop at the sample, 5.8 s; marched resolved, it stops where the march
-// cannot go on, ~5.84562 s, where IDA and CVODE stop too (5.845638 s; the
-// 2e-5 s between them is the march's shortest pieces, kSwitchMinStep, times
-// its backups near the hard point), with the stop's sample recorded there.
+// stalls at a scaled residual ~3e-8, mu_min ~0.49988 < mu); at dt = 0.05 s
+// the step's stages certify INFEASIBLE_FRICTION with mu_min - mu = 5.8e-5
+// at the located stop, past the point the path's solves reach. Both runs
+// used to stop where their grid put them (5.8 s at the sample; 5.84771 s
+// past it); marched resolved, both stop with SOLVER_FAILURE where the
+// march cannot go on, inside the ~2e-5 s window where IDA's and CVODE's
+// stage solves fail too (5.845638 s), with the stop's sample there.
 TEST(SwitchEvents, CoupledRunStopsWhereItsSolvesGiveUpNotAtTheSample) {
   Scene scene = PaperScene();
   std::vector<GaussianBump> bumps =
       dynamic_cast<const GaussianTerrain&>(*scene.terrain).bumps();
   for (GaussianBump& b : bumps) b.amplitude *= 8;
   scene.terrain = std::make_shared<GaussianTerrain>(bumps);
-  SimulationOptions o =
-      BuiltinOptions("rk-projection", Coupling::kCoupled, 0.1);
-  o.t_end = 6.0;
-  const SimulationResult r = Simulator(scene, o).Run();
-  ASSERT_EQ(r.status, "SOLVER_FAILURE") << r.stop_reason;
-  EXPECT_GT(r.t_reached, 5.8455) << r.stop_reason;
-  EXPECT_LT(r.t_reached, 5.8457) << r.stop_reason;
-  ASSERT_FALSE(r.samples.empty());
-  EXPECT_EQ(r.samples.back().t, r.t_reached);
-  EXPECT_NE(r.stop_reason.find("resolved march"), std::string::npos)
-      << r.stop_reason;
+  for (double dt : {0.1, 0.05}) {
+    SimulationOptions o =
+        BuiltinOptions("rk-projection", Coupling::kCoupled, dt);
+    o.t_end = 6.0;
+    const SimulationResult r = Simulator(scene, o).Run();
+    ASSERT_EQ(r.status, "SOLVER_FAILURE") << dt << ": " << r.stop_reason;
+    EXPECT_GT(r.t_reached, 5.8455) << dt << ": " << r.stop_reason;
+    EXPECT_LT(r.t_reached, 5.8457) << dt << ": " << r.stop_reason;
+    ASSERT_FALSE(r.samples.empty());
+    EXPECT_EQ(r.samples.back().t, r.t_reached) << dt;
+    EXPECT_NE(r.stop_reason.find("resolved march"), std::string::npos)
+        << r.stop_reason;
+  }
 }
 
 TEST(SwitchEvents, PaperSceneIdaKeepsItsHistoryInCoupledMode) {
