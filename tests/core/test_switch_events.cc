@@ -667,6 +667,13 @@ TEST(SwitchEvents, PaperSceneCoupledRk4LadderHasOrderFourAboveTheFloor) {
 // jumps): 28.2 % rejections when each restart tried h0 = dt; with the carried
 // initial step (model.md §8.5) one per restart remains, the one ending IDA's
 // order-raising start (10.8 %, asserted in [5 %, 20 %]).
+// Runs scene to t_end, coupled newton + rk-projection (RK4) at dt.
+SimulationResult RunCoupledRk4(const Scene& scene, double dt, double t_end) {
+  SimulationOptions o = BuiltinOptions("rk-projection", Coupling::kCoupled, dt);
+  o.t_end = t_end;
+  return Simulator(scene, o).Run();
+}
+
 // pvc mode at mu = 0.3: wheel 2's friction use reaches 1 at ~14.2569 s
 // (the paper's Fig. 14 stop). A coupled run approaches it in resolved steps
 // that shrink like the creep's square root; the stop is located where the
@@ -680,10 +687,7 @@ TEST(SwitchEvents, CoupledRunStopsWhereAWheelsFrictionSaturates) {
   scene.mu = 0.3;
   std::vector<double> stops;
   for (double dt : {0.05, 0.0125}) {
-    SimulationOptions o =
-        BuiltinOptions("rk-projection", Coupling::kCoupled, dt);
-    o.t_end = 15.0;
-    const SimulationResult r = Simulator(scene, o).Run();
+    const SimulationResult r = RunCoupledRk4(scene, dt, 15.0);
     ASSERT_EQ(r.status, "INFEASIBLE_FRICTION") << dt << ": " << r.stop_reason;
     EXPECT_EQ(r.critical_contact, 2);
     EXPECT_TRUE(r.event.located) << dt;
@@ -713,10 +717,7 @@ TEST(SwitchEvents, CoupledRunStopsWhereItsSolvesGiveUpNotAtTheSample) {
   for (GaussianBump& b : bumps) b.amplitude *= 8;
   scene.terrain = std::make_shared<GaussianTerrain>(bumps);
   for (double dt : {0.1, 0.05}) {
-    SimulationOptions o =
-        BuiltinOptions("rk-projection", Coupling::kCoupled, dt);
-    o.t_end = 6.0;
-    const SimulationResult r = Simulator(scene, o).Run();
+    const SimulationResult r = RunCoupledRk4(scene, dt, 6.0);
     ASSERT_EQ(r.status, "SOLVER_FAILURE") << dt << ": " << r.stop_reason;
     EXPECT_GT(r.t_reached, 5.8455) << dt << ": " << r.stop_reason;
     EXPECT_LT(r.t_reached, 5.8457) << dt << ": " << r.stop_reason;
