@@ -1243,12 +1243,13 @@ class StopLocationFindingsTest(unittest.TestCase):
         self.assertEqual(len(text), 2)
         self.assertEqual(
             text[0], "Located physical stops, coupled: 2 runs stop -2.60e-04 to 3.60e-08 s "
-            "from the reference's stop (median |difference| 1.30e-04 s); 1 farther than "
-            "the reference's own check (|ref_check_t_diff|), the farthest newton + "
-            "rk-projection on paper_pvc (mu_sweep): -2.60e-04 s.")
+            "from the reference's stop (median |difference| 1.30e-04 s); 1 differ by more "
+            "than the reference's own uncertainty (|ref_check_t_diff|), so the difference "
+            "is the method's, the largest newton + rk-projection on paper_pvc (mu_sweep): "
+            "-2.60e-04 s.")
         self.assertIn("zoh: 2 runs stop 9.00e-04 to 0.0013 s", text[1])
-        self.assertIn("2 farther than the reference's own check", text[1])
-        self.assertIn("the farthest newton + ida", text[1])
+        self.assertIn("2 differ by more than the reference's own uncertainty", text[1])
+        self.assertIn("the method's (the hold's lag), the largest newton + ida", text[1])
 
     def test_without_the_columns_nothing_is_said(self):
         from quasiroll_report import findings

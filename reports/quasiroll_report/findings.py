@@ -144,8 +144,10 @@ def stop_location_findings(runs):
                   and abs(r["err_stop_t"]) > abs(r["ref_check_t_diff"])]
         if beyond:
             worst = max(beyond, key=lambda r: abs(r["err_stop_t"]))
-            text += (f"; {len(beyond)} farther than the reference's own check "
-                     f"(|ref_check_t_diff|), the farthest {worst['method']} on "
+            lag = " (the hold's lag)" if coupling == "zoh" else ""
+            text += (f"; {len(beyond)} differ by more than the reference's own "
+                     f"uncertainty (|ref_check_t_diff|), so the difference is the "
+                     f"method's{lag}, the largest {worst['method']} on "
                      f"{worst['scene']} ({worst.get('suite_group', '')}): "
                      f"{fmt(worst['err_stop_t'])} s")
         out.append(text + ".")
