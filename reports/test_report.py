@@ -1224,6 +1224,21 @@ class FailedTextTest(unittest.TestCase):
                          "failed: paper_pvc μ=0.3 physical friction_limit (2 methods)")
 
 
+class BorrowedCauseTextTest(unittest.TestCase):
+    """A stability cell coloured by the reference's physical stop while its
+    run ended in SOLVER_FAILURE is said to be so in the caption."""
+
+    def test_solver_status_cells_are_counted(self):
+        from quasiroll_report import figures_methods
+        cells = [dict(cls="physical", status="SOLVER_FAILURE"),
+                 dict(cls="physical", status="INFEASIBLE_FRICTION"),
+                 dict(cls="numerical", status="SOLVER_FAILURE"),
+                 dict(cls="physical", status="SINGULAR")]
+        text = figures_methods._borrowed_cause_text(cells)
+        self.assertTrue(text.startswith(" 2 physical cells ended in a solver status"))
+        self.assertIn("err_stop_t", text)
+        self.assertEqual(figures_methods._borrowed_cause_text(cells[1:2]), "")
+
 class StopLocationFindingsTest(unittest.TestCase):
     """The key finding on located stops: per coupling, the span of
     err_stop_t, and the runs farther from the reference's stop than the

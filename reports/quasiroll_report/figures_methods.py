@@ -591,6 +591,20 @@ def _axis_caption(chart):
     return out
 
 
+def _borrowed_cause_text(cells):
+    """Caption sentence for physical cells whose runs ended in a solver
+    status (SOLVER_FAILURE, SINGULAR): their colour is the reference's stop,
+    met at the same place; '' without any."""
+    borrowed = [c for c in cells if c["cls"] == sel.PHYSICAL
+                and c.get("status") in ("SOLVER_FAILURE", "SINGULAR")]
+    if not borrowed:
+        return ""
+    return (f" {len(borrowed)} physical cell{'s' if len(borrowed) != 1 else ''} "
+            "ended in a solver status (their solves gave up) where the reference "
+            "stops physically: the colour names the reference's stop; how far "
+            "from it each run stopped is runs.csv err_stop_t.")
+
+
 def _stability_figure(ctx, chart):
     panels = chart["panels"]
     n_cols = max(len(p["values"]) for p in panels)
@@ -629,7 +643,7 @@ def _stability_figure(ctx, chart):
         "unclassified."
         + (f" Dotted line: the friction the scene needs, {mu_text} (the solver's "
            "μ_min maximised over the reference trajectory)." if mu_text else "")
-        + _axis_caption(chart)
+        + _axis_caption(chart) + _borrowed_cause_text(cells)
         + (f" {sel.REFERENCE_FAILURE_MARK} = the reference of that cell failed "
            "numerically before t_end although its retry ladder ran "
            "(reference_stop = reference_failure, docs/harness.md): the reach "
