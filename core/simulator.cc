@@ -832,17 +832,9 @@ bool Simulator::Interval(SimulationResult* result) {
     result->t_reached = s.ires.t_reached;
     if (s.ode.SolveStopped(st)) {
       const bool resolved = !std::isnan(s.resolved_stop.t);
-      if (resolved ? LocateIntegratorStop(s.resolved_stop.t, s.y,
-                                          s.resolved_stop.t_failed, result)
+      if (resolved ? StopAtMarch(s.resolved_stop, result)
                    : LocateIntegratorStop(t, s.theta, t_next, result))
         return !s.done_located;
-      // The solve gave up where the march stands (IntegrateInterval).
-      if (resolved && s.ode.stopping_solution().status ==
-                          QuasiStaticStatus::kSolverFailure) {
-        RecordIntegratorStop(s.resolved_stop.t, s.y, s.ode.stopping_solution(),
-                             "the resolved march's last state", result);
-        return false;
-      }
       const QuasiStaticSolution& f = s.ode.stopping_solution();
       result->status = ToString(f.status);
       result->stop_configuration = s.solver.problem().configuration();
@@ -1117,7 +1109,8 @@ bool Simulator::LocateSampleStop(double* t, SimulationResult* result) {
 
 namespace {
 // mu_min - mu at a located friction stop above which the stop is taken for
-// a step's stages jumping a point where the path ends (LocateIntegratorStop).
+// a step's stages jumping a point where the solutions change abruptly
+// (LocateIntegratorStop).
 constexpr double kFrictionJump = 1e-6;
 }  // namespace
 
@@ -1170,9 +1163,8 @@ bool Simulator::LocateIntegratorStop(double t0, const Configuration& theta0,
 }
 
 // Integrates [t0, t1] from theta0 by the resolved march (coupled,
-// fixed-step) and stops where it gives up: a certified limit is located
-// from the march's state, a solve that gives up stops the run there. False
-// (nothing recorded) if the march does not apply or gets to t1.
+// fixed-step) and stops where it fails (StopAtMarch). False (nothing
+// recorded) if the march does not apply or gets to t1.
 bool Simulator::MarchToStop(double t0, const Configuration& theta0, double t1,
                             SimulationResult* result) {
   Session& s = *session_;
@@ -1186,6 +1178,16 @@ bool Simulator::MarchToStop(double t0, const Configuration& theta0, double t1,
                         &stop) ||
       std::isnan(stop.t) || !s.ode.SolveStopped(s.ires.status))
     return false;
+  return StopAtMarch(stop, result);
+}
+
+// The resolved march failed on a solve at stop (s.y: its state at stop.t):
+// a certified limit is located from there (LocateIntegratorStop), a solve
+// that gave up ends the run there. Returns true if a stop was recorded or
+// left pending.
+bool Simulator::StopAtMarch(const ResolvedStop& stop,
+                            SimulationResult* result) {
+  Session& s = *session_;
   if (s.ode.PhysicalStop(s.ires.status))
     return LocateIntegratorStop(stop.t, s.y, stop.t_failed, result);
   RecordIntegratorStop(stop.t, s.y, s.ode.stopping_solution(),

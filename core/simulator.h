@@ -284,6 +284,7 @@ class Simulator {
                             SimulationResult* result);
   bool MarchToStop(double t0, const Configuration& theta0, double t1,
                    SimulationResult* result);
+  bool StopAtMarch(const ResolvedStop& stop, SimulationResult* result);
   void RecordIntegratorStop(double t, const Configuration& theta,
                             const QuasiStaticSolution& sol, const char* where,
                             SimulationResult* result);

@@ -10,7 +10,7 @@ from matplotlib.transforms import blended_transform_factory
 
 from . import selection as sel
 from .data import dae_option, has_dae_option, is_finite, is_success
-from .plotting import (COMPONENT_STYLES, MissingData, WHEEL_STYLES, fmt,
+from .plotting import (COMPONENT_STYLES, MissingData, WHEEL_STYLES, fmt, span_text,
                        new_figure, no_data, positive, save_figure,
                        spans_decades, vline_label)
 from .figures_methods import style_legend_handles
@@ -603,9 +603,7 @@ def _stop_lag_text(rows):
     lags = [v for v in lags if is_finite(v)]
     if not lags:
         return ""
-    lo, hi = min(lags), max(lags)
-    span = fmt(lo) if lo == hi else f"{fmt(lo)} to {fmt(hi)}"
-    return f", stop − reference's stop {span} s"
+    return f", stop − reference's stop {span_text(lags)} s"
 
 
 def _failed_text(failed):

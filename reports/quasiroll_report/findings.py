@@ -8,7 +8,7 @@ import numpy as np
 from . import selection as sel
 from .data import (dae_option, is_finite, is_success, method_options, method_without,
                    parse_method)
-from .plotting import fmt
+from .plotting import fmt, span_text
 from .problems import problem_label
 
 ERROR_TARGETS = [1e-4, 1e-6, 1e-8, 1e-10]
@@ -135,8 +135,7 @@ def stop_location_findings(runs):
     for coupling in sorted({r["coupling"] for r in rows}):
         sub = [r for r in rows if r["coupling"] == coupling]
         lags = [r["err_stop_t"] for r in sub]
-        lo, hi = min(lags), max(lags)
-        span = fmt(lo) if lo == hi else f"{fmt(lo)} to {fmt(hi)}"
+        span = span_text(lags)
         median = float(np.median(np.abs(lags)))
         text = (f"Located physical stops, {coupling}: {len(sub)} runs stop {span} s "
                 f"from the reference's stop (median |difference| {fmt(median)} s)")

@@ -222,6 +222,12 @@ def fmt(value, digits=3):
     return f"{value:.{digits}g}"
 
 
+def span_text(values):
+    """'<min> to <max>' of finite values by fmt ('<v>' when they are equal)."""
+    lo, hi = min(values), max(values)
+    return fmt(lo) if lo == hi else f"{fmt(lo)} to {fmt(hi)}"
+
+
 def method_label(method):
     return method
 
