@@ -345,6 +345,35 @@ class GoodReportTest(unittest.TestCase):
             has=["paper_pvc no sliding; creep", "proportional to ε", "paper slides"],
             lacks=["less than paper", "paper_pvc slips"])
 
+    def test_slip_vs_mu_draws_sliding_and_creep_apart(self):
+        # A referee's question: is the regularisation shown as physics? The
+        # method-coloured curves are the sliding (runs.csv sliding_distance);
+        # the creep (proportional to ε) is grey, and a panel without sliding
+        # says so instead of drawing its creep in a method's colour.
+        record = self.manifest()["fig14_total_slip_vs_mu"]
+        figure = record["data"]
+        self.assertTrue(figure["split"])
+        runs = read_runs(Fixture.good)[0]
+        by_scene = {p["scene"]: p for p in figure["panels"]}
+        self.assertTrue(by_scene["paper"]["slides"])
+        self.assertFalse(by_scene["paper_pvc"]["slides"])
+        for scene, panel in by_scene.items():
+            for method, curve in panel["curves"].items():
+                for mu, value in curve:
+                    rows = [r for r in sel.mu_sweep_rows(runs)
+                            if r["scene"] == scene and r["mu"] == mu
+                            and r["method"] == method and data.is_success(r)
+                            and os.path.isfile(data.trajectory_path(Fixture.good, r))]
+                    self.assertAlmostEqual(
+                        value, float(np.median([r["sliding_distance"] for r in rows])),
+                        delta=1e-12 * max(value, 1e-300))
+                    creep = dict(panel["creep_curves"][method])[mu]
+                    self.assertAlmostEqual(
+                        creep, float(np.median([r["creep_distance"] for r in rows])),
+                        delta=1e-12 * creep)
+        self.assertIn("drawn apart", record["caption"])
+        self.assertIn("grey, thin: the friction regularisation", record["caption"])
+
     def test_force_figures_say_lines_join_the_samples(self):
         for name in ("fig09_normal_forces", "fig10_longitudinal_traction",
                      "fig11_lateral_traction"):

@@ -504,7 +504,8 @@ def figure_slip(ctx):
 def trajectory_metrics(traj, run):
     """Traction and slip summaries of one run for the μ-sweep figures; the
     total slip is the run's located one (located_total_slip) where the
-    results carry it, else the trapezoid over the output rows."""
+    results carry it, else the trapezoid over the output rows; sliding and
+    creep are runs.csv's (nan without the columns)."""
     t = traj["t"]
     ok = np.isfinite(t)
     for i in WHEELS:
@@ -516,12 +517,15 @@ def trajectory_metrics(traj, run):
     total = sum(np.hypot(traj[f"t{i}_lon"][ok], traj[f"t{i}_lat"][ok])
                 for i in WHEELS)
     integral = located_total_slip(run)
+    sliding = run.get("sliding_distance", math.nan)
+    creep = run.get("creep_distance", math.nan)
     if not is_finite(integral):
         integral = float(np.sum(0.5 * (slip_sum[1:] + slip_sum[:-1]) * np.diff(t))) \
             if t.size > 1 else math.nan
     return {"mean_abs_lon": lon,
             "mean_total_traction": float(np.mean(total)) if ok.any() else math.nan,
-            "total_slip": integral}
+            "total_slip": integral,
+            "sliding": sliding, "creep": creep}
 
 
 def located_total_slip(run):
@@ -559,15 +563,19 @@ def _scene_mu_min(ctx, scene):
     return value
 
 
-def _per_method_curve(ax, ok, metrics, key, styles):
+def _per_method_curve(ax, ok, metrics, key, styles, positive=False):
+    """Each method's median of metrics[key] against μ; with positive (a log
+    axis) values <= 0 are left out of the drawing (not of the returned
+    curves) instead of being dropped silently by the axis."""
     curves = {}
     for method in sel.method_names(ok):
         mine = sorted((r["mu"], metrics[r["run_id"]][key]) for r in ok
                       if r["method"] == method)
         mus = sorted({m for m, _ in mine})
         vals = [float(np.nanmedian([v for m, v in mine if m == mu])) for mu in mus]
+        drawn = [v if v > 0 or not positive else math.nan for v in vals]
         style = styles.get(method) or method_style(method)
-        ax.plot(mus, vals, label=method, **plot_style(style))
+        ax.plot(mus, drawn, label=method, **plot_style(style))
         curves[method] = list(zip(mus, vals))
     return curves
 
@@ -632,8 +640,9 @@ def _scene_title(ctx, scene, rows):
                        omit=("mu",)) or scene
 
 
-def _sweep_legend(fig, gs_cell, ok, failed, styles):
+def _sweep_legend(fig, gs_cell, ok, failed, styles, more=()):
     extra = [Line2D([], [], color="grey", linestyle=":", label="μ_min(ref): friction\nthe scene needs")]
+    extra.extend(more)
     if failed:
         extra.append(Line2D([], [], marker="x", color="#444444", markeredgewidth=2,
                             linestyle="none", label="failed at this μ"))
@@ -751,33 +760,87 @@ def _main_method(ctx, ok):
     return names[0]
 
 
+CREEP_COLOUR = "#9a9a9a"
+
+
+def _split_slip(ok, metrics):
+    """True when every run carries its located sliding and creep distances
+    (runs.csv sliding_distance, creep_distance): Fig. 14 then draws them
+    apart; else the total (the trapezoid over the output rows) as before."""
+    return bool(ok) and all(is_finite(metrics[r["run_id"]]["sliding"])
+                            and is_finite(metrics[r["run_id"]]["creep"]) for r in ok)
+
+
+def _creep_curves(ax, ok, metrics, styles):
+    """Each method's creep distance against μ, grey and thin: the friction
+    regularisation (proportional to ε), drawn beside the sliding, never in
+    a method's colour."""
+    curves = {}
+    for method in sel.method_names(ok):
+        mine = sorted((r["mu"], metrics[r["run_id"]]["creep"]) for r in ok
+                      if r["method"] == method)
+        mus = sorted({m for m, _ in mine})
+        vals = [float(np.nanmedian([v for m, v in mine if m == mu])) for mu in mus]
+        style = styles.get(method) or method_style(method)
+        ax.plot(mus, vals, color=CREEP_COLOUR, marker=style.marker,
+                markerfacecolor="none", linestyle=style.linestyle, linewidth=0.9,
+                markersize=4, zorder=1)
+        curves[method] = list(zip(mus, vals))
+    return curves
+
+
+def _slip_panel(ax, mine_ok, metrics, styles, split, log):
+    """One scene's curves: (sliding or total curves, creep curves or {},
+    whether the scene slides at all)."""
+    key = "sliding" if split else "total_slip"
+    curves = _per_method_curve(ax, mine_ok, metrics, key, styles, positive=log)
+    if not split:
+        return curves, {}, True
+    creep = _creep_curves(ax, mine_ok, metrics, styles)
+    slides = any(v > 0 for c in curves.values() for _, v in c)
+    if mine_ok and not slides:
+        ax.text(0.5, 0.62, "no sliding at any μ\n(sliding_distance = 0):\n"
+                "grey is creep only, ∝ ε", transform=ax.transAxes, ha="center",
+                va="center", fontsize=8, color="#333333",
+                bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.85})
+    return curves, creep, slides
+
+
 def figure_total_slip_vs_mu(ctx):
     scenes, ok, metrics, failed = _sweep_data(ctx)
     n = len(scenes)
     fig = new_figure(4.4 * n + 2.6, 4.6)
     gs = fig.add_gridspec(1, n + 1, width_ratios=[1] * n + [0.6])
-    values = [metrics[r["run_id"]]["total_slip"] for r in ok]
+    split = _split_slip(ok, metrics)
+    values = [metrics[r["run_id"]][k] for r in ok
+              for k in (("sliding", "creep") if split else ("total_slip",))]
     log = spans_decades(values, 1.0)
     panels, share = [], None
     for k, scene in enumerate(scenes):
         ax = fig.add_subplot(gs[0, k], sharey=share)
         share = share or ax
         mine_ok = [r for r in ok if r["scene"] == scene]
-        curves = _per_method_curve(ax, mine_ok, metrics, "total_slip", ctx.styles)
+        curves, creep, slides = _slip_panel(ax, mine_ok, metrics, ctx.styles,
+                                            split, log)
         _mark_failures(ax, [r for r in failed if r["scene"] == scene])
         mu_min = _scene_mu_min(ctx, scene)
         _mu_min_line(ax, mu_min)
         if log:
             ax.set_yscale("log")
         ax.set_xlabel("friction coefficient μ [-]")
-        ax.set_ylabel("total slip ∫Σ_i ‖s_i‖ dt [m]")
+        ax.set_ylabel("slip distance ∫Σ_i ‖s_i‖ dt [m]" if split else
+                      "total slip ∫Σ_i ‖s_i‖ dt [m]")
         title = _scene_title(ctx, scene, mine_ok + failed)
         ax.set_title(title, fontsize=9)
         if not mine_ok:
             no_data(ax, "no successful run")
         panels.append({"scene": scene, "methods": sorted(curves), "mu_min": mu_min,
-                       "curves": curves, "title": title})
-    _sweep_legend(fig, gs[0, n], ok, failed, ctx.styles)
+                       "curves": curves, "creep_curves": creep, "slides": slides,
+                       "title": title})
+    extra = ([Line2D([], [], color=CREEP_COLOUR, marker="o", markerfacecolor="none",
+                     linewidth=0.9, label="creep: friction\nregularisation (∝ ε),\nnot physics")]
+             if split else [])
+    _sweep_legend(fig, gs[0, n], ok, failed, ctx.styles, extra)
     mu, per_scene = _common_mu_ratio(ctx, scenes, ok, metrics, "total_slip")
     regimes = _slip_regimes(ok, mu)
     headline = ""
@@ -790,26 +853,33 @@ def figure_total_slip_vs_mu(ctx):
         (low_s, low_v), (high_s, high_v) = ordered[0], ordered[-1]
         headline += f" {low_s} slides {fmt(high_v / low_v, 2)}× less than {high_s}."
     needs = _mu_min_needs(panels)
+    what = (
+        "The slip holds two regimes (docs/model.md §7.5), drawn apart: sliding "
+        "on the friction cone (method colours: the physics) and creep below it "
+        "(grey, thin: the friction regularisation, proportional to ε, not "
+        "physics); a pvc robot never slides, so its panel shows creep only and "
+        "is not compared with paper mode's sliding. Each point is the run's own "
+        "integral (runs.csv sliding_distance and creep_distance, its switches "
+        "located, independent of the output grid)." if split else
+        "The total slip holds two regimes (docs/model.md §7.5): sliding on the "
+        "friction cone, and creep below it, which is the friction "
+        "regularisation (proportional to ε), not physics; these results carry "
+        "no sliding_distance / creep_distance columns, so each point is the "
+        "trapezoid over the output rows (it depends on the output grid) and the "
+        "two regimes are not drawn apart.")
     caption = (
         "Fig. 14 — the paper shows the accumulated slip falling as μ grows and "
         "the passive variable camber slipping far less than the fixed camber, "
         "at the price of needing more friction. One panel per scene/mode on a "
-        "shared axis (never averaged over them), one curve per method. The "
-        "total slip holds two regimes (docs/model.md §7.5): sliding on the "
-        "friction cone, and creep below it, which is the friction "
-        "regularisation (proportional to ε), not physics; a pvc robot never "
-        "slides, so its curve is creep only and is not compared with paper "
-        "mode's sliding. Each point is the run's own integral (runs.csv "
-        "sliding_distance + creep_distance, its switches located, independent "
-        "of the output grid; the trapezoid over the output rows only for "
-        "results without those columns)." + headline
+        "shared axis (never averaged over them), one curve per method. " + what
+        + headline
         + (f" {needs} (μ_min(ref), dotted)." if needs else
            " μ_min not drawn (these results carry no ref_mu_min column).")
         + f" {_failed_text(failed)}.")
     record = save_figure(fig, ctx.out_dir, "fig14_total_slip_vs_mu",
                          "Fig. 14 — total slip vs μ", caption)
     record.data = {"panels": panels, "compare_mu": mu, "per_scene": per_scene,
-                   "regimes": regimes}
+                   "regimes": regimes, "split": split}
     return record
 
 
