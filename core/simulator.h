@@ -296,6 +296,8 @@ class Simulator {
   bool JumpSuspected(bool structure_changed);
   const Eigen::VectorXd& InterpolateKnown(double tm, double t_end);
   void RestartAtSwitches(double t, SimulationResult* result);
+  // The class test's slips at the sample just solved (session class_now).
+  void ClassSlips(SimulationResult* result);
   // Solution jumps (core/solution_jumps.h) between the last sample and t:
   // appends their events; true if one was located.
   bool LocateSolutionJump(double t, SimulationResult* result);

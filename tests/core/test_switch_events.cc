@@ -235,6 +235,51 @@ TEST(SwitchEvents, ACreepingWheelsReversalIsLocatedAboveTheNoiseFloor) {
   EXPECT_FALSE(IsReversal(Eigen::Vector2d(200 * kEps, 0), large, kEps));
 }
 
+// A creeping wheel's slip that turns steeply (its traction's turn, width ~
+// eps/|s'|) is already past 0.1 eps at the far end b of the located
+// bracket, so the piece before the split, [t0, b], holds the same sign
+// change: it is one reversal, recorded once. Searching that piece again
+// recorded it twice (overlapping brackets: 39 runs of the default suite),
+// or, when the second search could not narrow, ended the piece's search
+// and hid another wheel's reversal there (the bumpy scene's wheel 2 at
+// 0.154 and 0.177 s, Delta t = 0.4 s). Wheel 2 here slides through a
+// reversal at 9.0801 s: its stick window, |s| < 100 eps, is located too.
+TEST(SwitchEvents, ASteepCreepReversalIsRecordedOnce) {
+  const double t0 = 9.05, t1 = 9.10, t2 = 9.0801;
+  const double half_window = 100.0 / 300.0 * 0.01;  // |s2| < kappa eps
+  for (int k = 0; k < 40; ++k) {
+    const double tr = 9.0512345 + 0.00123 * k;
+    auto slips = [&](double t) -> std::array<Eigen::Vector2d, 3> {
+      return {
+          3 * kEps * std::tanh((t - tr) / 1e-10) * Eigen::Vector2d(0.6, -0.8),
+          300 * kEps * (t - t2) / 0.01 * Eigen::Vector2d(1.0, 0.0),
+          Eigen::Vector2d(6e-5, 0.0)};
+    };
+    SlipVectorEvaluator evaluate = [&](double t,
+                                       std::array<Eigen::Vector2d, 3>* s) {
+      *s = slips(t);
+      return true;
+    };
+    std::vector<SwitchEvent> out;
+    LocateSwitchesAndReversals(t0, t1, slips(t0), slips(t1), kEps, 1e-9,
+                               evaluate, &out);
+    std::vector<SwitchEvent> reversals, changes;
+    for (const SwitchEvent& e : out)
+      (e.reversal ? reversals : changes).push_back(e);
+    ASSERT_EQ(reversals.size(), 1u) << "tr = " << tr;
+    EXPECT_EQ(reversals[0].wheel, 1);
+    EXPECT_LE(reversals[0].t_lower, tr + 1e-12);
+    EXPECT_GE(reversals[0].t_upper, tr - 1e-12);
+    ASSERT_EQ(changes.size(), 2u) << "tr = " << tr;
+    EXPECT_EQ(changes[0].wheel, 2);
+    EXPECT_TRUE(changes[0].from_sliding);
+    EXPECT_NEAR(changes[0].t, t2 - half_window, 1e-8);
+    EXPECT_EQ(changes[1].wheel, 2);
+    EXPECT_TRUE(changes[1].to_sliding);
+    EXPECT_NEAR(changes[1].t, t2 + half_window, 1e-8);
+  }
+}
+
 TEST(SwitchEvents, TheCreepBandLiesBelowTheSlidingThreshold) {
   const double at = kSwitchSlipOverEpsilon * kEps;
   EXPECT_FALSE(InSwitchBand(0.5 * kSwitchBandSlipOverEpsilon * kEps, kEps));
@@ -339,6 +384,44 @@ SimulationResult RunPaper(double dt, Coupling coupling, bool locate,
   o.t_end = t_end;
   o.locate_switches = locate;
   return Simulator(PaperScene(), o).Run();
+}
+
+// At a loose nlp_tol (1e-6) a sample's root fixes a slip near the sliding
+// level only to about that level, so the class test reads refined copies of
+// the samples (ClassSlips, model.md §8.6): the run has the default
+// tolerance's class changes, none of them closing onto a sample. Reading
+// the samples' own slips, wheel 3 "switched" at 2.95 s and at each sample
+// from 3.05 to 3.55 s and back, and wheel 1 at t = 0.
+TEST(SwitchEvents, ALooseToleranceRunSwitchesWhereTheDefaultOneDoes) {
+  SimulationOptions o = BuiltinOptions("rk-projection", Coupling::kZoh, 0.05);
+  o.t_end = 3.6;
+  const SimulationResult exact = Simulator(PaperScene(), o).Run();
+  o.quasi_static.residual_tolerance = 1e-6;
+  const SimulationResult loose = Simulator(PaperScene(), o).Run();
+  ASSERT_TRUE(exact.success()) << exact.stop_reason;
+  ASSERT_TRUE(loose.success()) << loose.stop_reason;
+  auto changes = [](const SimulationResult& r) {
+    std::vector<SwitchEvent> out;
+    for (const SwitchEvent& e : r.switches)
+      if (!e.jump) out.push_back(e);
+    return out;
+  };
+  const std::vector<SwitchEvent> a = changes(exact), b = changes(loose);
+  ASSERT_EQ(a.size(), 2u);  // wheel 1 starts to slide, wheel 3 stops
+  ASSERT_EQ(b.size(), a.size());
+  for (std::size_t j = 0; j < a.size(); ++j) {
+    EXPECT_EQ(b[j].wheel, a[j].wheel);
+    EXPECT_EQ(b[j].from_sliding, a[j].from_sliding);
+    EXPECT_EQ(b[j].to_sliding, a[j].to_sliding);
+    // The loose roots move the path itself: 2.9030289 vs 2.9030305 s and
+    // 2.9194294 vs 2.9194309 s measured (the samples are 0.05 s apart).
+    EXPECT_NEAR(b[j].t, a[j].t, 1e-5);
+    const double k = std::round(b[j].t_lower / 0.05);
+    EXPECT_GT(std::abs(b[j].t_lower - k * 0.05), 1e-12) << b[j].t;
+    EXPECT_GT(std::abs(b[j].t_upper - std::round(b[j].t_upper / 0.05) * 0.05),
+              1e-12)
+        << b[j].t;
+  }
 }
 
 // The paper scene's first switch: wheel 1 starts sliding at ~2.9029 s
