@@ -310,6 +310,49 @@ TEST(SwitchEvents, AFailedEvaluationLeavesTheSwitchUnlocated) {
                std::invalid_argument);
 }
 
+// A probe that cannot be solved (a backend that stalls near a switch) is
+// replaced by one beside it: the switch is still located to the tolerance.
+// Failing every evaluation in a band of the interval left it unlocated in
+// the bracket narrowed so far.
+TEST(SwitchEvents, AFailedProbeIsReplacedByOneBesideIt) {
+  const double ts = 0.3141, at = kSwitchSlipOverEpsilon * kEps;
+  // Wheel 1's slip falls through the sliding level at ts (log |s| is not
+  // linear in t, so the location probes the interval's inside).
+  auto slip = [&](double t) {
+    return at * std::exp(-std::sinh((t - ts) / 0.05));
+  };
+  int bands = 0, probed = 0;
+  for (const double side : {-1.0, 1.0}) {
+    for (const double dist : {3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 1e-5}) {
+      // Every evaluation fails in a band dist .. 2 dist from ts.
+      const double lo = ts + side * dist, hi = ts + side * 2 * dist;
+      int failed = 0;
+      SlipEvaluator evaluate = [&](double t, std::array<double, 3>* s) {
+        if (t > std::min(lo, hi) && t < std::max(lo, hi)) {
+          ++failed;
+          return false;
+        }
+        *s = {slip(t), 0.0, 0.0};
+        return true;
+      };
+      std::vector<SwitchEvent> out;
+      ASSERT_EQ(LocateSwitches(0.0, 1.0, {slip(0.0), 0, 0}, {slip(1.0), 0, 0},
+                               kEps, 1e-9, evaluate, &out),
+                1);
+      ++bands;
+      probed += failed > 0;
+      EXPECT_TRUE(out[0].located) << side * dist;
+      EXPECT_LE(out[0].t_upper - out[0].t_lower, 1e-9) << side * dist;
+      EXPECT_LE(out[0].t_lower, ts + 1e-12) << side * dist;
+      EXPECT_GE(out[0].t_upper, ts - 1e-12) << side * dist;
+    }
+  }
+  // Brent's steps jump over most bands: 3 of the 14 were probed (the one
+  // at -3e-4 left the switch unlocated before EvalNearby).
+  EXPECT_EQ(bands, 14);
+  EXPECT_GE(probed, 3);
+}
+
 // y' = max(0, t - c): y'' jumps at c, so one classical RK4 step across c
 // errs by O(h^3); resolved, the pieces that do not straddle c are exact
 // (y is piecewise quadratic) and the one that does is refined until the
