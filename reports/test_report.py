@@ -1268,6 +1268,57 @@ class BorrowedCauseTextTest(unittest.TestCase):
         self.assertIn("err_stop_t", text)
         self.assertEqual(figures_methods._borrowed_cause_text(cells[1:2]), "")
 
+class EventFindingsTest(unittest.TestCase):
+    """The key finding on the located events themselves: unlocated events,
+    one event recorded twice, brackets closing onto an output sample (each
+    a defect of the location once, docs/model.md §8.6)."""
+
+    class Store:
+        def __init__(self, events):
+            self.events = events
+
+        def switches(self, run):
+            return self.events.get(run["run_id"])
+
+    @staticmethod
+    def event(t, wheel=1, kind="switch", located=True, lower=None):
+        return {"t": t, "wheel": wheel, "from": "stick", "to": "slide",
+                "located": located, "kind": kind,
+                "t_lower": t - 7e-10 if lower is None else lower, "t_upper": t}
+
+    def test_clean_events_read_clean(self):
+        from quasiroll_report import findings
+        runs = [{"run_id": "a", "dt": 0.05}, {"run_id": "b", "dt": 0.05}]
+        store = self.Store({"a": [self.event(2.9031), self.event(9.0933, 3, "creep_reversal")],
+                            "b": None})
+        text = findings.event_findings(runs, store)[0]
+        self.assertIn("1 runs): 1 creep reversal, 1 switch rows", text)
+        self.assertIn("every one located to the switch tolerance, none recorded twice",
+                      text)
+
+    def test_each_defect_is_named(self):
+        from quasiroll_report import findings
+        runs = [{"run_id": "loose", "dt": 0.05}, {"run_id": "twice", "dt": 0.025},
+                {"run_id": "failed", "dt": 0.4}]
+        store = self.Store({
+            # A bracket closing onto the sample at 3.05 s (and its twin back).
+            "loose": [self.event(3.05, 3, lower=3.05 - 7.45e-10),
+                      self.event(3.05 + 7.45e-10, 3, lower=3.05)],
+            "twice": [self.event(9.0932758512, 3, "creep_reversal"),
+                      self.event(9.0932758518, 3, "creep_reversal")],
+            "failed": [self.event(1.1109, located=False, lower=1.1107)],
+            # Three wheels' rows of one jump are not twins.
+        })
+        store.events["failed"] += [self.event(2.0, w, "solution_jump") for w in (1, 2, 3)]
+        text = findings.event_findings(runs, store)[0]
+        self.assertIn("1 not located (their solves failed inside the bracket) in 1 runs, "
+                      "e.g. failed wheel 1 at 1.1109 s", text)
+        self.assertIn("2 recorded twice", text)
+        self.assertIn("e.g. loose wheel 3", text)
+        self.assertIn("2 with a bracket closing onto an output sample", text)
+        self.assertNotIn("every one located", text)
+
+
 class StopLocationFindingsTest(unittest.TestCase):
     """The key finding on located stops: per coupling, the span of
     err_stop_t, and the runs farther from the reference's stop than the

@@ -389,8 +389,9 @@ def read_trajectory(path):
 
 def read_switches(path):
     """switches/<run_id>.csv (docs/formats.md) as a list of dicts with t,
-    wheel, from, to, located and kind ("switch", "creep_reversal" or
-    "solution_jump"; files from before the column: "switch"); None if the
+    wheel, from, to, located, kind ("switch", "creep_reversal" or
+    "solution_jump"; files from before the column: "switch") and the
+    bracket t_lower, t_upper (nan without the columns); None if the
     file does not exist (a run from before the file was written, or from a
     merge that did not copy it)."""
     if not os.path.isfile(path):
@@ -405,7 +406,9 @@ def read_switches(path):
             rows.append({"t": parse_number(row["t"]), "wheel": int(row["wheel"]),
                          "from": row["from"], "to": row["to"],
                          "located": row["located"] == "true",
-                         "kind": row.get("kind") or "switch"})
+                         "kind": row.get("kind") or "switch",
+                         "t_lower": parse_number(row.get("t_lower") or "nan"),
+                         "t_upper": parse_number(row.get("t_upper") or "nan")})
         except ValueError:
             raise ReportError(f"{label}: a row has a non-number") from None
     return rows

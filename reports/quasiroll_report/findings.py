@@ -153,6 +153,76 @@ def stop_location_findings(runs):
     return out
 
 
+# Two events of one wheel and kind closer than this are one event recorded
+# twice [s] (the location's brackets are 1e-9 s wide).
+EVENT_TWIN_S = 1e-6
+
+
+def _onto_sample(event, dt):
+    """Whether a located event's bracket closes onto an output sample k dt:
+    then that sample's own solve decided the event, not the location."""
+    if not (is_finite(dt) and dt > 0 and event["located"]):
+        return False
+    ends = [t for t in (event["t_lower"], event["t_upper"]) if is_finite(t)]
+    return any(abs(t - round(t / dt) * dt) <= 1e-12 * max(1.0, abs(t)) for t in ends)
+
+
+def _event_text(label, found, rows):
+    """'<n> <label>, e.g. <run> at <t> s' or ''."""
+    if not found:
+        return ""
+    run, event = found[0]
+    return (f"; {len(found)} {label} in {len({r['run_id'] for r, _ in found})} runs, "
+            f"e.g. {run['run_id']} wheel {event['wheel']} at {fmt(event['t'], 10)} s")
+
+
+def event_findings(runs, store):
+    """What the located events of the runs (switches/<run_id>.csv) say about
+    the location itself: how many were left unlocated (the solves failed
+    inside the bracket), one wheel's events of one kind closer than
+    EVENT_TWIN_S (one event recorded twice), and brackets that close onto
+    an output sample (decided by that sample's solve). Each was once a
+    defect of the location (docs/model.md §8.6); none is expected."""
+    if store is None:  # no results directory to read them from
+        return []
+    kinds, files = {}, 0
+    unlocated, twins, onto = [], [], []
+    for run in runs:
+        events = store.switches(run)
+        if not events:
+            continue
+        files += 1
+        dt = run.get("dt", math.nan)
+        for e in events:
+            kinds[e["kind"]] = kinds.get(e["kind"], 0) + 1
+            if not e["located"]:
+                unlocated.append((run, e))
+            elif e["kind"] != "solution_jump" and _onto_sample(e, dt):
+                onto.append((run, e))
+        by_key = {}
+        for e in events:
+            by_key.setdefault((e["wheel"], e["kind"]), []).append(e["t"])
+        for (wheel, kind), times in by_key.items():
+            times.sort()
+            for t0, t1 in zip(times, times[1:]):
+                if t1 - t0 < EVENT_TWIN_S:
+                    twins.append((run, {"wheel": wheel, "t": t0}))
+    if not kinds:
+        return []
+    counts = ", ".join(f"{n} {k.replace('_', ' ')}" for k, n in sorted(kinds.items()))
+    problems = (_event_text("not located (their solves failed inside the bracket)",
+                            unlocated, runs)
+                + _event_text(f"recorded twice (one wheel and kind within {fmt(EVENT_TWIN_S)} s)",
+                              twins, runs)
+                + _event_text("with a bracket closing onto an output sample (decided by "
+                              "that sample's solve, not located)", onto, runs))
+    text = f"Located events (switches/<run_id>.csv, {files} runs): {counts} rows"
+    text += problems if problems else (
+        "; every one located to the switch tolerance, none recorded twice, none "
+        "closing onto an output sample")
+    return [text + "."]
+
+
 def _motion_counts(run):
     """Whether a run's qs_inertia_ratio measures the problem's motion: every
     run up to its t_reached, failed ones included, except numerical failures
@@ -413,6 +483,7 @@ def key_findings(ctx, records):
             + epsilon_findings(ctx.runs)
             + stability_findings(ctx.runs, ctx.references)
             + stop_location_findings(ctx.runs)
+            + event_findings(ctx.runs, getattr(ctx, "trajectories", None))
             + qs_findings(ctx.runs, ctx.references, ctx.meta) + kkt_findings(ctx.runs))
 
 
