@@ -1268,6 +1268,32 @@ class BorrowedCauseTextTest(unittest.TestCase):
         self.assertIn("err_stop_t", text)
         self.assertEqual(figures_methods._borrowed_cause_text(cells[1:2]), "")
 
+class FailureStripTest(unittest.TestCase):
+    """Figs. 13-14 mark failed runs by crosses in a grey strip along the
+    bottom; the data must lie above it, or a cross reads as a value (it sat
+    on the pvc traction curve at 8.3 N)."""
+
+    def test_data_lie_above_the_strip(self):
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from quasiroll_report import figures_paper as fp
+        for log in (False, True):
+            fig, ax = plt.subplots()
+            ys = [1.3e-7, 1e-3] if log else [8.3, 32.0]
+            ax.plot([0.5, 0.8], ys)
+            if log:
+                ax.set_yscale("log")
+            failed = [dict(mu=0.2, method="newton/rk-projection/zoh", status="INFEASIBLE_FRICTION",
+                           cause="physical", cause_detail="friction_limit")]
+            fp._mark_failures(ax, failed)
+            fp._room_for_failures([ax])
+            lowest = ax.transAxes.inverted().transform(
+                ax.transData.transform((0.5, min(ys))))[1]
+            self.assertGreater(lowest, 0.12, log)
+            plt.close(fig)
+
+
 class EventFindingsTest(unittest.TestCase):
     """The key finding on the located events themselves: unlocated events,
     one event recorded twice, brackets closing onto an output sample (each

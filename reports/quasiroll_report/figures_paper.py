@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 from matplotlib.lines import Line2D
-from matplotlib.patches import Patch
+from matplotlib.patches import Patch, Rectangle
 from matplotlib.transforms import blended_transform_factory
 
 from . import selection as sel
@@ -581,11 +581,19 @@ def _per_method_curve(ax, ok, metrics, key, styles, positive=False):
 
 
 def _mark_failures(ax, failed):
+    """A cross per failed run at its μ, in a grey strip along the bottom of
+    the axes: the strip keeps them apart from the data, and their height
+    carries no value (they would read as a traction or a slip otherwise)."""
     trans = blended_transform_factory(ax.transData, ax.transAxes)
+    if failed:
+        strip = Rectangle((0, 0), 1, 0.12, transform=ax.transAxes,
+                          facecolor="#eeeeee", edgecolor="none", zorder=0)
+        strip.failure_strip = True
+        ax.add_patch(strip)
     labelled = set()
     for k, r in enumerate(sorted(failed, key=lambda r: (r["mu"], r["method"]))):
         colour = method_style(r["method"])[0]
-        ax.plot([r["mu"]], [0.04 + 0.03 * (k % 3)], marker="x", color=colour,
+        ax.plot([r["mu"]], [0.03 + 0.03 * (k % 3)], marker="x", color=colour,
                 markersize=9, markeredgewidth=2, transform=trans, linestyle="none")
         cls, detail = sel.failure_cause(r)
         text = r["status"] if cls == sel.UNKNOWN else f"{cls}: {detail}"
@@ -593,6 +601,20 @@ def _mark_failures(ax, failed):
             labelled.add((r["mu"], text))
             ax.text(r["mu"], 0.14, " " + text, rotation=90, fontsize=6.5,
                     ha="center", va="bottom", transform=trans, color="#333333")
+
+
+def _room_for_failures(axes, strip=0.12):
+    """Lowers the y-limit of the axes that carry a failure strip
+    (_mark_failures) until their data lie above the strip (shared axes move
+    together): the crosses never sit on a curve."""
+    for ax in axes:
+        if not any(getattr(p, "failure_strip", False) for p in ax.patches):
+            continue
+        lo, hi = ax.get_ylim()
+        log = ax.get_yscale() == "log"
+        a, b = (math.log10(lo), math.log10(hi)) if log else (lo, hi)
+        a -= (strip + 0.03) * (b - a) / (1 - strip - 0.03)
+        ax.set_ylim(10 ** a if log else a, hi)
 
 
 def _mu_min_line(ax, mu_min):
@@ -645,7 +667,7 @@ def _sweep_legend(fig, gs_cell, ok, failed, styles, more=()):
     extra.extend(more)
     if failed:
         extra.append(Line2D([], [], marker="x", color="#444444", markeredgewidth=2,
-                            linestyle="none", label="failed at this μ"))
+                            linestyle="none", label="failed at this μ\n(grey strip: its height\ncarries no value)"))
     ax = fig.add_subplot(gs_cell)
     ax.axis("off")
     ax.legend(handles=style_legend_handles(ok, extra, styles), loc="upper left",
@@ -732,6 +754,7 @@ def figure_traction_vs_mu(ctx):
         ax_wheel.legend(loc="best", fontsize=7)
         panels.append({"scene": scene, "methods": sorted(curves), "mu_min": mu_min,
                        "curves": {m: c for m, c in curves.items()}, "title": title})
+    _room_for_failures(fig.axes)
     _sweep_legend(fig, gs[:, n], ok, failed, ctx.styles)
     mu, values = _common_mu_ratio(ctx, scenes, ok, metrics, "mean_total_traction")
     compare = (", ".join(f"{s} {fmt(v)} N" for s, v in values.items()) + f" at μ={fmt(mu)}"
@@ -840,6 +863,7 @@ def figure_total_slip_vs_mu(ctx):
     extra = ([Line2D([], [], color=CREEP_COLOUR, marker="o", markerfacecolor="none",
                      linewidth=0.9, label="creep: friction\nregularisation (∝ ε),\nnot physics")]
              if split else [])
+    _room_for_failures(fig.axes)
     _sweep_legend(fig, gs[0, n], ok, failed, ctx.styles, extra)
     mu, per_scene = _common_mu_ratio(ctx, scenes, ok, metrics, "total_slip")
     regimes = _slip_regimes(ok, mu)
