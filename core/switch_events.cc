@@ -297,13 +297,13 @@ bool IsReversal(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1,
 
 namespace {
 // LocateSwitchesAndReversals with the wheels whose reversal in [t0, t1] is
-// already recorded (bit i - 1 of `located`): the piece before a split ends
-// at the bracket's far end b, so it holds the crossing just located, and
-// s(t0) . s(b) < 0 there again; searching it again found the same crossing
-// a second time (a bracket overlapping the first: 39 of the default
-// suite's runs listed two creep reversals of one wheel ~6e-10 s apart), or
-// the second search could not narrow and ended the loop, hiding another
-// wheel's reversal in that piece.
+// already recorded (bit i - 1 of located_reversals): the piece before a
+// split ends at the bracket's far end b, so it holds the crossing just
+// located, and s(t0) . s(b) < 0 there again; searching it again found the
+// same crossing a second time (a bracket overlapping the first: 39 of the
+// default suite's runs listed two creep reversals of one wheel ~6e-10 s
+// apart), or the second search could not narrow and ended the loop, hiding
+// another wheel's reversal in that piece.
 int LocateInPiece(double t0, double t1,
                   const std::array<Eigen::Vector2d, 3>& slip0,
                   const std::array<Eigen::Vector2d, 3>& slip1, double epsilon,

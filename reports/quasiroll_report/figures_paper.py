@@ -563,21 +563,32 @@ def _scene_mu_min(ctx, scene):
     return value
 
 
-def _per_method_curve(ax, ok, metrics, key, styles, positive=False):
-    """Each method's median of metrics[key] against μ; with positive (a log
-    axis) values <= 0 are left out of the drawing (not of the returned
-    curves) instead of being dropped silently by the axis."""
-    curves = {}
+def _method_medians(ok, metrics, key, styles):
+    """(method, its style, μ values, median of metrics[key] at each μ) per
+    method of the runs ok."""
     for method in sel.method_names(ok):
         mine = sorted((r["mu"], metrics[r["run_id"]][key]) for r in ok
                       if r["method"] == method)
         mus = sorted({m for m, _ in mine})
         vals = [float(np.nanmedian([v for m, v in mine if m == mu])) for mu in mus]
+        yield method, styles.get(method) or method_style(method), mus, vals
+
+
+def _per_method_curve(ax, ok, metrics, key, styles, positive=False):
+    """Each method's median of metrics[key] against μ; with positive (a log
+    axis) values <= 0 are left out of the drawing (not of the returned
+    curves) instead of being dropped silently by the axis."""
+    curves = {}
+    for method, style, mus, vals in _method_medians(ok, metrics, key, styles):
         drawn = [v if v > 0 or not positive else math.nan for v in vals]
-        style = styles.get(method) or method_style(method)
         ax.plot(mus, drawn, label=method, **plot_style(style))
         curves[method] = list(zip(mus, vals))
     return curves
+
+
+# Height of the strip along the bottom of a μ-sweep panel that holds the
+# failed runs' crosses (axes fraction).
+FAILURE_STRIP = 0.12
 
 
 def _mark_failures(ax, failed):
@@ -586,7 +597,7 @@ def _mark_failures(ax, failed):
     carries no value (they would read as a traction or a slip otherwise)."""
     trans = blended_transform_factory(ax.transData, ax.transAxes)
     if failed:
-        strip = Rectangle((0, 0), 1, 0.12, transform=ax.transAxes,
+        strip = Rectangle((0, 0), 1, FAILURE_STRIP, transform=ax.transAxes,
                           facecolor="#eeeeee", edgecolor="none", zorder=0)
         strip.failure_strip = True
         ax.add_patch(strip)
@@ -603,7 +614,7 @@ def _mark_failures(ax, failed):
                     ha="center", va="bottom", transform=trans, color="#333333")
 
 
-def _room_for_failures(axes, strip=0.12):
+def _room_for_failures(axes, strip=FAILURE_STRIP):
     """Lowers the y-limit of the axes that carry a failure strip
     (_mark_failures) until their data lie above the strip (shared axes move
     together): the crosses never sit on a curve."""
@@ -799,12 +810,7 @@ def _creep_curves(ax, ok, metrics, styles):
     regularisation (proportional to ε), drawn beside the sliding, never in
     a method's colour."""
     curves = {}
-    for method in sel.method_names(ok):
-        mine = sorted((r["mu"], metrics[r["run_id"]]["creep"]) for r in ok
-                      if r["method"] == method)
-        mus = sorted({m for m, _ in mine})
-        vals = [float(np.nanmedian([v for m, v in mine if m == mu])) for mu in mus]
-        style = styles.get(method) or method_style(method)
+    for method, style, mus, vals in _method_medians(ok, metrics, "creep", styles):
         ax.plot(mus, vals, color=CREEP_COLOUR, marker=style.marker,
                 markerfacecolor="none", linestyle=style.linestyle, linewidth=0.9,
                 markersize=4, zorder=1)

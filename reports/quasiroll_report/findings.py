@@ -167,7 +167,7 @@ def _onto_sample(event, dt):
     return any(abs(t - round(t / dt) * dt) <= 1e-12 * max(1.0, abs(t)) for t in ends)
 
 
-def _event_text(label, found, rows):
+def _event_text(label, found):
     """'<n> <label>, e.g. <run> at <t> s' or ''."""
     if not found:
         return ""
@@ -211,11 +211,11 @@ def event_findings(runs, store):
         return []
     counts = ", ".join(f"{n} {k.replace('_', ' ')}" for k, n in sorted(kinds.items()))
     problems = (_event_text("not located (their solves failed inside the bracket)",
-                            unlocated, runs)
+                            unlocated)
                 + _event_text(f"recorded twice (one wheel and kind within {fmt(EVENT_TWIN_S)} s)",
-                              twins, runs)
+                              twins)
                 + _event_text("with a bracket closing onto an output sample (decided by "
-                              "that sample's solve, not located)", onto, runs))
+                              "that sample's solve, not located)", onto))
     text = f"Located events (switches/<run_id>.csv, {files} runs): {counts} rows"
     text += problems if problems else (
         "; every one located to the switch tolerance, none recorded twice, none "
