@@ -57,4 +57,15 @@ double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
   return worst;
 }
 
+double QuasiStaticInertiaRatio(const SimulationResult& result,
+                               const Scene& scene) {
+  if (!result.stop_retry) return QuasiStaticInertiaRatio(result.samples, scene);
+  // The retry replaces the stop's sample, or follows the last sample when
+  // the stop has none of its own.
+  std::vector<TrajectorySample> run = result.samples;
+  if (!run.empty() && run.back().t == result.stop_retry->t) run.pop_back();
+  run.push_back(*result.stop_retry);
+  return QuasiStaticInertiaRatio(run, scene);
+}
+
 }  // namespace quasiroll

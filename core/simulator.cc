@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -140,7 +141,18 @@ class Simulator::RobotOde final : public LoopClosureOde {
   // tolerance).
   void set_follow_past_roots(bool follow) { follow_past_ = follow; }
   // Forget the coupled right-hand sides' roots (a new run).
-  void ForgetPastRoots() { past_roots_.Clear(); }
+  void ForgetPastRoots() {
+    past_roots_.Clear();
+    have_last_ok_ = false;
+  }
+  // Coupled: the time and state of the latest right-hand side whose solve
+  // converged (false before any).
+  bool LastSolved(double* t, Configuration* q) const {
+    if (!have_last_ok_) return false;
+    *t = last_ok_t_;
+    *q = last_ok_q_;
+    return true;
+  }
   // A root at time t for the coupled right-hand sides' warm starts.
   void RememberRoot(double t, const Eigen::VectorXd& z) {
     if (follow_past_) past_roots_.Remember(t, z);
@@ -168,6 +180,9 @@ class Simulator::RobotOde final : public LoopClosureOde {
       }
       kkt_residual_ = std::fmax(kkt_residual_, sol_.kkt_residual);
       RememberRoot(t, sol_.z);
+      last_ok_t_ = t;
+      last_ok_q_ = q;
+      have_last_ok_ = true;
       w = solver_->problem().JointSpaceVelocity(sol_.z);
     }
     Configuration qd;
@@ -284,6 +299,10 @@ class Simulator::RobotOde final : public LoopClosureOde {
   // analyzer (cheap path: no multipliers' derivatives) and workspaces.
   Configuration solved_q_ = Configuration::Zero();
   bool have_solved_ = false;
+  // LastSolved().
+  double last_ok_t_ = 0;
+  Configuration last_ok_q_ = Configuration::Zero();
+  bool have_last_ok_ = false;
   SensitivityAnalyzer analyzer_{[] {
     SensitivityOptions o;
     o.multipliers = false;
@@ -756,7 +775,71 @@ bool Simulator::Advance(SimulationResult* result) {
       (checkpoint_seconds - s.checkpoint_seconds_seen);
   s.checkpoint_seconds_seen = checkpoint_seconds;
   s.done = !more;
+  if (!more && result->status == ToString(QuasiStaticStatus::kSolverFailure))
+    RetryStop(result);
   return more;
+}
+
+// A solve that gave up (SOLVER_FAILURE: mu > mu_min) may be a stall or the
+// quasi-static breakaway (model.md §8.8): near it the path's twist grows
+// without bound and the solves from the path's last root fail, but a cold
+// start still finds the root (up to the breakaway itself, past which there
+// is none). The stop's state is solved that way, by the continuation
+// backend (a square-system Newton method) when one is registered, else the
+// run's: the stop's sample's state, else the stage state whose solve
+// failed, and if that has no root either, coupled, the latest right-hand
+// side's state that solved (after the last sample). The first that
+// converges is result->stop_retry; the stop reason says what they gave.
+void Simulator::RetryStop(SimulationResult* result) {
+  Session& s = *session_;
+  const std::vector<TrajectorySample>& samples = result->samples;
+  struct Candidate {
+    double t;
+    Configuration theta;
+  };
+  std::vector<Candidate> candidates;
+  const double t_stop = result->t_reached;
+  if (!samples.empty() && samples.back().t == t_stop)
+    candidates.push_back({t_stop, samples.back().theta});
+  else if (result->stop_configuration.allFinite())
+    candidates.push_back({t_stop, result->stop_configuration});
+  Candidate solved;
+  if (options_.coupling == Coupling::kCoupled &&
+      s.ode.LastSolved(&solved.t, &solved.theta) &&
+      (samples.empty() || solved.t > samples.back().t))
+    candidates.push_back(solved);
+  if (candidates.empty()) return;
+  std::unique_ptr<NlpSolver> nlp = ContinuationNlp(options_);
+  OptionValues unused;
+  if (!nlp) nlp = CreateNlp(options_, &unused);
+  QuasiStaticSolver solver(*model_, QuasiStaticParameters::FromScene(scene_),
+                           std::move(nlp), options_.quasi_static);
+  std::ostringstream os;
+  os << std::setprecision(9) << "; solved again from a cold start ("
+     << solver.nlp().name() << "):";
+  for (const Candidate& c : candidates) {
+    QuasiStaticSolution retry;
+    solver.Reset();
+    solver.Solve(c.theta, &retry);
+    os << " the state at t = " << c.t << " s: ";
+    if (retry.status != QuasiStaticStatus::kOk) {
+      os << ToString(retry.status) << " too;";
+      continue;
+    }
+    TrajectorySample sample;
+    FillSample(*model_, c.t, c.theta, retry, &sample);
+    os << "|v| = " << sample.velocity.norm()
+       << " m/s, |w| = " << sample.angular_velocity.norm() << " rad/s";
+    for (auto it = samples.rbegin(); it != samples.rend(); ++it) {
+      if (!(it->t < c.t) || !it->velocity.allFinite()) continue;
+      os << " (t = " << it->t << " s: " << it->velocity.norm() << " m/s, "
+         << it->angular_velocity.norm() << " rad/s)";
+      break;
+    }
+    result->stop_retry = std::move(sample);
+    break;
+  }
+  result->stop_reason += os.str();
 }
 
 bool Simulator::Interval(SimulationResult* result) {

@@ -12,6 +12,7 @@
 
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -177,6 +178,14 @@ struct SimulationResult {
   long long checkpoint_iterations = 0;
   // The located physical stop (limit "" if none).
   StopEvent event;
+  // A run that ended with SOLVER_FAILURE: its last sample's state solved
+  // again from a cold start, with the run's backend and its fallbacks (after
+  // the run: not in the counters or wall_seconds). A root whose twist
+  // dwarfs the samples' before it is the quasi-static breakaway of model.md
+  // §8.8 (the minimum-energy problem's twist diverges along the path), not
+  // a solver's stall; QuasiStaticInertiaRatio(result, scene) reads it.
+  // Empty otherwise, or when that solve fails too.
+  std::optional<TrajectorySample> stop_retry;
   // The located stick/slide switches and creeping wheels' slip reversals
   // (SwitchEvent::reversal), in time order (locate_switches).
   std::vector<SwitchEvent> switches;
@@ -298,6 +307,7 @@ class Simulator {
   void RestartAtSwitches(double t, SimulationResult* result);
   // The class test's slips at the sample just solved (session class_now).
   void ClassSlips(SimulationResult* result);
+  void RetryStop(SimulationResult* result);
   // Solution jumps (core/solution_jumps.h) between the last sample and t:
   // appends their events; true if one was located.
   bool LocateSolutionJump(double t, SimulationResult* result);

@@ -271,11 +271,12 @@ std::vector<std::string> MakeRow(const RunSpec& run,
   FailureEvidence e = Evidence(run, status, result.t_reached, reference);
   e.drift_max = d.drift_max;
   e.gap_max = d.gap_max;
-  // The run's own motion up to its stop, on its own output grid: the value
-  // the row shows. (The reference's motion would be measured on its finer
-  // grid, where a velocity jump at a slide switch reads as a larger
-  // acceleration: not comparable with the bound.)
-  const double qs_ratio = QuasiStaticInertiaRatio(result.samples, scene);
+  // The run's own motion up to its stop, on its own output grid (with the
+  // stop's state solved again after a SOLVER_FAILURE: a breakaway's twist,
+  // model.md §8.8): the value the row shows. (The reference's motion would be
+  // measured on its finer grid, where a velocity jump at a slide switch reads
+  // as a larger acceleration: not comparable with the bound.)
+  const double qs_ratio = QuasiStaticInertiaRatio(result, scene);
   e.qs_inertia_bound = run.bounds.qs_inertia;
   e.qs_inertia_ratio = qs_ratio;
   const FailureCause cause = ClassifyFailure(e);

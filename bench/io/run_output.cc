@@ -373,6 +373,26 @@ void WriteStopEvent(const StopEvent& e, JsonWriter* json) {
   j.EndObject();
 }
 
+namespace {
+// "stop_retry": after a SOLVER_FAILURE stop, the stop's state solved again
+// from a cold start (model.md §8.8, the breakaway); null otherwise or if
+// none solved.
+void WriteStopRetry(const std::optional<TrajectorySample>& retry,
+                    JsonWriter* json) {
+  JsonWriter& j = *json;
+  j.Key("stop_retry");
+  if (!retry) {
+    j.Null();
+    return;
+  }
+  j.BeginObject();
+  j.Key("t").Value(retry->t);
+  j.Key("speed").Value(retry->velocity.norm());
+  j.Key("angular_speed").Value(retry->angular_velocity.norm());
+  j.EndObject();
+}
+}  // namespace
+
 // The located stick/slide switches (core/switch_events.h, docs/formats.md).
 void WriteSwitches(const std::vector<SwitchEvent>& switches, JsonWriter* json) {
   JsonWriter& j = *json;
@@ -427,7 +447,8 @@ std::string RunJson(const Scene& scene, const SimulationOptions& options,
   j.Key("wall_s").Value(r.wall_seconds);
   j.Key("kkt_residual").Value(r.kkt_residual);
   j.Key("step_drift_max").Value(r.step_drift_max);
-  j.Key("qs_inertia_ratio").Value(QuasiStaticInertiaRatio(r.samples, scene));
+  j.Key("qs_inertia_ratio").Value(QuasiStaticInertiaRatio(r, scene));
+  WriteStopRetry(r.stop_retry, &j);
   const SlipDistances slip = TotalSlipDistances(r.samples);
   j.Key("sliding_distance").Value(slip.sliding);
   j.Key("creep_distance").Value(slip.creep);
