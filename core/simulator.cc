@@ -299,7 +299,8 @@ class Simulator::RobotOde final : public LoopClosureOde {
   // analyzer (cheap path: no multipliers' derivatives) and workspaces.
   Configuration solved_q_ = Configuration::Zero();
   bool have_solved_ = false;
-  // LastSolved().
+  // LastSolved(): unlike solved_q_, which RhsJacobian clears before its own
+  // solve, the latest success survives a failed solve, and has its time.
   double last_ok_t_ = 0;
   Configuration last_ok_q_ = Configuration::Zero();
   bool have_last_ok_ = false;
@@ -1380,10 +1381,8 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
       }
     }
     const Configuration q = DenseState(tm);
-    if (ends) s.probe_solver->SetWarmStart(InterpolateKnown(tm, t));
-    s.probe_solver->Solve(q, &probe);
-    if (refine) s.probe_solver->Refine(kLocationResidualTolerance, &probe);
-    AddSolveCounts(probe, result);
+    SolveProbe(q, ends ? &InterpolateKnown(tm, t) : nullptr, refine, &probe,
+               result);
     if (probe.status != QuasiStaticStatus::kOk) return false;
     for (int i = 0; i < 3; ++i) (*slip)[i] = probe.contacts[i].slip;
     RememberProbe(tm, probe);
@@ -1444,9 +1443,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
 void Simulator::SizeProbeSolvers(SimulationResult* result) {
   Session& s = *session_;
   const Eigen::VectorXd& z = s.sol.z;
-  s.probe_solver->SetWarmStart(z);
-  s.probe_solver->Solve(s.theta, &s.sol_event);
-  AddSolveCounts(s.sol_event, result);
+  SolveProbe(s.theta, &z, false, &s.sol_event, result);
   for (Session::KnownSolution& k : s.probe_known) k.z = z;
   s.probe_warm = z;
   if (!s.branch_solver) return;
@@ -1493,6 +1490,16 @@ void Simulator::RememberProbe(double tm, const QuasiStaticSolution& sol) {
   for (int i = 0; i < 3; ++i) k.slip[i] = sol.contacts[i].slip;
 }
 
+void Simulator::SolveProbe(const Configuration& q, const Eigen::VectorXd* warm,
+                           bool refine, QuasiStaticSolution* probe,
+                           SimulationResult* result) {
+  QuasiStaticSolver& solver = *session_->probe_solver;
+  if (warm) solver.SetWarmStart(*warm);
+  solver.Solve(q, probe);
+  if (refine) solver.Refine(kLocationResidualTolerance, probe);
+  AddSolveCounts(*probe, result);
+}
+
 // The slips the class test (RestartAtSwitches) reads at the sample just
 // solved: its own, or, when its root is looser than kClassSlipResidual, the
 // same state's solved again and refined like a location probe. A root at a
@@ -1508,10 +1515,7 @@ void Simulator::ClassSlips(SimulationResult* result) {
       !(s.sol.residual > kClassSlipResidual))
     return;
   QuasiStaticSolution& probe = s.sol_event;  // the probes' scratch
-  s.probe_solver->SetWarmStart(s.sol.z);
-  s.probe_solver->Solve(s.theta, &probe);
-  s.probe_solver->Refine(kLocationResidualTolerance, &probe);
-  AddSolveCounts(probe, result);
+  SolveProbe(s.theta, &s.sol.z, true, &probe, result);
   if (probe.status != QuasiStaticStatus::kOk) return;
   for (int i = 0; i < 3; ++i) s.class_now[i] = probe.contacts[i].slip;
 }

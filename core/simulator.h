@@ -178,13 +178,14 @@ struct SimulationResult {
   long long checkpoint_iterations = 0;
   // The located physical stop (limit "" if none).
   StopEvent event;
-  // A run that ended with SOLVER_FAILURE: its last sample's state solved
-  // again from a cold start, with the run's backend and its fallbacks (after
-  // the run: not in the counters or wall_seconds). A root whose twist
-  // dwarfs the samples' before it is the quasi-static breakaway of model.md
-  // §8.8 (the minimum-energy problem's twist diverges along the path), not
-  // a solver's stall; QuasiStaticInertiaRatio(result, scene) reads it.
-  // Empty otherwise, or when that solve fails too.
+  // A run that ended with SOLVER_FAILURE: the stop's state solved again
+  // from a cold start (Simulator::RetryStop: which state, which backend;
+  // after the run, not in the counters or wall_seconds), as a sample at that
+  // state's time. A root whose twist dwarfs the samples' before it is the
+  // quasi-static breakaway of model.md §8.8 (the minimum-energy problem's
+  // twist diverges along the path), not a solver's stall;
+  // QuasiStaticInertiaRatio(result, scene) reads it. Empty otherwise, or
+  // when no retried state solves.
   std::optional<TrajectorySample> stop_retry;
   // The located stick/slide switches and creeping wheels' slip reversals
   // (SwitchEvent::reversal), in time order (locate_switches).
@@ -316,6 +317,11 @@ class Simulator {
   Configuration DenseState(double tm) const;
   // Stores a converged probe of the interval (warm-start node, slip cache).
   void RememberProbe(double tm, const QuasiStaticSolution& sol);
+  // One probe solve on the probe solver at q (from *warm when given),
+  // refined to the location tolerance when refine, counted in result.
+  void SolveProbe(const Configuration& q, const Eigen::VectorXd* warm,
+                  bool refine, QuasiStaticSolution* probe,
+                  SimulationResult* result);
   void IntegrateSlipAcrossSwitches(double t, std::size_t first,
                                    const SlipVectorEvaluator& evaluate,
                                    SimulationResult* result);
