@@ -15,8 +15,11 @@ Vec3 EstimatedInertia(const Scene& scene) {
   return Vec3(k * (w * w + h * h), k * (l * l + h * h), k * (l * l + w * w));
 }
 
-double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
-                               const Scene& scene) {
+namespace {
+// The ratio over run; the last sample's one-sided difference spans at least
+// last_span_floor.
+double InertiaRatio(const std::vector<TrajectorySample>& run,
+                    const Scene& scene, double last_span_floor) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   auto usable = [](const TrajectorySample& s) {
     if (!s.velocity.allFinite() || !s.angular_velocity.allFinite())
@@ -39,7 +42,8 @@ double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
     // Central difference over the usable neighbours (one-sided at the ends).
     const TrajectorySample& lo = run[ok[j == 0 ? 0 : j - 1]];
     const TrajectorySample& hi = run[ok[j + 1 == ok.size() ? j : j + 1]];
-    const double span = hi.t - lo.t;
+    double span = hi.t - lo.t;
+    if (j + 1 == ok.size()) span = std::max(span, last_span_floor);
     if (!(span > 0)) continue;
     const Vec3 a = (hi.velocity - lo.velocity) / span;
     const Vec3 alpha = (hi.angular_velocity - lo.angular_velocity) / span;
@@ -56,16 +60,30 @@ double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
   }
   return worst;
 }
+}  // namespace
+
+double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
+                               const Scene& scene) {
+  return InertiaRatio(run, scene, 0.0);
+}
 
 double QuasiStaticInertiaRatio(const SimulationResult& result,
                                const Scene& scene) {
   if (!result.stop_retry) return QuasiStaticInertiaRatio(result.samples, scene);
-  // The retry replaces the stop's sample, or follows the last sample when
-  // the stop has none of its own.
+  // The retry replaces the stop's sample (at its time, or just before it:
+  // a located stop's approach), or follows the last sample when the stop
+  // has none of its own. Its difference spans at least the last two
+  // samples' interval: a twist that changes steeply but stays bounded right
+  // at a limit (the square-root onset of sliding at a friction limit) then
+  // counts at the samples' resolution, not by how close to the limit the
+  // last sample happens to lie; a diverging one (a breakaway) exceeds any
+  // bound either way.
   std::vector<TrajectorySample> run = result.samples;
-  if (!run.empty() && run.back().t == result.stop_retry->t) run.pop_back();
+  while (!run.empty() && run.back().t >= result.stop_retry->t) run.pop_back();
+  double spacing = 0.0;
+  if (run.size() >= 2) spacing = run.back().t - run[run.size() - 2].t;
   run.push_back(*result.stop_retry);
-  return QuasiStaticInertiaRatio(run, scene);
+  return InertiaRatio(run, scene, spacing);
 }
 
 }  // namespace quasiroll

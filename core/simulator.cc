@@ -747,6 +747,28 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
           .count();
 }
 
+namespace {
+// result->stop_retry from sol at (t, q); appends to *os the twist there and
+// at the last sample before t with one.
+void SetStopRetry(const KinematicModel& model, double t, const Configuration& q,
+                  const QuasiStaticSolution& sol, SimulationResult* result,
+                  std::ostringstream* os) {
+  TrajectorySample sample;
+  FillSample(model, t, q, sol, &sample);
+  *os << "|v| = " << sample.velocity.norm()
+      << " m/s, |w| = " << sample.angular_velocity.norm() << " rad/s";
+  const std::vector<TrajectorySample>& samples = result->samples;
+  for (auto it = samples.rbegin(); it != samples.rend(); ++it) {
+    if (!(it->t < t) || !it->velocity.allFinite()) continue;
+    *os << " (t = " << it->t << " s: " << it->velocity.norm() << " m/s, "
+        << it->angular_velocity.norm() << " rad/s)";
+    break;
+  }
+  result->stop_retry = std::move(sample);
+}
+
+}  // namespace
+
 bool Simulator::Advance(SimulationResult* result) {
   if (!session_ || session_->done) return false;
   const auto start = std::chrono::steady_clock::now();
@@ -778,7 +800,68 @@ bool Simulator::Advance(SimulationResult* result) {
   s.done = !more;
   if (!more && result->status == ToString(QuasiStaticStatus::kSolverFailure))
     RetryStop(result);
+  if (!more && !result->stop_retry && result->status != "success")
+    ApproachStop(result);
   return more;
+}
+
+// The solver of the solves after the run (RetryStop, ApproachStop): the
+// continuation backend (a square-system Newton method) when one is
+// registered, else the run's, with the homotopy fallbacks of model.md §7.3.
+std::unique_ptr<QuasiStaticSolver> Simulator::StopSolver() const {
+  std::unique_ptr<NlpSolver> nlp = ContinuationNlp(options_);
+  OptionValues unused;
+  if (!nlp) nlp = CreateNlp(options_, &unused);
+  return std::make_unique<QuasiStaticSolver>(
+      *model_, QuasiStaticParameters::FromScene(scene_), std::move(nlp),
+      options_.quasi_static);
+}
+
+// zoh, a run that stopped after its last sample's solve (a limit located
+// inside the interval, or a sample whose solve gave up): the held twist
+// hides the quasi-static twist on the way to the stop, and before a
+// breakaway (model.md §8.8) it diverges there. Follows the root from the
+// last sample's along the held path towards the stop (the located
+// bracket's lower end, else the stop): each step solved from the last root
+// (StopSolver), half the remaining time, a quarter of the last try after a
+// failure, until within event_tolerance or the steps fall below 1e-3 of
+// the remaining time. The last root reached becomes result->stop_retry
+// (not counted: after the run).
+void Simulator::ApproachStop(SimulationResult* result) {
+  Session& s = *session_;
+  const double t_stop = std::isnan(s.t_lower) ? result->t_reached : s.t_lower;
+  if (options_.coupling != Coupling::kZoh || !s.have_prev || !s.have_z_prev ||
+      !(t_stop > s.t_prev) || !options_.locate_events)
+    return;
+  std::unique_ptr<QuasiStaticSolver> solver = StopSolver();
+  double t_a = s.t_prev, fraction = 0.5;
+  Configuration q_a = s.theta_prev;
+  Eigen::VectorXd z_a = s.z_prev;
+  QuasiStaticSolution sol, root;
+  while (t_stop - t_a > options_.event_tolerance && fraction > 1e-3) {
+    const double t = t_a + fraction * (t_stop - t_a);
+    if (!(t > t_a) ||
+        Reintegrate(s.t_prev, s.theta_prev, t) != IntegratorStatus::kSuccess)
+      break;
+    solver->SetWarmStart(z_a);
+    solver->Solve(s.y_event, &sol);
+    if (sol.status != QuasiStaticStatus::kOk) {
+      fraction *= 0.25;
+      continue;
+    }
+    t_a = t;
+    q_a = s.y_event;
+    z_a = sol.z;
+    std::swap(root, sol);
+    fraction = 0.5;
+  }
+  if (!(t_a > s.t_prev)) return;
+  std::ostringstream os;
+  os << std::setprecision(9) << "; the root followed from the last sample's"
+     << " along the held twist (" << solver->nlp().name() << ") to t = " << t_a
+     << " s: ";
+  SetStopRetry(*model_, t_a, q_a, root, result, &os);
+  result->stop_reason += os.str();
 }
 
 // A solve that gave up (SOLVER_FAILURE: mu > mu_min) may be a stall or the
@@ -810,34 +893,20 @@ void Simulator::RetryStop(SimulationResult* result) {
       (samples.empty() || solved.t > samples.back().t))
     candidates.push_back(solved);
   if (candidates.empty()) return;
-  std::unique_ptr<NlpSolver> nlp = ContinuationNlp(options_);
-  OptionValues unused;
-  if (!nlp) nlp = CreateNlp(options_, &unused);
-  QuasiStaticSolver solver(*model_, QuasiStaticParameters::FromScene(scene_),
-                           std::move(nlp), options_.quasi_static);
+  std::unique_ptr<QuasiStaticSolver> solver = StopSolver();
   std::ostringstream os;
   os << std::setprecision(9) << "; solved again from a cold start ("
-     << solver.nlp().name() << "):";
+     << solver->nlp().name() << "):";
   for (const Candidate& c : candidates) {
     QuasiStaticSolution retry;
-    solver.Reset();
-    solver.Solve(c.theta, &retry);
+    solver->Reset();
+    solver->Solve(c.theta, &retry);
     os << " the state at t = " << c.t << " s: ";
     if (retry.status != QuasiStaticStatus::kOk) {
       os << ToString(retry.status) << " too;";
       continue;
     }
-    TrajectorySample sample;
-    FillSample(*model_, c.t, c.theta, retry, &sample);
-    os << "|v| = " << sample.velocity.norm()
-       << " m/s, |w| = " << sample.angular_velocity.norm() << " rad/s";
-    for (auto it = samples.rbegin(); it != samples.rend(); ++it) {
-      if (!(it->t < c.t) || !it->velocity.allFinite()) continue;
-      os << " (t = " << it->t << " s: " << it->velocity.norm() << " m/s, "
-         << it->angular_velocity.norm() << " rad/s)";
-      break;
-    }
-    result->stop_retry = std::move(sample);
+    SetStopRetry(*model_, c.t, c.theta, retry, result, &os);
     break;
   }
   result->stop_reason += os.str();

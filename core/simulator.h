@@ -282,7 +282,7 @@ class Simulator {
   class RobotOde;
   struct Session;
   bool Interval(SimulationResult* result);
-  // Located stops (core/simulator_events.cc).
+  // Located stops.
   struct Bracket;
   IntegratorStatus Reintegrate(double t0, const Configuration& theta0,
                                double t1);
@@ -309,6 +309,8 @@ class Simulator {
   // The class test's slips at the sample just solved (session class_now).
   void ClassSlips(SimulationResult* result);
   void RetryStop(SimulationResult* result);
+  void ApproachStop(SimulationResult* result);
+  std::unique_ptr<QuasiStaticSolver> StopSolver() const;
   // Solution jumps (core/solution_jumps.h) between the last sample and t:
   // appends their events; true if one was located.
   bool LocateSolutionJump(double t, SimulationResult* result);

@@ -79,7 +79,8 @@ FailureCause ClassifyFailure(const FailureEvidence& e) {
     return {"physical", "singular_point"};
   if (st == RunStatus::kSolverFailure || st == RunStatus::kSingular) {
     // SOLVER_FAILURE means mu > mu_min and regular statics at that state
-    // (model.md §7): a solution exists and the NLP did not find it. That the
+    // (model.md §7): a solution may exist and the NLP did not find it (past
+    // a breakaway none does, model.md §8.8: the ratio rule above). That the
     // reference (newton by default) fails there too does not make it
     // physical (another backend may pass); only a physical stop of the
     // reference at the same place does.
