@@ -16,28 +16,30 @@ Vec3 EstimatedInertia(const Scene& scene) {
 }
 
 namespace {
-// The ratio over run; the last sample's one-sided difference spans at least
-// last_span_floor.
-double InertiaRatio(const std::vector<TrajectorySample>& run,
-                    const Scene& scene, double last_span_floor) {
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  auto usable = [](const TrajectorySample& s) {
-    if (!s.velocity.allFinite() || !s.angular_velocity.allFinite())
+// A sample with velocities and contact forces.
+bool Usable(const TrajectorySample& s) {
+  if (!s.velocity.allFinite() || !s.angular_velocity.allFinite()) return false;
+  for (const ContactSample& c : s.contacts)
+    if (!std::isfinite(c.normal_force) || !std::isfinite(c.traction_lon) ||
+        !std::isfinite(c.traction_lat))
       return false;
-    for (const ContactSample& c : s.contacts)
-      if (!std::isfinite(c.normal_force) || !std::isfinite(c.traction_lon) ||
-          !std::isfinite(c.traction_lat))
-        return false;
-    return true;
-  };
+  return true;
+}
+
+// The ratio over run's usable samples from the first_usable-th on; the
+// last one's one-sided difference spans at least last_span_floor.
+double InertiaRatio(const std::vector<TrajectorySample>& run,
+                    const Scene& scene, double last_span_floor,
+                    std::size_t first_usable = 0) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<std::size_t> ok;
   for (std::size_t k = 0; k < run.size(); ++k)
-    if (usable(run[k])) ok.push_back(k);
+    if (Usable(run[k])) ok.push_back(k);
   if (ok.size() < 2) return nan;
   const Vec3 inertia = EstimatedInertia(scene);
   const double l0 = scene.geometry.wheelbase();
   double worst = 0.0;
-  for (std::size_t j = 0; j < ok.size(); ++j) {
+  for (std::size_t j = first_usable; j < ok.size(); ++j) {
     const TrajectorySample& s = run[ok[j]];
     // Central difference over the usable neighbours (one-sided at the ends).
     const TrajectorySample& lo = run[ok[j == 0 ? 0 : j - 1]];
@@ -67,6 +69,20 @@ double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
   return InertiaRatio(run, scene, 0.0);
 }
 
+namespace {
+// The samples before result.stop_retry and the retry after them; *spacing
+// the interval between the last two of those samples (0 with fewer).
+std::vector<TrajectorySample> WithStopRetry(const SimulationResult& result,
+                                            double* spacing) {
+  std::vector<TrajectorySample> run = result.samples;
+  while (!run.empty() && run.back().t >= result.stop_retry->t) run.pop_back();
+  *spacing = 0.0;
+  if (run.size() >= 2) *spacing = run.back().t - run[run.size() - 2].t;
+  run.push_back(*result.stop_retry);
+  return run;
+}
+}  // namespace
+
 double QuasiStaticInertiaRatio(const SimulationResult& result,
                                const Scene& scene) {
   if (!result.stop_retry) return QuasiStaticInertiaRatio(result.samples, scene);
@@ -78,12 +94,21 @@ double QuasiStaticInertiaRatio(const SimulationResult& result,
   // counts at the samples' resolution, not by how close to the limit the
   // last sample happens to lie; a diverging one (a breakaway) exceeds any
   // bound either way.
-  std::vector<TrajectorySample> run = result.samples;
-  while (!run.empty() && run.back().t >= result.stop_retry->t) run.pop_back();
   double spacing = 0.0;
-  if (run.size() >= 2) spacing = run.back().t - run[run.size() - 2].t;
-  run.push_back(*result.stop_retry);
+  const std::vector<TrajectorySample> run = WithStopRetry(result, &spacing);
   return InertiaRatio(run, scene, spacing);
+}
+
+double StopInertiaRatio(const SimulationResult& result, const Scene& scene) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (!result.stop_retry) return nan;
+  double spacing = 0.0;
+  const std::vector<TrajectorySample> run = WithStopRetry(result, &spacing);
+  // The retry's own point: the last usable one, if it is usable at all.
+  const auto usable =
+      static_cast<std::size_t>(std::count_if(run.begin(), run.end(), Usable));
+  if (usable < 2 || !Usable(run.back())) return nan;
+  return InertiaRatio(run, scene, spacing, usable - 1);
 }
 
 }  // namespace quasiroll

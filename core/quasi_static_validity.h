@@ -11,6 +11,10 @@
 
 namespace quasiroll {
 
+// The validity threshold of the ratio below (docs/model.md §8.8): inertial
+// loads at 1 % of the contact loads.
+constexpr double kQuasiStaticInertiaThreshold = 1e-2;
+
 // Principal moments of inertia [kg m^2] the validity metric assumes: scenes
 // carry only the mass, so the robot is taken as a uniform solid box spanning
 // its wheel footprint — length a + b (wheelbase), width `track`, height
@@ -36,5 +40,10 @@ double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
 // it).
 double QuasiStaticInertiaRatio(const SimulationResult& result,
                                const Scene& scene);
+// The ratio at result.stop_retry alone (its difference to the last usable
+// sample, as above): whether the stop's own twist leaves the quasi-static
+// domain (a breakaway, model.md §8.8), apart from the motion before it.
+// NaN without a stop_retry or a usable sample before it.
+double StopInertiaRatio(const SimulationResult& result, const Scene& scene);
 
 }  // namespace quasiroll

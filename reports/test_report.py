@@ -14,6 +14,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import types
 import unittest
 from html import escape
 
@@ -952,6 +953,49 @@ class RefereeTest(unittest.TestCase):
         figures_paper._mu_min_line(ax, 0.43)
         self.assert_inside_axes_clear_of_title(fig, ax, "μ_min")
         plotting.plt.close(fig)
+
+    # 2b. a cause legend with the longest label ends inside its figure
+    def test_cause_legend_inside_figure(self):
+        from quasiroll_report import figures_methods
+        plotting.apply_style()
+        rows = ["newton/rk-projection/zoh", "ceres/rk-baumgarte/coupled"]
+        cells = {(rows[0], 0): {"cls": "success", "detail": ""},
+                 (rows[0], 1): {"cls": "model", "detail": "quasi_static_invalid"},
+                 (rows[1], 0): {"cls": "numerical", "detail": "shared_solver_failure"},
+                 (rows[1], 1): {"cls": "physical", "detail": "degenerate_contact"}}
+        for cell in cells.values():
+            cell.update(label="1", status="")
+        chart = {"axis": "roughness", "axis_label": "roughness [-]",
+                 "group": "stability_roughness",
+                 "panels": [{"scene": "paper", "rows": rows, "values": [1, 8],
+                             "cells": cells,
+                             "label": "paper · 6 s", "mu_min": float("nan"),
+                             "limits": []}]}
+        captured = {}
+        original = plotting.save_figure
+
+        def keep(fig, *args, **kwargs):
+            fig.canvas.draw()
+            captured["figure"] = fig.bbox.x1
+            captured["legends"] = [leg.get_window_extent().x1
+                                   for ax in fig.axes if ax.get_legend()
+                                   for leg in [ax.get_legend()]]
+            captured["labels"] = [t.get_text() for ax in fig.axes if ax.get_legend()
+                                  for t in ax.get_legend().get_texts()]
+            plotting.plt.close(fig)
+            return types.SimpleNamespace(notes=[])
+
+        figures_methods.save_figure = keep
+        try:
+            figures_methods._stability_figure(
+                types.SimpleNamespace(runs=[], out_dir=None), chart)
+        finally:
+            figures_methods.save_figure = original
+        self.assertTrue(captured.get("legends"), captured)
+        self.assertTrue(any("quasi-static domain" in t for t in captured["labels"]),
+                        captured["labels"])
+        for right in captured["legends"]:
+            self.assertLessEqual(right, captured["figure"])
 
     # 3. numeric axes by value; the RK4 limit on the σ·Δt axis
     def test_numeric_axes_and_rk4_limit(self):

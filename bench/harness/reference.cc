@@ -316,7 +316,7 @@ SimulationResult ComputeNumericalReference(const Scene& scene,
                            second.status, second.t_reached});
   if (second.success() || second.t_reached > result.t_reached) {
     if (method) *method = "dp54";
-    log->stop = ReferenceStopOf(second);
+    log->stop = ReferenceStopOf(second, scene);
     return second;
   }
   return result;
@@ -699,7 +699,7 @@ Reference LoadOrComputeReference(const std::string& dir, const Scene& scene,
           : ComputeCheckedNumericalReference(scene, settings, &ref, &info);
   ref.status = result.status;
   ref.stop_reason = result.stop_reason;
-  ref.stop = ReferenceStopOf(result);
+  ref.stop = ReferenceStopOf(result, scene);
   ref.rescues = info.retries.rescues;
   const std::string csv = TrajectoryCsv(result);
   // Always use the samples as stored (exact round trip), so that a cached

@@ -8,6 +8,7 @@
 
 #include "quasiroll/bench/io/format.h"
 #include "quasiroll/core/nlp.h"
+#include "quasiroll/core/quasi_static_validity.h"
 #include "quasiroll/core/slip_regimes.h"
 
 namespace quasiroll::bench {
@@ -17,8 +18,15 @@ bool IsPhysicalReferenceStatus(const std::string& status) {
          status == "DEGENERATE_CONTACT";
 }
 
-std::string ReferenceStopOf(const SimulationResult& result) {
+bool BreakawayStop(const SimulationResult& result, const Scene& scene) {
+  return !result.success() && !IsPhysicalReferenceStatus(result.status) &&
+         StopInertiaRatio(result, scene) > kQuasiStaticInertiaThreshold;
+}
+
+std::string ReferenceStopOf(const SimulationResult& result,
+                            const Scene& scene) {
   if (result.success()) return "end";
+  if (BreakawayStop(result, scene)) return "model:breakaway";
   if (!IsPhysicalReferenceStatus(result.status)) return "reference_failure";
   std::string limit = result.event.limit;
   if (limit.empty()) {
@@ -54,9 +62,11 @@ std::string SecondReferenceNlp(const std::string& primary) {
 
 namespace {
 
-// A run that the ladder retries: neither at its end nor at a physical limit.
-bool NeedsRetry(const SimulationResult& r) {
-  return !r.success() && !IsPhysicalReferenceStatus(r.status);
+// A run that the ladder retries: neither at its end nor at a physical limit
+// nor at a breakaway.
+bool NeedsRetry(const SimulationResult& r, const Scene& scene) {
+  return !r.success() && !IsPhysicalReferenceStatus(r.status) &&
+         !BreakawayStop(r, scene);
 }
 
 // t rounded to the output grid k h when within 1e-9 s of it (so that stitched
@@ -113,6 +123,8 @@ void Stitch(const SimulationResult& seg, double t_off, double h, double epsilon,
   into->stop_configuration = seg.stop_configuration;
   into->mu_min_at_stop = seg.mu_min_at_stop;
   into->critical_contact = seg.critical_contact;
+  into->stop_retry = seg.stop_retry;
+  if (into->stop_retry) into->stop_retry->t += t_off;
   if (!std::isnan(seg.kkt_residual))
     into->kkt_residual = std::fmax(into->kkt_residual, seg.kkt_residual);
   into->step_drift_max = std::fmax(into->step_drift_max, seg.step_drift_max);
@@ -167,7 +179,7 @@ bool RunLadder(const Scene& scene, const std::vector<Rung>& rungs, double t0,
     *seg = Simulator(scene, o).Run(theta0);
     AddCosts(*seg, total);
     log->attempts.push_back(Attempt(rung.name, rung.detail, t0, t1, *seg, h));
-    if (!NeedsRetry(*seg)) return true;
+    if (!NeedsRetry(*seg, scene)) return true;
   }
   return false;
 }
@@ -182,7 +194,7 @@ SimulationResult RunReferenceWithRetries(const Scene& scene,
   SimulationResult result = sim.Run();
   log->attempts.push_back(Attempt("primary", "", 0, t_end, result, h));
   const std::vector<Rung> rungs = Ladder(options);
-  while (NeedsRetry(result) && log->rescues < kMaxReferenceRescues) {
+  while (NeedsRetry(result, scene) && log->rescues < kMaxReferenceRescues) {
     const int g = LastGoodSample(result, h, t_end);
     if (g < 0) break;
     const double t0 = result.samples[g].t;
@@ -203,7 +215,7 @@ SimulationResult RunReferenceWithRetries(const Scene& scene,
     log->attempts.push_back(Attempt("primary", "", t1, t_end, cont, h));
     Stitch(cont, t1, h, scene.epsilon, &result);
   }
-  log->stop = ReferenceStopOf(result);
+  log->stop = ReferenceStopOf(result, scene);
   return result;
 }
 

@@ -9,6 +9,14 @@
 //                       <limit> is the located StopEvent::limit, e.g.
 //                       friction_limit, relative_curvature, second_contact,
 //                       or the status's own name when none was located);
+//   model:breakaway     a stop that is not physical, whose own twist
+//                       (SimulationResult::stop_retry, solved after the run)
+//                       leaves the quasi-static domain: StopInertiaRatio over
+//                       kQuasiStaticInertiaThreshold (the twist diverges
+//                       there, model.md §8.8). No rung is tried: past that
+//                       point the quasi-static problem has no root, and a
+//                       rung that steps across lands on a motion the model
+//                       does not describe;
 //   reference_failure   anything else (SOLVER_FAILURE, SINGULAR, an
 //                       integrator status) that persisted through the ladder.
 //
@@ -74,8 +82,11 @@ struct ReferenceRetryLog {
 
 // INFEASIBLE_FRICTION, LIFT_OFF, DEGENERATE_CONTACT.
 bool IsPhysicalReferenceStatus(const std::string& status);
-// "end", "physical:<limit>" or "reference_failure" (above).
-std::string ReferenceStopOf(const SimulationResult& result);
+// A stop at a breakaway (above).
+bool BreakawayStop(const SimulationResult& result, const Scene& scene);
+// "end", "physical:<limit>", "model:breakaway" or "reference_failure"
+// (above).
+std::string ReferenceStopOf(const SimulationResult& result, const Scene& scene);
 
 // The second NLP backend of the ladder, chosen from the registry by
 // BackendInfo, never by name: among the registered backends other than

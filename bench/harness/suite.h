@@ -19,6 +19,7 @@
 #include "quasiroll/bench/harness/run_request.h"
 #include "quasiroll/bench/io/format.h"
 #include "quasiroll/core/dae.h"
+#include "quasiroll/core/quasi_static_validity.h"
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/simulator.h"
 #include "quasiroll/core/terrains.h"
@@ -77,9 +78,9 @@ struct ReferenceSettings {
 // loads, the level at which the dropped terms reach the forces' own
 // solver-independent accuracy in the default suite's rough scenes.
 struct RunBounds {
-  double drift = 1e-3;       // max ||H||_inf over the samples
-  double gap = 1e-3;         // max geometric gap over the samples [m]
-  double qs_inertia = 1e-2;  // max quasi-static inertia ratio of the motion
+  double drift = 1e-3;  // max ||H||_inf over the samples
+  double gap = 1e-3;    // max geometric gap over the samples [m]
+  double qs_inertia = kQuasiStaticInertiaThreshold;  // max ratio of the motion
   bool operator==(const RunBounds& o) const {
     return drift == o.drift && gap == o.gap && qs_inertia == o.qs_inertia;
   }

@@ -22,6 +22,8 @@
 #include "quasiroll/bench/io/json_reader.h"
 #include "quasiroll/core/nlp.h"
 #include "quasiroll/core/quasi_static.h"
+#include "quasiroll/core/quasi_static_validity.h"
+#include "quasiroll/core/terrains.h"
 #include "test_support.h"
 
 namespace quasiroll::bench {
@@ -353,6 +355,37 @@ TEST(ReferenceRetryPhysical, PhysicalStopIsUnchanged) {
   EXPECT_EQ(log.rescues, 0);
   EXPECT_EQ(log.attempts.size(), 1u);
   EXPECT_GT(r.t_reached, 14.0);
+}
+
+// A breakaway is not passed: on R1 with its bumps 8x higher (the default
+// suite's stability_roughness) the quasi-static twist diverges at ~5.84564 s
+// (model.md §8.8). The reference's fixed RK4 steps give up there; the
+// ladder's rung step/4 used to step across it on stage roots of tens of m/s
+// and went on 0.3 m to a tread-angle "limit" at 5.84588 s (mu_min 9.16
+// there). Now a stop whose own twist leaves the quasi-static domain is the
+// model's: reference_stop model:breakaway, within the ~2e-5 s window where
+// every method's solves give up, with mu_min just under mu (0.49988).
+TEST(ReferenceRetryPhysical, BreakawayIsNotPassed) {
+  RegisterWindowBackends();
+  g_window = FailureWindow{};
+  Scene scene = PaperScene(6.0);
+  std::vector<GaussianBump> bumps =
+      dynamic_cast<const GaussianTerrain&>(*scene.terrain).bumps();
+  for (GaussianBump& b : bumps) b.amplitude *= 8;
+  scene.terrain = std::make_shared<GaussianTerrain>(bumps);
+  ReferenceRetryLog log;
+  const SimulationResult r =
+      ComputeNumericalReference(scene, ReferenceSettings{}, nullptr, &log);
+  EXPECT_EQ(log.stop, "model:breakaway") << r.stop_reason;
+  EXPECT_EQ(r.status, "SOLVER_FAILURE") << r.stop_reason;
+  EXPECT_GT(r.t_reached, 5.8455);
+  EXPECT_LT(r.t_reached, 5.8457);
+  EXPECT_LT(r.mu_min_at_stop, scene.mu);
+  EXPECT_GT(r.mu_min_at_stop, scene.mu - 1e-3);
+  ASSERT_TRUE(r.stop_retry.has_value());
+  EXPECT_GT(StopInertiaRatio(r, scene), 1.0);
+  for (const ReferenceAttempt& a : log.attempts)
+    EXPECT_LT(a.t_reached, 5.8457) << a.rung;
 }
 
 }  // namespace
