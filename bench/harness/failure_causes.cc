@@ -59,6 +59,11 @@ FailureCause ClassifyFailure(const FailureEvidence& e) {
       e.has_reference && e.ref_status != RunStatus::kSuccess;
   const bool same_place =
       ref_stopped && std::abs(e.t_reached - e.ref_t_reached) <= tol_t + 1e-9;
+  // The reference's twist diverges where the run stops (a breakaway,
+  // model.md §8.8): whatever the run's own solves saw there, the stop is the
+  // model's.
+  if (same_place && e.ref_breakaway && !BlewUp(e))
+    return {"model", "quasi_static_invalid"};
   if (IsPhysicalStop(st)) {
     // The reference stops there too (also where its own solver gave up
     // just short of the limit): the limit is the problem's.

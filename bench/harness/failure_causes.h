@@ -30,6 +30,9 @@ struct FailureEvidence {
   std::optional<RunStatus> ref_status;
   double ref_t_reached = 0;
   double ref_dt = 0;  // spacing of the reference's samples
+  // The reference stopped at a breakaway (reference_stop model:breakaway,
+  // reference_retry.h): its twist diverges there.
+  bool ref_breakaway = false;
   // Quasi-static inertia ratio of the run's motion up to its stop (runs.csv
   // qs_inertia_ratio; NaN when unknown) and the suite's bound on it.
   double qs_inertia_ratio = std::numeric_limits<double>::quiet_NaN();

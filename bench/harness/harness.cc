@@ -181,6 +181,7 @@ FailureEvidence Evidence(const RunSpec& run, RunStatus status, double t_reached,
     e.has_reference = true;
     e.ref_status = ParseRunStatus(reference->status);
     e.ref_t_reached = reference->samples.back().t;
+    e.ref_breakaway = reference->stop == "model:breakaway";
     if (reference->samples.size() >= 2)
       e.ref_dt = reference->samples[1].t - reference->samples[0].t;
   }

@@ -294,6 +294,31 @@ TEST(FailureCauses, StopBeyondQuasiStaticValidityIsTheModels) {
   EXPECT_EQ(ClassifyFailure(e).detail, "error");
 }
 
+// A stop where the reference stopped at a breakaway (reference_stop
+// model:breakaway: its twist diverges there, model.md §8.8) is the model's
+// even when the run's own samples and retry show no fast motion (a solve
+// that gave up without a converged retry, or a friction limit the held
+// twist reached); elsewhere, or after a blow-up, the other rules judge.
+TEST(FailureCauses, StopAtTheReferencesBreakawayIsTheModels) {
+  FailureEvidence e =
+      Evidence("SOLVER_FAILURE", 5.8456, "SOLVER_FAILURE", 5.845638);
+  e.qs_inertia_bound = 0.01;
+  e.qs_inertia_ratio = 0.0024;
+  EXPECT_EQ(ClassifyFailure(e).detail, "shared_solver_failure");
+  e.ref_breakaway = true;
+  FailureCause c = ClassifyFailure(e);
+  EXPECT_EQ(c.cause, "model");
+  EXPECT_EQ(c.detail, "quasi_static_invalid");
+  e.status = RunStatus::kInfeasibleFriction;
+  e.t_reached = 5.856;
+  EXPECT_EQ(ClassifyFailure(e).detail, "quasi_static_invalid");
+  e.t_reached = 5.2;  // two output intervals (0.1 s) before: not there
+  EXPECT_EQ(ClassifyFailure(e).cause, "numerical");
+  e.t_reached = 5.856;
+  e.drift_max = 0.5;
+  EXPECT_NE(ClassifyFailure(e).cause, "model");
+}
+
 TEST(FailureCauses, SolverIntegratorBoundsAndErrors) {
   EXPECT_EQ(
       ClassifyFailure(Evidence("SOLVER_FAILURE", 2.6, "success", 20)).detail,
