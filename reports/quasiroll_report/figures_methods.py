@@ -54,15 +54,17 @@ def style_legend_handles(rows, extra=(), styles=None):
 
 def _legend_axes(fig, gs_cell, handles, title=None):
     """A legend in its own grid cell, its labels wrapped (at 40, 32, 26, 20
-    characters) until it ends inside the figure: the cell's width is fixed
-    and a long label would be cut off at the figure's edge."""
+    characters; labels already broken into lines are kept) until it ends
+    inside the figure: the cell's width is fixed and a long label would be
+    cut off at the figure's edge."""
     ax = fig.add_subplot(gs_cell)
     ax.axis("off")
     labels = [h.get_label() for h in handles]
     for width in (None, 40, 32, 26, 20):
         if width:
             for handle, label in zip(handles, labels):
-                handle.set_label(textwrap.fill(label, width))
+                if "\n" not in label:
+                    handle.set_label(textwrap.fill(label, width))
         legend = ax.legend(handles=handles, loc="upper left", frameon=False,
                            title=title, borderaxespad=0.0)
         fig.canvas.draw()
