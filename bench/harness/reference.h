@@ -81,7 +81,7 @@ struct Reference {
   std::string status;  // "success" or the numerical run's status
   std::string stop_reason;
   // Why the reference ended (runs.csv reference_stop, reference_retry.h):
-  // "end", "physical:<limit>" or "reference_failure".
+  // "end", "physical:<limit>", "model:breakaway" or "reference_failure".
   std::string stop;
   // Failing intervals the retry ladder passed (0 for an analytic reference).
   int rescues = 0;

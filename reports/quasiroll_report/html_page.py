@@ -250,8 +250,8 @@ def _reference_method(spec):
 
 def _reference_stop_cell(spec, run):
     """Why the reference ended (reference_stop: end, physical:<limit>,
-    reference_failure), a reference failure in bold: no run is credited
-    with reach past it (docs/harness.md, Reference retries)."""
+    model:breakaway, reference_failure), a reference failure in bold: no run
+    is credited with reach past it (docs/harness.md, Reference retries)."""
     stop = spec.get("reference_stop") or run.get("reference_stop", "")
     if not isinstance(stop, str) or not stop:
         return "<td>n/a</td>"
