@@ -825,8 +825,9 @@ std::unique_ptr<QuasiStaticSolver> Simulator::StopSolver() const {
 // bracket's lower end, else the stop): each step solved from the last root
 // (StopSolver), half the remaining time, a quarter of the last try after a
 // failure, until within event_tolerance or the steps fall below 1e-3 of
-// the remaining time. The last root reached becomes result->stop_retry
-// (not counted: after the run).
+// the remaining time. If the root is lost before the stop (no quasi-static
+// solution on the way there: a breakaway's signature), the last root
+// reached becomes result->stop_retry (not counted: after the run).
 void Simulator::ApproachStop(SimulationResult* result) {
   Session& s = *session_;
   const double t_stop = std::isnan(s.t_lower) ? result->t_reached : s.t_lower;
@@ -855,11 +856,14 @@ void Simulator::ApproachStop(SimulationResult* result) {
     std::swap(root, sol);
     fraction = 0.5;
   }
-  if (!(t_a > s.t_prev)) return;
+  // Followed to the stop: the quasi-static solution exists up to it, and
+  // its twist there, which near a limit can change steeply but boundedly
+  // (model.md §8.8), is left to the samples.
+  if (!(t_a > s.t_prev) || t_stop - t_a <= options_.event_tolerance) return;
   std::ostringstream os;
   os << std::setprecision(9) << "; the root followed from the last sample's"
-     << " along the held twist (" << solver->nlp().name() << ") to t = " << t_a
-     << " s: ";
+     << " along the held twist (" << solver->nlp().name() << ") is lost after"
+     << " t = " << t_a << " s: ";
   SetStopRetry(*model_, t_a, q_a, root, result, &os);
   result->stop_reason += os.str();
 }

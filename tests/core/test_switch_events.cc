@@ -895,11 +895,12 @@ TEST(SwitchEvents, ZohRunSeesTheTwistDivergeBeforeTheFrictionLimit) {
 }
 
 // The control: a friction limit the quasi-static model does reach (pvc,
-// mu = 0.3, wheel 2 at ~14.2582 s, zoh dt 0.05). Its approach keeps the
-// twist within 1 % of the last sample's, and the ratio with it stays an
-// order of magnitude under the threshold 0.01 (1.4e-3 measured; the
-// approach's difference spans the sample interval, model.md §8.8).
-TEST(SwitchEvents, ZohApproachToAFrictionLimitKeepsItsTwist) {
+// mu = 0.3, wheel 2 at ~14.2582 s, zoh dt 0.05). The root is followed to
+// the stop, so nothing is added to the samples: the twist's steep but
+// bounded change right at the limit (model.md §8.8) depends on how close to
+// it each integrator's located stop lies, and on stability_mu's pvc
+// mu = 0.1 rows it moved their ratios over 5.7e-5 .. 8.3e-3 when it counted.
+TEST(SwitchEvents, ZohApproachToAFrictionLimitAddsNothing) {
   Scene scene = PaperScene();
   scene.mode = ActuationMode::kPvc;
   scene.mu = 0.3;
@@ -908,12 +909,9 @@ TEST(SwitchEvents, ZohApproachToAFrictionLimitKeepsItsTwist) {
   const SimulationResult r = Simulator(scene, o).Run();
   ASSERT_EQ(r.status, "INFEASIBLE_FRICTION") << r.stop_reason;
   EXPECT_TRUE(r.event.located);
-  ASSERT_TRUE(r.stop_retry.has_value()) << r.stop_reason;
-  EXPECT_LT(r.t_reached - r.stop_retry->t, 1e-8);
-  const TrajectorySample& last = r.samples[r.samples.size() - 2];
-  EXPECT_NEAR(r.stop_retry->velocity.norm(), last.velocity.norm(),
-              0.01 * last.velocity.norm());
-  EXPECT_LT(QuasiStaticInertiaRatio(r, scene), 0.01 / 3);
+  EXPECT_FALSE(r.stop_retry.has_value()) << r.stop_reason;
+  EXPECT_EQ(r.stop_reason.find("root followed"), std::string::npos);
+  EXPECT_LT(QuasiStaticInertiaRatio(r, scene), 1e-3);
 }
 
 // IDA keeps its history across the output times in coupled mode (model.md
