@@ -825,21 +825,24 @@ std::unique_ptr<QuasiStaticSolver> Simulator::StopSolver() const {
 // bracket's lower end, else the stop): each step solved from the last root
 // (StopSolver), half the remaining time, a quarter of the last try after a
 // failure, until within event_tolerance or the steps fall below 1e-3 of
-// the remaining time. If the root is lost before the stop (no quasi-static
-// solution on the way there: a breakaway's signature), the last root
-// reached becomes result->stop_retry (not counted: after the run).
+// the remaining time. If the root is lost before the last 1e-3 of the way
+// (no quasi-static solution on the way to the stop: a breakaway's
+// signature), the last root reached becomes result->stop_retry (not
+// counted: after the run).
 void Simulator::ApproachStop(SimulationResult* result) {
   Session& s = *session_;
   const double t_stop = std::isnan(s.t_lower) ? result->t_reached : s.t_lower;
   if (options_.coupling != Coupling::kZoh || !s.have_prev || !s.have_z_prev ||
       !(t_stop > s.t_prev) || !options_.locate_events)
     return;
+  constexpr double kApproachResolution = 1e-3;
   std::unique_ptr<QuasiStaticSolver> solver = StopSolver();
   double t_a = s.t_prev, fraction = 0.5;
   Configuration q_a = s.theta_prev;
   Eigen::VectorXd z_a = s.z_prev;
   QuasiStaticSolution sol, root;
-  while (t_stop - t_a > options_.event_tolerance && fraction > 1e-3) {
+  while (t_stop - t_a > options_.event_tolerance &&
+         fraction > kApproachResolution) {
     const double t = t_a + fraction * (t_stop - t_a);
     if (!(t > t_a) ||
         Reintegrate(s.t_prev, s.theta_prev, t) != IntegratorStatus::kSuccess)
@@ -856,10 +859,14 @@ void Simulator::ApproachStop(SimulationResult* result) {
     std::swap(root, sol);
     fraction = 0.5;
   }
-  // Followed to the stop: the quasi-static solution exists up to it, and
-  // its twist there, which near a limit can change steeply but boundedly
-  // (model.md §8.8), is left to the samples.
-  if (!(t_a > s.t_prev) || t_stop - t_a <= options_.event_tolerance) return;
+  // Followed to the stop, or lost within the last 1e-3 of the way (the
+  // continuation's own resolution): the quasi-static solution exists up to
+  // the limit as far as this can tell, and its twist there, which near a
+  // limit can change steeply but boundedly (model.md §8.8), is left to the
+  // samples.
+  if (!(t_a > s.t_prev) || t_stop - t_a <= options_.event_tolerance ||
+      t_stop - t_a <= kApproachResolution * (t_stop - s.t_prev))
+    return;
   std::ostringstream os;
   os << std::setprecision(9) << "; the root followed from the last sample's"
      << " along the held twist (" << solver->nlp().name() << ") is lost after"
