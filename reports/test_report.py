@@ -933,6 +933,21 @@ class RefereeTest(unittest.TestCase):
         self.assertGreaterEqual(box.x0, frame.x0 - 1)
         self.assertFalse(box.overlaps(ax.title.get_window_extent(renderer)))
 
+    # 2a. on a stability panel the label is a tick on the top edge, clear of
+    # the title and of the cells' fractions (it hid them inside the cells)
+    def assert_top_tick_clear(self, fig, ax, needle):
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        labels = [t for child in ax.child_axes for t in child.get_xticklabels()
+                  if needle in t.get_text()]
+        self.assertEqual(len(labels), 1)
+        box = labels[0].get_window_extent(renderer)
+        self.assertGreaterEqual(box.y0, ax.get_window_extent(renderer).y1 - 1)
+        self.assertFalse(box.overlaps(ax.title.get_window_extent(renderer)))
+        for cell in ax.texts:
+            self.assertFalse(box.overlaps(cell.get_window_extent(renderer)),
+                             cell.get_text())
+
     def test_mu_min_label_inside_axes(self):
         from quasiroll_report import figures_methods, figures_paper
         plotting.apply_style()
@@ -944,7 +959,7 @@ class RefereeTest(unittest.TestCase):
             fig = plotting.new_figure(7, 1.3 + 0.3 * len(rows))
             ax = fig.add_subplot()
             figures_methods._draw_stability_panel(ax, panel, "μ [-]", "mu")
-            self.assert_inside_axes_clear_of_title(fig, ax, "μ_min")
+            self.assert_top_tick_clear(fig, ax, "μ_min")
             plotting.plt.close(fig)
         fig = plotting.new_figure(5, 4)
         ax = fig.add_subplot()

@@ -8,12 +8,12 @@ import textwrap
 import numpy as np
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
-from matplotlib.ticker import NullFormatter
+from matplotlib.ticker import NullFormatter, NullLocator
 
 from . import selection as sel
 from .data import is_finite
 from .plotting import (MissingData, NOT_RUN_COLOUR, UNKNOWN_COLOUR, cause_colour,
-                       legend_below_log_data, points_under_legend, vline_label,
+                       legend_below_log_data, points_under_legend,
                        fmt, new_figure, no_data, positive, save_figure,
                        text_colour)
 from .data import is_variant
@@ -541,21 +541,29 @@ def _draw_stability_panel(ax, panel, axis_label, axis):
     ax.grid(which="major", visible=False)
     ax.tick_params(which="minor", length=0)
     ax.set_xlabel(axis_label)
-    ax.set_title(panel["label"], fontsize=9, loc="left")
+    # The marker lines' labels are ticks on the top edge: inside the cells
+    # they would hide the cells' fractions.
+    marks = []
     if axis == "mu" and is_finite(panel["mu_min"]):
         x = panel["mu_min"] if xs is None else sel.value_position(xs, panel["mu_min"])
         lo, hi = ax.get_xlim()
         if x is not None and min(lo, hi) <= x <= max(lo, hi):
             ax.axvline(x, color="black", linestyle=":", linewidth=2)
-            vline_label(ax, x, f"μ_min(ref) = {fmt(panel['mu_min'])}", color="black")
+            marks.append((x, f"μ_min(ref) = {fmt(panel['mu_min'])}"))
     for x, substeps in panel.get("limits", []):
         lo, hi = ax.get_xlim()
         if x >= hi:
             ax.set_xlim(lo, x * (1.15 if panel.get("log") else 1.05))
         ax.axvline(x, color="#222222", linestyle="--", linewidth=1.4)
-        vline_label(ax, x, "RK4 limit σ·h = 2.785" + (f" (h = Δt/{substeps})"
-                                                      if substeps != 1 else ""),
-                    color="#222222")
+        marks.append((x, "RK4 limit σ·h = 2.785" + (f" (h = Δt/{substeps})"
+                                                    if substeps != 1 else "")))
+    if marks:
+        top = ax.secondary_xaxis("top")
+        top.set_xticks([x for x, _ in marks])
+        top.set_xticklabels([text for _, text in marks], fontsize=7)
+        top.xaxis.set_minor_locator(NullLocator())
+        top.tick_params(length=3, pad=1)
+    ax.set_title(panel["label"], fontsize=9, loc="left", pad=14 if marks else 6)
 
 
 def _cause_handles(charts):
