@@ -536,8 +536,12 @@ bool LoadCachedReference(const std::string& csv_path,
         static_cast<int>(NumberMember(json, "rescues", &has_rescues));
     if (ac != AnalyticCase::kNone) ref->analytic.emplace(scene, terrain, ac);
     // A cache written before these fields existed (or before the retry
-    // ladder) is recomputed.
-    if (has_mu && has_err && has_rescues && !ref->stop.empty()) return true;
+    // ladder), or under older stop rules, is recomputed.
+    bool has_rules = false;
+    const double rules = NumberMember(json, "stop_rules", &has_rules);
+    if (has_mu && has_err && has_rescues && !ref->stop.empty() && has_rules &&
+        rules == kReferenceStopRules)
+      return true;
     ref->samples.clear();
   } catch (const std::runtime_error&) {
     ref->samples.clear();  // corrupt cache: recompute
@@ -651,6 +655,7 @@ void WriteReferenceCache(const std::string& csv_path,
   w.Key("check_t_reached").Value(info.check_t_reached);
   w.Key("check_wall_s").Value(info.check_wall);
   w.Key("reference_stop").Value(ref.stop);
+  w.Key("stop_rules").Value(kReferenceStopRules);
   w.Key("rescues").Value(ref.rescues);
   w.Key("check_rescues").Value(info.check_rescues);
   w.Key("retries").BeginArray();

@@ -55,6 +55,12 @@
 
 namespace quasiroll::bench {
 
+// The version of the rules above that decide where a reference stops,
+// written into references/<hash>.json (`stop_rules`): 2 since breakaways
+// (model:breakaway). A cache written under other rules is recomputed, since
+// the key names only the scene and the reference settings.
+constexpr int kReferenceStopRules = 2;
+
 // Failing intervals one reference may rescue (each rescue costs at most
 // 4 + 16 + cost_ratio + 1 output intervals' worth of solves; 50 of them stay
 // below the ~1600 intervals of a 20 s reference at h = 0.0125 s).

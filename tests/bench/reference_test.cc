@@ -7,9 +7,13 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <numbers>
+#include <sstream>
+#include <string>
 
 #include "quasiroll/bench/harness/metrics.h"
+#include "quasiroll/bench/harness/reference_retry.h"
 #include "quasiroll/bench/harness/suite.h"
 #include "quasiroll/core/scene.h"
 #include "quasiroll/core/yaml_util.h"
@@ -233,6 +237,30 @@ TEST(BenchReference, CacheRoundTripIsExact) {
               b.samples[i].contacts[2].normal_force);
   }
   EXPECT_EQ(a.status, b.status);
+  // A cache written under other stop rules (reference_retry.h) is
+  // recomputed; one under the current rules is read as it is.
+  const fs::path json = dir / "references" / (a.hash + ".json");
+  auto rewrite = [&](const std::string& from, const std::string& to) {
+    std::ifstream in(json);
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string t = text.str();
+    const std::size_t at = t.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    t.replace(at, from.size(), to);
+    std::ofstream(json) << t;
+  };
+  rewrite("\"status\":\"success\"", "\"status\":\"EDITED\"");
+  EXPECT_EQ(LoadOrComputeReference(dir.string(), l.scene, l.terrain, "",
+                                   settings, "paper")
+                .status,
+            "EDITED");
+  rewrite("\"stop_rules\":" + std::to_string(kReferenceStopRules),
+          "\"stop_rules\":1");
+  EXPECT_EQ(LoadOrComputeReference(dir.string(), l.scene, l.terrain, "",
+                                   settings, "paper")
+                .status,
+            "success");
   // A different scene parameter is a different key.
   l.scene.mu = 0.3;
   EXPECT_NE(ReferenceKey(l.scene, l.terrain, "", settings), a.key);
