@@ -832,8 +832,13 @@ std::unique_ptr<QuasiStaticSolver> Simulator::StopSolver() const {
 void Simulator::ApproachStop(SimulationResult* result) {
   Session& s = *session_;
   const double t_stop = std::isnan(s.t_lower) ? result->t_reached : s.t_lower;
+  // The stop's own sample closes the interval that started at t_prev with
+  // the held twist (an integrator failure inside an interval has none: its
+  // held twist is not the one of the interval from t_prev).
+  const bool stop_sampled =
+      !result->samples.empty() && result->samples.back().t == result->t_reached;
   if (options_.coupling != Coupling::kZoh || !s.have_prev || !s.have_z_prev ||
-      !(t_stop > s.t_prev) || !options_.locate_events)
+      !stop_sampled || !(t_stop > s.t_prev) || !options_.locate_events)
     return;
   constexpr double kApproachResolution = 1e-3;
   std::unique_ptr<QuasiStaticSolver> solver = StopSolver();
