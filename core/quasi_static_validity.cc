@@ -90,10 +90,10 @@ double QuasiStaticInertiaRatio(const SimulationResult& result,
   // a located stop's approach), or follows the last sample when the stop
   // has none of its own. Its difference spans at least the last two
   // samples' interval: a twist that changes steeply but stays bounded right
-  // at a limit (the square-root onset of sliding at a friction limit) then
-  // counts at the samples' resolution, not by how close to the limit the
-  // last sample happens to lie; a diverging one (a breakaway) exceeds any
-  // bound either way.
+  // at a limit (a stall's retry next to a friction limit) then counts at the
+  // samples' resolution, not by how close to the limit the last sample
+  // happens to lie; a diverging one (a breakaway) exceeds any bound either
+  // way.
   double spacing = 0.0;
   const std::vector<TrajectorySample> run = WithStopRetry(result, &spacing);
   return InertiaRatio(run, scene, spacing);

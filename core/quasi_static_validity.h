@@ -32,9 +32,10 @@ Vec3 EstimatedInertia(const Scene& scene);
 // NaN with fewer than two samples with finite velocities and forces.
 double QuasiStaticInertiaRatio(const std::vector<TrajectorySample>& run,
                                const Scene& scene);
-// The same over a run's samples with result.stop_retry (a SOLVER_FAILURE
-// stop's state solved again) in place of the stop's own sample, or after
-// the last sample when the stop has none: the motion up to the stop
+// The same over a run's samples with result.stop_retry (the twist at or
+// just before the stop, solved after the run) in place of the stop's own
+// sample, or after the last sample when the stop has none: the motion up to
+// the stop
 // includes the twist there (a breakaway's diverging twist, model.md §8.8,
 // lies between the last usable sample and the stop, where no sample sees
 // it).

@@ -178,14 +178,16 @@ struct SimulationResult {
   long long checkpoint_iterations = 0;
   // The located physical stop (limit "" if none).
   StopEvent event;
-  // A run that ended with SOLVER_FAILURE: the stop's state solved again
-  // from a cold start (Simulator::RetryStop: which state, which backend;
-  // after the run, not in the counters or wall_seconds), as a sample at that
-  // state's time. A root whose twist dwarfs the samples' before it is the
-  // quasi-static breakaway of model.md §8.8 (the minimum-energy problem's
-  // twist diverges along the path), not a solver's stall;
-  // QuasiStaticInertiaRatio(result, scene) reads it. Empty otherwise, or
-  // when no retried state solves.
+  // The twist at or just before the stop, solved after the run (not in the
+  // counters or wall_seconds), as a sample at that state's time: after a
+  // SOLVER_FAILURE stop the stop's state solved again from a cold start
+  // (Simulator::RetryStop: which state, which backend); zoh, otherwise, the
+  // last root followed from the last sample's along the held twist when it
+  // is lost before the stop (Simulator::ApproachStop). A root whose twist
+  // dwarfs the samples' before it is the quasi-static breakaway of model.md
+  // §8.8 (the minimum-energy problem's twist diverges along the path), not
+  // a solver's stall; QuasiStaticInertiaRatio(result, scene) reads it.
+  // Empty otherwise, or when no such state solves.
   std::optional<TrajectorySample> stop_retry;
   // The located stick/slide switches and creeping wheels' slip reversals
   // (SwitchEvent::reversal), in time order (locate_switches).

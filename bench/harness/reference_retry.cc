@@ -65,8 +65,7 @@ namespace {
 // A run that the ladder retries: neither at its end nor at a physical limit
 // nor at a breakaway.
 bool NeedsRetry(const SimulationResult& r, const Scene& scene) {
-  return !r.success() && !IsPhysicalReferenceStatus(r.status) &&
-         !BreakawayStop(r, scene);
+  return ReferenceStopOf(r, scene) == "reference_failure";
 }
 
 // t rounded to the output grid k h when within 1e-9 s of it (so that stitched

@@ -374,9 +374,9 @@ void WriteStopEvent(const StopEvent& e, JsonWriter* json) {
 }
 
 namespace {
-// "stop_retry": after a SOLVER_FAILURE stop, the stop's state solved again
-// from a cold start (model.md §8.8, the breakaway); null otherwise or if
-// none solved.
+// "stop_retry": SimulationResult::stop_retry, the twist at or just before
+// the stop solved after the run (model.md §8.8, the breakaway); null when
+// there is none.
 void WriteStopRetry(const std::optional<TrajectorySample>& retry,
                     JsonWriter* json) {
   JsonWriter& j = *json;
