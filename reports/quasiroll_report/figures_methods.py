@@ -478,7 +478,7 @@ def value_edges(values, log):
 def _draw_value_cells(ax, panel):
     """A numeric axis: each column a band from half-way to its neighbours,
     positioned by value (log10 where the values span a decade), a tick and a
-    dot at the value itself."""
+    dot at the value itself, the cell's text at the band's centre."""
     from matplotlib.patches import Rectangle
     from matplotlib.ticker import FixedLocator, NullFormatter, NullLocator
     rows, values = panel["rows"], [float(v) for v in panel["values"]]
@@ -507,7 +507,12 @@ def _draw_value_cells(ax, panel):
                     linestyle="none")
             w = width_of(j)
             if w >= 7:
-                ax.text(value, i, cell["label"], ha="center", va="center",
+                # At the band's centre, not the value: two close values (σ·Δt
+                # 2.5 and 3 either side of the RK4 limit) would stack their
+                # texts on the limit line.
+                centre = (math.sqrt(edges[j] * edges[j + 1]) if log
+                          else 0.5 * (edges[j] + edges[j + 1]))
+                ax.text(centre, i, cell["label"], ha="center", va="center",
                         fontsize=7 if w >= 22 else 6, rotation=0 if w >= 22 else 90,
                         color=text, clip_on=True)
     ax.set_xlim(edges[0], edges[-1])
@@ -597,7 +602,8 @@ def _axis_caption(chart):
     if any(p.get("numeric") for p in panels):
         scale = ("log" if any(p.get("log") for p in panels) else "linear")
         out += (f" Columns sit at their values on a {scale} axis (a band reaches "
-                "half-way to the next value; the dot marks the value run).")
+                "half-way to the next value; the dot marks the value run, the text "
+                "sits at the band's centre).")
     limits = sorted({n for p in panels for _, n in p.get("limits", [])})
     if limits:
         steps = ", ".join(f"substeps = {n}: h = Δt/{n}, line at σ·Δt = "
