@@ -822,13 +822,17 @@ std::unique_ptr<QuasiStaticSolver> Simulator::StopSolver() const {
 // hides the quasi-static twist on the way to the stop, and before a
 // breakaway (model.md §8.8) it diverges there. Follows the root from the
 // last sample's along the held path towards the stop (the located
-// bracket's lower end, else the stop): each step solved from the last root
-// (StopSolver), half the remaining time, a quarter of the last try after a
-// failure, until within event_tolerance or the steps fall below 1e-3 of
-// the remaining time. If the root is lost before the last 1e-3 of the way
-// (no quasi-static solution on the way to the stop: a breakaway's
-// signature), the last root reached becomes result->stop_retry (not
-// counted: after the run).
+// bracket's lower end, else the stop) by the continuation of solution
+// jumps (FollowBranch, core/solution_jumps.h): each step reintegrated from
+// the last sample and solved from the last accepted root (StopSolver), a
+// step accepted only if no wheel's slip moved by more than
+// kBranchStepSlipChange of the interval's change to the stop's root (a
+// step that converges onto another root across a fold is not a follow;
+// without a root at the stop any converged step is accepted). If the root
+// ends (or the steps run out) before the last 1e-3 of the way (no
+// quasi-static solution on the way to the stop: a breakaway's signature),
+// the last root reached becomes result->stop_retry (not counted: after the
+// run).
 void Simulator::ApproachStop(SimulationResult* result) {
   Session& s = *session_;
   const double t_stop = std::isnan(s.t_lower) ? result->t_reached : s.t_lower;
@@ -841,42 +845,69 @@ void Simulator::ApproachStop(SimulationResult* result) {
       !stop_sampled || !(t_stop > s.t_prev) || !options_.locate_events)
     return;
   constexpr double kApproachResolution = 1e-3;
-  std::unique_ptr<QuasiStaticSolver> solver = StopSolver();
-  double t_a = s.t_prev, fraction = 0.5;
-  Configuration q_a = s.theta_prev;
-  Eigen::VectorXd z_a = s.z_prev;
-  QuasiStaticSolution sol, root;
-  while (t_stop - t_a > options_.event_tolerance &&
-         fraction > kApproachResolution) {
-    const double t = t_a + fraction * (t_stop - t_a);
-    if (!(t > t_a) ||
-        Reintegrate(s.t_prev, s.theta_prev, t) != IntegratorStatus::kSuccess)
-      break;
-    solver->SetWarmStart(z_a);
-    solver->Solve(s.y_event, &sol);
-    if (sol.status != QuasiStaticStatus::kOk) {
-      fraction *= 0.25;
-      continue;
-    }
-    t_a = t;
-    q_a = s.y_event;
-    z_a = sol.z;
-    std::swap(root, sol);
-    fraction = 0.5;
+  struct Approach {
+    std::unique_ptr<QuasiStaticSolver> solver;
+    QuasiStaticSolution sol, root;
+    Configuration q;
+    double t = 0;
+    double max_change = std::numeric_limits<double>::infinity();
+    std::array<Eigen::Vector2d, 3> slip_now;
+  } a{StopSolver(),
+      {},
+      {},
+      s.theta_prev,
+      s.t_prev,
+      std::numeric_limits<double>::infinity(),
+      {}};
+  // The last sample's root (solved again by the stop solver from itself:
+  // its slips, which the run no longer keeps).
+  a.solver->SetWarmStart(s.z_prev);
+  a.solver->Solve(s.theta_prev, &a.root);
+  if (a.root.status != QuasiStaticStatus::kOk) return;
+  for (int i = 0; i < 3; ++i) a.slip_now[i] = a.root.contacts[i].slip;
+  if (s.sol.status == QuasiStaticStatus::kOk) {
+    double change = 0;
+    for (int i = 0; i < 3; ++i)
+      change =
+          std::max(change, (s.sol.contacts[i].slip - a.slip_now[i]).norm());
+    if (std::isfinite(change))
+      a.max_change = kBranchStepSlipChange * change +
+                     kBranchSlipFloorOverEpsilon * scene_.epsilon;
   }
-  // Followed to the stop, or lost within the last 1e-3 of the way (the
-  // continuation's own resolution): the quasi-static solution exists up to
-  // the limit as far as this can tell, and its twist there, which near a
-  // limit can change steeply but boundedly (model.md §8.8), is left to the
-  // samples.
-  if (!(t_a > s.t_prev) || t_stop - t_a <= options_.event_tolerance ||
-      t_stop - t_a <= kApproachResolution * (t_stop - s.t_prev))
+  const BranchStep step = [this, &a](double t) {
+    Session& ss = *session_;
+    if (Reintegrate(ss.t_prev, ss.theta_prev, t) != IntegratorStatus::kSuccess)
+      return false;
+    a.solver->SetWarmStart(a.root.z);
+    a.solver->Solve(ss.y_event, &a.sol);
+    if (a.sol.status != QuasiStaticStatus::kOk) return false;
+    for (int i = 0; i < 3; ++i)
+      if (!((a.sol.contacts[i].slip - a.slip_now[i]).norm() <= a.max_change))
+        return false;
+    for (int i = 0; i < 3; ++i) a.slip_now[i] = a.sol.contacts[i].slip;
+    a.t = t;
+    a.q = ss.y_event;
+    std::swap(a.root, a.sol);
+    return true;
+  };
+  const BranchEnd end =
+      FollowBranch(s.t_prev, t_stop, options_.event_tolerance, step);
+  // Followed to the stop, or lost within the last 1e-3 of the way: the
+  // quasi-static solution exists up to the limit as far as this can tell,
+  // and its twist there, which near a limit can change steeply but
+  // boundedly (model.md §8.8), is left to the samples.
+  if (end.outcome == BranchEnd::Outcome::kContinues || !(a.t > s.t_prev) ||
+      t_stop - a.t <= options_.event_tolerance ||
+      t_stop - a.t <= kApproachResolution * (t_stop - s.t_prev))
     return;
   std::ostringstream os;
   os << std::setprecision(9) << "; the root followed from the last sample's"
-     << " along the held twist (" << solver->nlp().name() << ") is lost after"
-     << " t = " << t_a << " s: ";
-  SetStopRetry(*model_, t_a, q_a, root, result, &os);
+     << " along the held twist (" << a.solver->nlp().name() << ") "
+     << (end.outcome == BranchEnd::Outcome::kEnds ? "ends" : "was followed")
+     << " after t = " << a.t << " s"
+     << (end.outcome == BranchEnd::Outcome::kEnds ? "" : " (steps used up)")
+     << ": ";
+  SetStopRetry(*model_, a.t, a.q, a.root, result, &os);
   result->stop_reason += os.str();
 }
 
