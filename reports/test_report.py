@@ -883,6 +883,265 @@ class ImplicitFindingsTest(unittest.TestCase):
         self.assertIn("ida 2× (1 matched pair, position errors differ by ≤ 0 %)", text)
 
 
+class PaperFigureRefereeTest(unittest.TestCase):
+    """The referee's points on the paper figures (figures_paper.py): Fig. 5's
+    pair and camber labels, Fig. 6's draw order, the force and slip figures'
+    breaks at located jumps, event styles and labels, the weight line, the
+    tractions' internal forces and the μ_min horizon."""
+
+    @staticmethod
+    def traj(n=21, dt=0.1, **columns):
+        """A trajectory of n samples: level pose, N_i = 49/3 N, slips 1e-5 m/s,
+        the given columns."""
+        traj = {name: np.zeros(n) for name in data.TRAJECTORY_COLUMNS}
+        traj.update(t=np.arange(n) * dt, nlp_status=["OK"] * n)
+        for i in (1, 2, 3):
+            traj[f"n{i}"] = np.full(n, 49.0 / 3)
+            traj[f"slip{i}"] = np.full(n, 1e-5)
+        traj.update({k: np.asarray(v, dtype=float) for k, v in columns.items()})
+        return traj
+
+    @staticmethod
+    def event(t, wheel, kind="switch", before="stick", after="slide"):
+        return {"t": t, "wheel": wheel, "from": before, "to": after, "located": True,
+                "kind": kind, "t_lower": t - 1e-9, "t_upper": t}
+
+    @staticmethod
+    def context(traj, events, references=None, terrain=None, **fields):
+        run = _base_row(run_id="syn", ref_hash="h", **fields)
+        store = types.SimpleNamespace(get=lambda r: traj, switches=lambda r: events,
+                                      has=lambda r: True)
+        return types.SimpleNamespace(primary=run, trajectories=store,
+                                     references=references or {},
+                                     terrain_of=lambda r: terrain, out_dir=None)
+
+    @staticmethod
+    def capture(function, ctx):
+        """(figure, caption) of a figure function, not saved."""
+        from quasiroll_report import figures_paper as fp
+        captured = {}
+
+        def keep(fig, out_dir, name, title, caption):
+            captured.update(fig=fig, caption=caption)
+            return types.SimpleNamespace(name=name, caption=caption, data={})
+        original, fp.save_figure = fp.save_figure, keep
+        try:
+            function(ctx)
+        finally:
+            fp.save_figure = original
+        return captured["fig"], captured["caption"]
+
+    def manifest(self):
+        with open(os.path.join(Fixture.good, "report", "figures.json")) as handle:
+            return {entry["name"]: entry for entry in json.load(handle)}
+
+    def fixture_context(self):
+        from quasiroll_report.report import Context
+        return Context(Fixture.good, os.path.join(Fixture.root, "paper_referee"))
+
+    # 1. Fig. 5: a pair of equal t_end and Δt, the caption's claim checked
+    def test_snapshot_pair_prefers_equal_horizon_and_step(self):
+        primary = _base_row(run_id="p1", method="m1", t_end=20.0, t_reached=20.0, dt=0.025)
+        runs = [primary,
+                _base_row(run_id="q1", method="m1", scene="paper_pvc", t_end=6.0,
+                          t_reached=6.0, dt=0.1),
+                _base_row(run_id="p2", method="m2", t_end=20.0, t_reached=20.0, dt=0.05),
+                _base_row(run_id="q2", method="m2", scene="paper_pvc", t_end=20.0,
+                          t_reached=20.0, dt=0.05),
+                # an ε twin pair, more accurate: the primary's ε wins
+                _base_row(run_id="p3", method="m2", t_end=20.0, t_reached=20.0, dt=0.05,
+                          eps=1e-7, err_pos_rms=1e-9),
+                _base_row(run_id="q3", method="m2", scene="paper_pvc", t_end=20.0,
+                          t_reached=20.0, dt=0.05, eps=1e-7)]
+        paper, pvc = sel.snapshot_pair(runs, lambda r: True, "paper_pvc", primary)
+        self.assertEqual((paper["run_id"], pvc["run_id"]), ("p2", "q2"))
+
+    def test_fig5_says_differ_only_by_mode_only_when_true(self):
+        from quasiroll_report import figures_paper as fp
+        ctx = types.SimpleNamespace(references={}, terrain_of=lambda r: {"type": "plane"})
+        paper = _base_row(run_id="p", method="m", t_end=20.0, dt=0.025)
+        pvc = _base_row(run_id="q", method="m", scene="paper_pvc", t_end=6.0, dt=0.1)
+        differences, compared = fp.pair_differences(ctx, paper, pvc)
+        self.assertEqual(differences, ["t_end 20 s vs 6 s", "Δt 0.025 s vs 0.1 s"])
+        text = fp._pair_sentence(paper, pvc, differences, compared)
+        self.assertNotIn("differ only by", text)
+        self.assertIn("t_end 20 s vs 6 s", text)
+        twin = dict(paper, run_id="q", scene="paper_pvc")
+        self.assertEqual(fp.pair_differences(ctx, paper, twin)[0], [])
+        self.assertIn("differ only by the camber mode",
+                      fp._pair_sentence(paper, twin, *fp.pair_differences(ctx, paper, twin)))
+        # The fixture's pair: both scenes' μ = 0.5 runs of one method, 8 s, Δt 0.1.
+        entry = self.manifest()["fig05_snapshots"]
+        self.assertEqual(entry["data"]["differences"], [])
+        self.assertIn("differ only by the camber mode", entry["caption"])
+
+    def test_camber_labels_have_significant_digits_and_no_signed_zero(self):
+        from quasiroll_report import figures_paper as fp
+        self.assertEqual(fp.degrees_text(0.0), "0°")
+        self.assertEqual(fp.degrees_text(-0.0), "0°")
+        self.assertEqual(fp.degrees_text(0.0153), "+0.015°")
+        self.assertEqual(fp.degrees_text(-0.00412), "-0.0041°")
+        for panel in self.manifest()["fig05_snapshots"]["data"]["panels"]:
+            for label in panel["camber_labels"]:
+                self.assertNotRegex(label, r"[+-]0\.0°")
+                self.assertRegex(label, r"^δ[23]=(0|[+-]\d\.?\d*(e-\d+)?)°$")
+
+    # 2. lines break at located jumps, not at continuous switches
+    def test_lines_break_at_located_jumps_only(self):
+        from quasiroll_report import figures_paper as fp
+        t = np.arange(21) * 0.1
+        jumping = np.where(t > 1.05, 5.0, 0.0) + 0.01 * t
+        smooth = 0.01 * t
+        spans = fp._event_spans([self.event(1.05, 1)])
+        self.assertEqual(fp.break_cuts(t, jumping, spans), [10])
+        self.assertEqual(fp.break_cuts(t, smooth, spans), [])     # continuous: no break
+        jump = fp._event_spans([self.event(0.55, w, "solution_jump", "slide", "slide")
+                                for w in (1, 2, 3)])
+        self.assertEqual(fp.break_cuts(t, smooth, jump), [5])     # a solution jump always
+        xs, ys = fp.with_breaks(t, jumping, [10])
+        self.assertEqual(xs.size, 22)
+        self.assertTrue(np.isnan(ys[11]) and 1.0 < xs[11] < 1.1)
+        # A stick window (slide→stick ... stick→slide) is a span of its own.
+        window = fp._event_spans([self.event(0.92, 1, before="slide", after="stick"),
+                                  self.event(1.08, 1)])
+        self.assertIn((0.92 - 1e-9, 1.08, False), window)
+
+    def test_extremes_leave_out_a_sample_inside_a_transition(self):
+        from quasiroll_report import figures_paper as fp
+        plotting.apply_style()
+        lon = np.where(np.arange(21) * 0.1 > 1.05, 5.0, 0.0)
+        lon[10] = 12.0                      # the sample at 1.0 s, mid-transition
+        events = [self.event(0.92, 1, before="slide", after="stick"), self.event(1.08, 1)]
+        ctx = self.context(self.traj(t1_lon=lon), events)
+        fig, ax, facts = fp._wheel_figure(ctx, "t{i}_lon", "N")
+        wheel1 = next(line for line in ax.get_lines() if line.get_label() == "wheel 1")
+        self.assertEqual(int(np.sum(np.isnan(wheel1.get_ydata()))), 2)
+        self.assertEqual(sorted(facts["inside"]), [1.0])
+        text = fp._range_text(facts, ctx.primary, "N")
+        self.assertIn("[0, 5] N", text)
+        self.assertIn("leaving out 1 sample(s) that fall inside a transition", text)
+        plotting.plt.close(fig)
+
+    # 3. Fig. 12: located reversals marked, the dip explained
+    def test_slip_figure_marks_located_reversals(self):
+        from quasiroll_report import figures_paper as fp
+        plotting.apply_style()
+        t = np.arange(21) * 0.1
+        slip3 = np.maximum(np.abs(t - 1.03) * 1e-5, 1e-12)
+        ctx = self.context(self.traj(slip3=slip3),
+                           [self.event(1.03, 3, "creep_reversal", "stick", "stick")])
+        fig, caption = self.capture(fp.figure_slip, ctx)
+        ax = fig.axes[0]
+        marks = [line for line in ax.get_lines() if line.get_marker() == "^"]
+        self.assertEqual([float(line.get_xdata()[0]) for line in marks], [1.03])
+        self.assertIn("passes through zero, at the located time", caption)
+        self.assertIn("output sample nearest to it", caption)
+        plotting.plt.close(fig)
+
+    # 4. event lines in styles of their own, labels with 5 digits, merged
+    def test_event_styles_and_labels(self):
+        from matplotlib.lines import _get_dash_pattern
+        from quasiroll_report import figures_paper as fp
+
+        def shape(style):
+            """The pattern's on-segments as dots and dashes: ('dash', 'dot') is
+            dash-dotted whatever the lengths."""
+            pattern = _get_dash_pattern(style)[1] or ()
+            return tuple("dot" if on <= 1.5 else "dash" for on in pattern[::2])
+        wheels = {shape(style) for _, style in plotting.WHEEL_STYLES}
+        events = {shape(style) for _, style in fp._EVENT_LINES.values()}
+        self.assertEqual(len(events), 3)
+        self.assertFalse(events & wheels, (events, wheels))
+        plotting.apply_style()
+        fig = plotting.new_figure(8, 4.2)
+        ax = fig.add_subplot()
+        ax.plot([0, 20], [0, 1])
+        _, _, _, texts = fp._draw_events(ax, [
+            self.event(2.902958448, 1), self.event(2.9193454, 3, before="slide", after="stick"),
+            *[self.event(2.9071446858, w, "solution_jump", "slide", "slide") for w in (1, 2, 3)],
+            self.event(16.647243, 3, "creep_reversal", "stick", "stick")])
+        self.assertEqual(texts, ["2.903 S1\n2.9071 J\n2.9193 S3", "16.647 R3"])
+        plotting.plt.close(fig)
+
+    # 5. Fig. 9: the weight line; vertical components of the contact forces
+    def test_normal_forces_draw_the_weight(self):
+        from quasiroll_report import figures_paper as fp
+        plotting.apply_style()
+        references = {"h": {"key": "robot{a=0.25};mass=5;gravity=9.8;mode=paper"}}
+        ctx = self.context(self.traj(n1=np.full(21, 20.0)), [], references,
+                           {"type": "plane", "height": 0.0})
+        fig, caption = self.capture(fp.figure_normal_forces, ctx)
+        weights = [line for line in fig.axes[0].get_lines()
+                   if list(line.get_ydata()) == [49.0, 49.0]]
+        self.assertEqual(len(weights), 1)
+        self.assertIn("m g = 49 N", caption)
+        self.assertIn("tractions have vertical components", caption)
+        self.assertIn("balance m g within 3.67 N", caption)   # Σ N = 52.67 N here
+        plotting.plt.close(fig)
+        # On an incline the normals tilt: Σ F_z = Σ N cos β without tractions.
+        incline = self.context(self.traj(), [], references,
+                               {"type": "incline", "slope_deg": 20.0})
+        vertical = fp.vertical_force_sum(incline, incline.primary, self.traj())
+        self.assertAlmostEqual(float(vertical[0]), 49.0 * float(np.cos(np.radians(20.0))),
+                               places=6)
+
+    # 6. Fig. 10: internal forces, the net line, creeping wheels marked
+    def test_longitudinal_traction_net_line_and_creep(self):
+        from quasiroll_report import figures_paper as fp
+        plotting.apply_style()
+        ctx = self.context(self.traj(t1_lon=np.full(21, -10.0), t2_lon=np.full(21, 5.0),
+                                     t3_lon=np.full(21, 5.5), slip1=np.full(21, 1e-9)),
+                           [], eps=1e-8)
+        fig, caption = self.capture(fp.figure_longitudinal_traction, ctx)
+        lines = {line.get_label(): line for line in fig.axes[0].get_lines()}
+        self.assertTrue(np.allclose(lines["sum (net)"].get_ydata(), 0.5))
+        grey = [line for line in fig.axes[0].get_lines()
+                if line.get_color() == fp.CREEP_UNDERLAY]
+        self.assertEqual(len(grey), 3)
+        self.assertEqual([int(np.sum(np.isfinite(line.get_ydata()))) for line in grey],
+                         [21, 0, 0])
+        for text in ("internal, antagonistic forces", "scale with μ",
+                     "fixed by the creep regularisation", "the net traction",
+                     "wheel 1 100 %"):
+            self.assertIn(text, caption)
+        self.assertNotIn("must provide", caption)
+        plotting.plt.close(fig)
+
+    # 7. Figs. 13-14: the μ_min horizon; Fig. 13's rows and shared μ axes
+    def test_mu_min_horizon_and_traction_rows(self):
+        from quasiroll_report import figures_paper as fp
+        manifest = self.manifest()
+        for name in ("fig13_traction_vs_mu", "fig14_total_slip_vs_mu"):
+            self.assertIn("paper needs μ ≥ 0.27 over 0–8 s", manifest[name]["caption"])
+            self.assertEqual([p["mu_min_horizon"] for p in manifest[name]["data"]["panels"]],
+                             [8.0, 8.0])
+        caption = manifest["fig13_traction_vs_mu"]["caption"]
+        self.assertIn("mean |longitudinal traction| only", caption)
+        self.assertIn("total traction norm", caption)
+        self.assertIn("scale with μ", caption)
+        fig = plotting.new_figure(5, 4)
+        ax = fig.add_subplot()
+        ax.plot([0.2, 0.8], [1, 2])
+        self.assertIn("(0–20 s)", fp._mu_min_line(ax, 0.43, 20.0).get_text())
+        plotting.plt.close(fig)
+        plotting.apply_style()
+        fig, _ = self.capture(fp.figure_traction_vs_mu, self.fixture_context())
+        top, bottom = fig.axes[0], fig.axes[1]
+        self.assertTrue(top.get_shared_x_axes().joined(top, bottom))
+        plotting.plt.close(fig)
+
+    # 8. Fig. 6: the centre path under the contact paths, thinner
+    def test_locus_centre_path_drawn_first_and_thinner(self):
+        from quasiroll_report import figures_paper as fp
+        plotting.apply_style()
+        fig, _ = self.capture(fp.figure_locus, self.fixture_context())
+        lines = {line.get_label(): line for line in fig.axes[0].get_lines()}
+        centre, wheel1 = lines["platform centre"], lines["contact point wheel 1"]
+        self.assertLess(centre.get_linewidth(), wheel1.get_linewidth())
+        self.assertLess(centre.get_zorder(), wheel1.get_zorder())
+        plotting.plt.close(fig)
+
+
 class RefereeTest(unittest.TestCase):
     """Issue #21 item 8, the referee's smaller points (report side)."""
 
@@ -1434,6 +1693,207 @@ class StopLocationFindingsTest(unittest.TestCase):
     def test_without_the_columns_nothing_is_said(self):
         from quasiroll_report import findings
         self.assertEqual(findings.stop_location_findings([dict(coupling="zoh")]), [])
+
+
+class MethodFigureRefereeTest(unittest.TestCase):
+    """The referee's defects of the method figures (work-precision, drift,
+    Fig. 15, stability charts): each check failed before its fix."""
+
+    @staticmethod
+    def _wp_row(method, dt, err, wall, tol=1e-6):
+        nlp, dae, coupling = method.split("/")
+        return _base_row(run_id=f"{method}-{dt}-{tol}", method=method, nlp=nlp, dae=dae,
+                         coupling=coupling, dt=dt, tol=tol, err_pos_rms=err,
+                         err_force_rms=err, wall_s=wall)
+
+    def _panel(self, rows, estimate, metric="err_pos_rms", unresolved=float("nan")):
+        from quasiroll_report import figures_methods as fm
+        plotting.apply_style()
+        fig = plotting.new_figure(6, 4)
+        ax = fig.add_subplot()
+        problem = {"rows": rows, "label": "p", "t_end": 8.0, "ref_err_est": estimate}
+        out = fm._work_precision_panel(ax, problem, metric, "error", False, {}, unresolved)
+        fig.canvas.draw()
+        self.addCleanup(plotting.plt.close, fig)
+        return ax, out
+
+    def manifest(self):
+        with open(os.path.join(Fixture.good, "report", "figures.json")) as handle:
+            return {entry["name"]: entry for entry in json.load(handle)}
+
+    # 1. the reference's estimate left of every point is inside the axis
+    def test_reference_estimate_left_of_the_points_is_drawn(self):
+        rows = [self._wp_row("a/b/zoh", dt, 1e-3 * dt, 0.1 / dt) for dt in (0.2, 0.1, 0.05)]
+        ax, _ = self._panel(rows, 1e-9, unresolved=1e-9)
+        lo, hi = ax.get_xlim()
+        self.assertLess(lo, 1e-9)
+        self.assertGreater(hi, 2e-4)
+        self.assertTrue(any(list(line.get_xdata()) == [1e-9, 1e-9]
+                            and line.get_linestyle() == ":" for line in ax.lines))
+
+    # 1. a measured floor too narrow to see gets a line of fixed width
+    def test_narrow_floor_band_is_drawn_visible(self):
+        rows = ([self._wp_row("a/b/zoh", dt, 1e-8 / 0.05 * dt, 0.1 / dt)
+                 for dt in (0.2, 0.1, 0.05)]
+                + [self._wp_row("c/d/zoh", dt, 1.01e-8 / 0.05 * dt ** 4 * 8000, 0.2 / dt)
+                   for dt in (0.4, 0.2, 0.05)])
+        ax, (_, _, floor, narrow) = self._panel(rows, float("nan"))
+        self.assertAlmostEqual(floor[1] / floor[0], 1.01, places=6)
+        self.assertTrue(narrow)
+        self.assertTrue(any(line.get_linewidth() == 4 for line in ax.lines))
+
+    # 2. below the reference's estimate errors tie: only time ranks them
+    def test_points_below_the_reference_estimate_are_tied(self):
+        fast = {"err": 5e-10, "wall": 1.0, "wall_q1": 1.0, "wall_q3": 1.0}
+        accurate = {"err": 1e-11, "wall": 2.0, "wall_q1": 2.0, "wall_q3": 2.0}
+        coarse = {"err": 1e-6, "wall": 0.1, "wall_q1": 0.1, "wall_q3": 0.1}
+        points = [fast, accurate, coarse]
+        self.assertEqual(len(sel.non_dominated(points)), 3)   # unresolved order decides
+        front = sel.non_dominated(points, floor=6e-10)
+        self.assertIn(fast, front)
+        self.assertIn(coarse, front)
+        self.assertNotIn(accurate, front)
+        # a resolved point is still not beaten by an error difference below 1 %
+        self.assertFalse(sel.dominates(fast, dict(accurate, err=6.05e-10), floor=6e-10))
+        # the panel: hatched below the estimate, one ring there
+        rows = [self._wp_row("a/b/zoh", 0.1, 5e-10, 1.0), self._wp_row("c/d/zoh", 0.1, 1e-11, 2.0),
+                self._wp_row("e/f/zoh", 0.1, 1e-6, 0.1)]
+        ax, (_, front, _, _) = self._panel(rows, 6e-10, unresolved=6e-10)
+        self.assertEqual(sorted(p["err"] for p in front), [5e-10, 1e-6])
+        self.assertTrue(any(patch.get_hatch() == "////" for patch in ax.patches))
+
+    # 3. force errors at round-off level tie at 1e3·ε·|N|
+    def test_force_round_off_floor(self):
+        self.assertAlmostEqual(sel.roundoff_floor(16.0), 1e3 * np.finfo(float).eps * 16.0)
+        self.assertTrue(np.isnan(sel.roundoff_floor(float("nan"))))
+        floor = sel.roundoff_floor(16.0)
+        rows = [self._wp_row("a/b/zoh", 0.1, 1e-15, 2.0), self._wp_row("c/d/zoh", 0.1, 3e-15, 1.0),
+                self._wp_row("e/f/zoh", 0.1, 1e-9, 0.5)]
+        ax, (_, front, _, _) = self._panel(rows, float("nan"), "err_force_rms", floor)
+        self.assertEqual(sorted(p["err"] for p in front), [3e-15, 1e-9])
+        self.assertTrue(any(line.get_linestyle() == "-." for line in ax.lines))
+        # the fixture's force panels: the floor from a trajectory's forces
+        manifest = self.manifest()["fig_work_precision"]
+        force = [p for p in manifest["data"]["panels"] if p["metric"] == "err_force_rms"]
+        self.assertTrue(force)
+        for panel in force:
+            self.assertTrue(0 < panel["unresolved_below"] < 1e-10, panel["unresolved_below"])
+        self.assertIn("force round-off floor", manifest["caption"])
+
+    # 4. the zoh order is measured, O(Δt) claimed only where observed
+    def test_zoh_order_sentence_is_measured(self):
+        from quasiroll_report import figures_methods as fm
+
+        def line(order, dae):
+            return [{"dt": dt, "tol": 1e-6, "err": 1e-3 * dt ** order, "coupling": "zoh",
+                     "dae": dae} for dt in (0.4, 0.2, 0.1, 0.05)]
+        orders = sel.observed_orders({"x": line(4.0, "rk"), "short": line(1.0, "rk")[:2]})
+        self.assertEqual(list(orders), ["x"])
+        self.assertAlmostEqual(orders["x"], 4.0)
+        text = fm._hold_order_text([({"label": "A"}, {"n/rk/zoh": line(1.0, "rk")}),
+                                    ({"label": "B"}, {"n/rk/zoh": line(4.0, "rk"),
+                                                      "n/cv/zoh": line(1.0, "cv")})])
+        self.assertIn("O(Δt)", text)
+        self.assertIn("observed on A (zoh orders 1.00 to 1.00)", text)
+        self.assertIn("Not so on B (zoh orders per integrator: cv 1.0, rk 4.0)", text)
+        self.assertNotIn("however accurate its integrator (hold error)", text)
+        caption = self.manifest()["fig_work_precision"]["caption"]
+        self.assertIn("its error falls only as O(Δt) however accurate its integrator: "
+                      "observed on", caption)
+
+    # 5. the omission note names only methods of the problems drawn
+    def test_failed_note_only_names_the_drawn_problems(self):
+        manifest = self.manifest()
+        for name in ("fig_work_precision", "fig_drift"):
+            caption = manifest[name]["caption"]
+            self.assertIn(FAILED_ONLY, caption, name)
+            self.assertNotIn(FAILED_VARIANT, caption, name)   # stability_sigma_dt only
+        runs, _ = read_runs(Fixture.good)
+        problems = sel.work_precision_problems(runs)
+        self.assertEqual(sel.failed_only_in(runs, problems), [FAILED_ONLY])
+
+    # 6. Fig. 15: bounded only with a plateau; within-step drift for both
+    def test_stabilisation_caption_states_what_the_data_show(self):
+        from quasiroll_report import figures_methods as fm
+        t = np.linspace(0.0, 20.0, 201)
+        self.assertGreater(fm.late_growth(t, 1e-10 * (1 + t)), fm.PLATEAU_GROWTH)
+        self.assertAlmostEqual(fm.late_growth(t, 1e-10 * (1 - np.exp(-t))), 1.0, places=3)
+        entry = self.manifest()["fig15_stabilisation"]
+        caption = entry["caption"]
+        self.assertIn("Like with like, within the steps before any projection "
+                      "(drift_step_max, dashed)", caption)
+        self.assertTrue("levels off (" in caption or "still growing at t_end" in caption)
+        self.assertEqual(sorted(entry["data"]["step_drift"]), ["rk-baumgarte", "rk-projection"])
+        self.assertTrue(any(t.startswith("within the steps:") for t in entry["data"]["legend"]))
+
+    # 7. the stability caption counts the rows drawn, not the method ids
+    def test_stability_caption_counts_rows(self):
+        entry = self.manifest()["fig_stability_sigma_dt"]
+        rows = {r for p in entry["data"]["panels"] for r in p["rows"]}
+        self.assertEqual(len(rows), 1)
+        self.assertIn("This run: 1 method row (from 3 method ids", entry["caption"])
+
+    # 8. integrators sharing one NLP are told apart; coinciding curves named
+    def test_integrators_distinguished_and_coinciding_curves_noted(self):
+        from quasiroll_report import figures_methods as fm
+        t = np.linspace(0, 1, 50)
+        y = 1e-13 * (1 + t)
+        self.assertTrue(fm.coinciding((t, y), (t, y * 1.02)))
+        self.assertFalse(fm.coinciding((t, y), (t, y * 2)))
+        self.assertFalse(fm.coinciding((t, y), (t[:-1], y[:-1])))
+        plotting.apply_style()
+        fig = plotting.new_figure(5, 3)
+        self.addCleanup(plotting.plt.close, fig)
+        ax = fig.add_subplot()
+        runs = [dict(method="newton/rk-projection/zoh", dae="rk-projection"),
+                dict(method="newton/cvode-projection/zoh", dae="cvode-projection")]
+        pairs = fm.plot_integrator_curves(ax, [(runs[0], t, y, "a"), (runs[1], t, y, "b")], {})
+        self.assertEqual(pairs, [("cvode-projection", "rk-projection")])
+        first, second = ax.lines
+        self.assertNotEqual(first.get_color(), second.get_color())
+        self.assertEqual(first.get_linestyle(), "-")
+        self.assertEqual(second.get_linestyle(), "--")
+        self.assertIn("colour = integrator", self.manifest()["fig_drift"]["caption"])
+
+    # 9. a failed cell that reached t_end says why; "not run" only when present
+    def test_end_of_run_failure_mark_and_not_run_legend(self):
+        from quasiroll_report import figures_methods as fm
+        late = _base_row(status="drift_exceeded", t_reached=8.0, t_reached_frac=1.0,
+                         cause="numerical", cause_detail="baumgarte_instability")
+        cell = sel.stability_cell([late])
+        self.assertEqual(cell["label"], "1.00·drift")
+        self.assertEqual(sel.stability_cell([dict(late, status="gap_exceeded")])["label"],
+                         "1.00·gap")
+        self.assertEqual(sel.stability_cell([dict(late, t_reached=4.0,
+                                                  t_reached_frac=0.5)])["label"], ".50")
+        self.assertIn("1.00·drift = reached t_end, but drift_max broke", fm._end_mark_text([cell]))
+        self.assertEqual(fm._end_mark_text([sel.stability_cell([_base_row()])]), "")
+        full = {"panels": [{"rows": ["m"], "values": [0.1], "cells": {("m", 0): cell}}]}
+        gap = {"panels": [{"rows": ["m", "n"], "values": [0.1], "cells": {("m", 0): cell}}]}
+        self.assertNotIn("not run", [h.get_label() for h in fm._cause_handles([full])])
+        self.assertIn("not run", [h.get_label() for h in fm._cause_handles([gap])])
+
+    # 10. legend labels wrap at '/', ',' or ' ', never inside a token
+    def test_legend_wraps_between_tokens(self):
+        from quasiroll_report import figures_methods as fm
+        from matplotlib.lines import Line2D
+        method = "ceres/cvode-projection[jacobian=fd,lmm=bdf,nonlinear_solver=newton]/coupled"
+        for width in (40, 32, 26, 20):
+            lines = plotting.wrap_label(method, width).split("\n")
+            self.assertEqual("".join(lines), method)
+            self.assertTrue(all(line[-1] in "/," for line in lines[:-1]), lines)
+        self.assertEqual(plotting.wrap_label("non-dominated (beaten by", 16),
+                         "non-dominated\n(beaten by")
+        plotting.apply_style()
+        fig = plotting.new_figure(6, 3)
+        self.addCleanup(plotting.plt.close, fig)
+        gs = fig.add_gridspec(1, 2, width_ratios=[1, 0.3])
+        handles = [Line2D([], [], label=method)]
+        fm._legend_axes(fig, gs[0, 1], handles)
+        label = handles[0].get_label()
+        self.assertIn("\n", label)
+        self.assertEqual(label.replace("\n", ""), method)
+        self.assertTrue(all(part[-1] in "/," for part in label.split("\n")[:-1]), label)
 
 
 if __name__ == "__main__":

@@ -3,7 +3,6 @@ constraint drift, and the stability charts (one per stability_<axis> group).
 """
 
 import math
-import textwrap
 
 import numpy as np
 from matplotlib.lines import Line2D
@@ -11,11 +10,11 @@ from matplotlib.patches import Patch
 from matplotlib.ticker import NullFormatter, NullLocator
 
 from . import selection as sel
-from .data import is_finite
+from .data import dae_option, has_dae_option, is_finite
 from .plotting import (MissingData, NOT_RUN_COLOUR, UNKNOWN_COLOUR, cause_colour,
-                       legend_below_log_data, points_under_legend,
+                       integrator_colour, legend_below_log_data, points_under_legend,
                        fmt, new_figure, no_data, positive, save_figure,
-                       text_colour)
+                       text_colour, wrap_label)
 from .data import is_variant
 from .problems import (coupling_line, dae_marker, method_style, nlp_colour, plot_style,
                        problem_label)
@@ -26,11 +25,14 @@ WP_METRICS = [
 ]
 
 
-def _failed_note(ctx):
-    if not ctx.failed_only:
+def _failed_note(ctx, problems):
+    """The methods the figure's problems ran whose runs there all failed
+    (selection.failed_only_in): not those of other groups' problems."""
+    failed = sel.failed_only_in(ctx.runs, problems)
+    if not failed:
         return ""
     return (" Omitted because all their runs failed: "
-            + ", ".join(ctx.failed_only) + ".")
+            + ", ".join(failed) + ".")
 
 
 def style_legend_handles(rows, extra=(), styles=None):
@@ -54,9 +56,10 @@ def style_legend_handles(rows, extra=(), styles=None):
 
 def _legend_axes(fig, gs_cell, handles, title=None):
     """A legend in its own grid cell, its labels wrapped (at 40, 32, 26, 20
-    characters; labels already broken into lines are kept) until it ends
-    inside the figure: the cell's width is fixed and a long label would be
-    cut off at the figure's edge."""
+    characters, only after '/' or ',' or at a space, never inside a token:
+    plotting.wrap_label; labels already broken into lines are kept) until it
+    ends inside the figure: the cell's width is fixed and a long label would
+    be cut off at the figure's edge."""
     ax = fig.add_subplot(gs_cell)
     ax.axis("off")
     labels = [h.get_label() for h in handles]
@@ -64,7 +67,7 @@ def _legend_axes(fig, gs_cell, handles, title=None):
         if width:
             for handle, label in zip(handles, labels):
                 if "\n" not in label:
-                    handle.set_label(textwrap.fill(label, width))
+                    handle.set_label(wrap_label(label, width))
         legend = ax.legend(handles=handles, loc="upper left", frameon=False,
                            title=title, borderaxespad=0.0)
         fig.canvas.draw()
@@ -120,27 +123,65 @@ def _draw_floor(ax, estimate):
     return True
 
 
+# A measured-floor band narrower than this share of the x-axis (in log
+# decades, ~4 px on a 430 px axis) is drawn as a line of fixed width too.
+MIN_BAND_SHARE = 0.01
+FLOOR_COLOUR = "#e8c07a"
+# Where errors are not resolved (below the reference's estimated error, or
+# below the force round-off floor): hatched, errors there tied for the rings.
+UNRESOLVED_STYLE = {"facecolor": "none", "edgecolor": "#6a6ab0", "hatch": "////",
+                    "linewidth": 0, "alpha": 0.5, "zorder": 0}
+
+
+def _include_in_xlim(ax, *xs):
+    """Widen the (log) x-limits so every positive finite x lies inside, by a
+    margin of 0.25 decade, and fix them: a band or line added later then
+    cannot move them, and a marker line left of every point is drawn."""
+    lo, hi = ax.get_xlim()
+    for x in xs:
+        if is_finite(x) and x > 0:
+            lo, hi = min(lo, x / 10 ** 0.25), max(hi, x * 10 ** 0.25)
+    ax.set_xlim(lo, hi)
+    return lo, hi
+
+
 def _draw_measured_floor(ax, low, high):
     """The measured error floor: the spread of the best methods' errors at
-    their tightest settings (selection.error_floor), a shaded band."""
+    their tightest settings (selection.error_floor), a shaded band; grey
+    below it. Call once the x-limits are fixed. A band narrower than
+    MIN_BAND_SHARE of the axis gets a 4 pt line at its centre as well, so it
+    stays visible. Returns True when the band was that narrow."""
     if not (is_finite(low) and is_finite(high) and low > 0):
         return False
     lo, hi = ax.get_xlim()
     ax.axvspan(min(lo, low / 2), low, color="#bbbbbb", alpha=0.35, zorder=0, linewidth=0)
-    ax.axvspan(low, max(high, low * 1.05), color="#e8c07a", alpha=0.35, zorder=0,
+    ax.axvspan(low, max(high, low * 1.05), color=FLOOR_COLOUR, alpha=0.35, zorder=0,
                linewidth=0)
+    narrow = math.log10(max(high, low) / low) < MIN_BAND_SHARE * math.log10(hi / lo)
+    if narrow:
+        ax.axvline(math.sqrt(low * max(high, low)), color=FLOOR_COLOUR, alpha=0.9,
+                   linewidth=4, zorder=0.5)
     ax.set_xlim(lo, hi)
-    return True
+    return narrow
 
 
-def _work_precision_panel(ax, problem, metric, label, spread, styles):
+def _draw_roundoff(ax, floor):
+    if is_finite(floor) and floor > 0:
+        ax.axvline(floor, color="#6a6ab0", linestyle="-.", linewidth=1.0)
+
+
+def _work_precision_panel(ax, problem, metric, label, spread, styles, unresolved=math.nan):
+    """One problem's chart of one metric. `unresolved`: the error below which
+    points are not resolved (the reference's estimate for positions, the
+    round-off floor for forces): hatched, tied at it for the rings.
+    Returns (series, front, measured floor, narrow floor band)."""
     series = sel.work_precision_series(None, metric, rows=problem["rows"])
     points = _plot_series(ax, series, styles)
     ax.set_title(f"{problem['label']} — {metric}", fontsize=9)
     if not points:
         no_data(ax, f"no successful run with finite {metric}")
-        return series, [], (math.nan, math.nan, [])
-    front = sel.non_dominated(points)
+        return series, [], (math.nan, math.nan, []), False
+    front = sel.non_dominated(points, floor=unresolved)
     _draw_front(ax, front)
     ax.set_xscale("log")
     ax.set_yscale("log")
@@ -151,11 +192,158 @@ def _work_precision_panel(ax, problem, metric, label, spread, styles):
         sec = ax.secondary_yaxis("right", functions=(lambda w: w / t_end,
                                                      lambda s: s * t_end))
         sec.set_ylabel("wall time per simulated second [s/s]")
+    estimate = problem["ref_err_est"] if metric == "err_pos_rms" else math.nan
+    # The reference's estimate is always shown (the caption quotes it); the
+    # round-off floor only near the data, not decades left of every point.
+    near = any(p["err"] < 10 * unresolved for p in points) if is_finite(unresolved) else False
+    lo, _ = _include_in_xlim(ax, estimate, unresolved if near else math.nan)
     floor = sel.error_floor(series)
-    _draw_measured_floor(ax, floor[0], floor[1])
-    if metric == "err_pos_rms":
-        _draw_floor(ax, problem["ref_err_est"])
-    return series, front, floor
+    narrow = _draw_measured_floor(ax, floor[0], floor[1])
+    if is_finite(unresolved) and unresolved > lo:
+        ax.axvspan(lo, unresolved, **UNRESOLVED_STYLE)
+    _draw_floor(ax, estimate)
+    if metric != "err_pos_rms":
+        _draw_roundoff(ax, unresolved)
+    return series, front, floor, narrow
+
+
+def _typical_force(ctx, problem):
+    """(median |N| over the wheels and samples [N], run) of the problem's
+    most accurate (err_force_rms) successful run with a trajectory: the
+    force scale of its round-off floor; (nan, None) without one."""
+    rows = sorted((r for r in problem["rows"] if is_finite(r.get("err_force_rms", math.nan))),
+                  key=lambda r: (r["err_force_rms"], r["run_id"]))
+    for run in rows:
+        traj = ctx.trajectories.get(run) if ctx.trajectories.has(run) else None
+        if traj is None:
+            continue
+        forces = np.abs(np.concatenate([traj[f"n{i}"] for i in (1, 2, 3)]))
+        forces = forces[np.isfinite(forces)]
+        if forces.size:
+            return float(np.median(forces)), run
+    return math.nan, None
+
+
+def _wp_panel_data(problem, metric, series, front, floor, unresolved, narrow):
+    """figures.json record of one work-precision panel."""
+    return {"problem": problem["label"], "metric": metric,
+            "problem_key": list(problem["key"]),
+            "t_end": sorted({r["t_end"] for r in problem["rows"] if is_finite(r["t_end"])}),
+            "scenes": sorted({r["scene"] for r in problem["rows"]}),
+            "ref_hashes": sorted({r.get("ref_hash", "") for r in problem["rows"]}),
+            "lines": list(series),
+            "front": [[p["err"], p["wall"]] for p in front],
+            "front_lines": _front_methods(series, front),
+            "labels": {line: [p["label"] for p in rungs] for line, rungs in series.items()},
+            "floor": [floor[0], floor[1]], "floor_lines": floor[2],
+            "narrow_floor": narrow, "unresolved_below": unresolved,
+            "exclusive": all(p["exclusive"] for rungs in series.values() for p in rungs),
+            "ref_err_est": problem["ref_err_est"]}
+
+
+def _wp_legend_extra(problems, roundoff, narrow):
+    extra = [Line2D([], [], color="black", linestyle="none", marker="o", markersize=9,
+                    markerfacecolor="none", label="non-dominated (beaten by\n"
+                    "> IQR in time and > 1 %\nin error by no point)"),
+             Patch(facecolor=FLOOR_COLOUR, alpha=0.5,
+                   label="measured floor: spread of\nthe best methods' tightest\nrungs"),
+             Patch(facecolor="#bbbbbb", alpha=0.5, label="below every method")]
+    if narrow:
+        extra.append(Line2D([], [], color=FLOOR_COLOUR, linewidth=4,
+                            label="measured floor narrower\nthan this line"))
+    if any(is_finite(p["ref_err_est"]) for p in problems):
+        extra.append(Line2D([], [], color="#555555", linestyle=":",
+                            label="reference's estimated\nerror"))
+    if roundoff:
+        extra.append(Line2D([], [], color=UNRESOLVED_STYLE["edgecolor"], linestyle="-.",
+                            label="force round-off floor\n1e3·ε·median |N|"))
+    if roundoff or any(is_finite(p["ref_err_est"]) for p in problems):
+        extra.append(Patch(facecolor="none", edgecolor=UNRESOLVED_STYLE["edgecolor"],
+                           hatch="////", label="not resolved: errors\ntied at the line for\n"
+                           "the rings"))
+    return extra
+
+
+def _wp_problem_text(problem, series, front, floor, narrow, force, force_min):
+    """A problem's sentence of the work-precision caption (position panel,
+    with the force panel's round-off floor)."""
+    best = min(front, key=lambda p: p["err"]) if front else None
+    estimate = problem["ref_err_est"]
+    below = sum(1 for rungs in series.values() for p in rungs
+                if is_finite(estimate) and p["err"] < estimate)
+    return (
+        f"{problem['label']} (groups {', '.join(problem['groups'])}): "
+        f"{sum(len(s) for s in series.values())} rungs of {len(series)} lines, "
+        f"most accurate err_pos_rms {fmt(best['err']) if best else 'n/a'} m in "
+        f"{fmt(best['wall']) if best else 'n/a'} s, non-dominated: "
+        f"{', '.join(_front_methods(series, front)) or 'none'}; measured floor "
+        + (f"{fmt(floor[0])} – {fmt(floor[1])} m ({len(floor[2])} methods"
+           + ("; narrower than 1 % of the axis: thick line" if narrow else "") + ")"
+           if is_finite(floor[0]) else "n/a") + "; reference error "
+        + (f"estimate {fmt(estimate)} m (dotted line; "
+           + (f"{below} points below it, not resolved)" if below else "no point below it)")
+           if is_finite(estimate) else "not estimated")
+        + (f"; force round-off floor {fmt(sel.roundoff_floor(force[0]))} N (median "
+           f"|N| {fmt(force[0])} N of {force[1]['run_id']}"
+           + ("" if force_min < 10 * sel.roundoff_floor(force[0]) else
+              "; over a decade below every force error, off the axis") + ")"
+           if force[1] else ""))
+
+
+# zoh lines whose observed order lies in this range fall as O(Δt).
+ZOH_FIRST_ORDER = (0.8, 1.25)
+
+
+def _hold_order_text(details):
+    """The caption's sentence on how the errors fall with Δt, measured: per
+    problem the observed orders of its zoh lines' Δt ladders
+    (selection.observed_orders); O(Δt) is said only of the problems where
+    every zoh line's order lies in ZOH_FIRST_ORDER, the others are named
+    with their orders per integrator (median over its NLPs)."""
+    first, other = [], []
+    for problem, series, *_ in details:
+        zoh = {line: rungs for line, rungs in series.items()
+               if rungs and rungs[0]["coupling"] == "zoh"}
+        orders = sel.observed_orders(zoh)
+        if not orders:
+            continue
+        if all(ZOH_FIRST_ORDER[0] <= p <= ZOH_FIRST_ORDER[1] for p in orders.values()):
+            first.append(f"{problem['label']} (zoh orders {min(orders.values()):.2f} "
+                         f"to {max(orders.values()):.2f})")
+            continue
+        by_dae = {}
+        for line, order in orders.items():
+            by_dae.setdefault(zoh[line][0]["dae"], []).append(order)
+        other.append(f"{problem['label']} (zoh orders per integrator: " + ", ".join(
+            f"{dae} {float(np.median(ps)) + 0.0:.1f}".replace("-0.0", "0.0")
+            for dae, ps in sorted(by_dae.items())) + ")")
+    text = ("Errors are against the problem's reference. Observed order: the "
+            "least-squares slope of log error against log Δt over a line's Δt "
+            "ladder (3 or more Δt at one rtol). ")
+    if first:
+        text += ("A zoh method holds the quasi-static twist over each Δt; where that "
+                 "hold error dominates, its error falls only as O(Δt) however accurate "
+                 "its integrator: observed on " + "; ".join(first) + ". ")
+    if other:
+        text += ("Not so on " + "; ".join(other) + ": there the hold error does "
+                 "not dominate the zoh error. ")
+    if not first and not other:
+        text += "No zoh line has such a ladder. "
+    return text + ("A coupled method's error is set by its integrator's step or "
+                   "rtol, not by a hold. ")
+
+
+def _timing_text(spread, exclusive):
+    if not spread:
+        return ("Wall time is the minimum over the repeats (these results carry no "
+                "timing spread: written before wall_s_median existed), so no error bars.")
+    return ("The point is the median wall time over the repeats, the bars span "
+            "their interquartile range (q1–q3). " + (
+                "Every run was timed alone (group key exclusive: no other run "
+                "shared the cores)." if exclusive else
+                "Runs of groups without the exclusive key (e.g. a tolerance ladder "
+                "with one repeat) were timed while other runs shared the cores: "
+                "their times are upper bounds."))
 
 
 def figure_work_precision(ctx):
@@ -166,65 +354,29 @@ def figure_work_precision(ctx):
     n = len(problems)
     fig = new_figure(13, 0.6 + 3.9 * n)
     gs = fig.add_gridspec(n, 3, width_ratios=[1, 1, 0.42])
-    details, panels = [], []
+    details, panels, narrow_any = [], [], False
     for i, problem in enumerate(problems):
+        force = _typical_force(ctx, problem)
+        unresolved = {"err_pos_rms": problem["ref_err_est"],
+                      "err_force_rms": sel.roundoff_floor(force[0])}
         for j, (metric, label) in enumerate(WP_METRICS):
             ax = fig.add_subplot(gs[i, j])
-            series, front, floor = _work_precision_panel(ax, problem, metric, label,
-                                                         spread, ctx.styles)
+            series, front, floor, narrow = _work_precision_panel(
+                ax, problem, metric, label, spread, ctx.styles, unresolved[metric])
+            narrow_any = narrow_any or narrow
             if metric == "err_pos_rms":
-                details.append((problem, series, front, floor))
-            panels.append({"problem": problem["label"], "metric": metric,
-                           "problem_key": list(problem["key"]),
-                           "t_end": sorted({r["t_end"] for r in problem["rows"]
-                                            if is_finite(r["t_end"])}),
-                           "scenes": sorted({r["scene"] for r in problem["rows"]}),
-                           "ref_hashes": sorted({r.get("ref_hash", "") for r in problem["rows"]}),
-                           "lines": list(series),
-                           "front": [[p["err"], p["wall"]] for p in front],
-                           "front_lines": _front_methods(series, front),
-                           "labels": {line: [p["label"] for p in rungs]
-                                      for line, rungs in series.items()},
-                           "floor": [floor[0], floor[1]], "floor_lines": floor[2],
-                           "exclusive": all(p["exclusive"] for rungs in series.values()
-                                            for p in rungs),
-                           "ref_err_est": problem["ref_err_est"]})
-    extra = [Line2D([], [], color="black", linestyle="none", marker="o", markersize=9,
-                    markerfacecolor="none", label="non-dominated (beaten by\n"
-                    "> IQR in time and > 1 %\nin error by no point)"),
-             Patch(facecolor="#e8c07a", alpha=0.5,
-                   label="measured floor: spread of\nthe best methods' tightest\nrungs"),
-             Patch(facecolor="#bbbbbb", alpha=0.5, label="below every method")]
-    if any(is_finite(p["ref_err_est"]) for p in problems):
-        extra.append(Line2D([], [], color="#555555", linestyle=":",
-                            label="reference's estimated\nerror"))
+                detail = (problem, series, front, floor, narrow, force)
+            else:
+                details.append(detail + (min((p["err"] for rungs in series.values()
+                                              for p in rungs), default=math.nan),))
+            panels.append(_wp_panel_data(problem, metric, series, front, floor,
+                                         unresolved[metric], narrow))
+    # The legend names the round-off line where a force panel draws it.
+    roundoff = any(d[6] < 10 * sel.roundoff_floor(d[5][0]) for d in details if d[5][1])
     rows = [r for p in problems for r in p["rows"]]
-    _legend_axes(fig, gs[:, 2], style_legend_handles(rows, extra, ctx.styles))
-    parts = []
-    for problem, series, front, floor in details:
-        best = min(front, key=lambda p: p["err"]) if front else None
-        parts.append(
-            f"{problem['label']} (groups {', '.join(problem['groups'])}): "
-            f"{sum(len(s) for s in series.values())} rungs of {len(series)} lines, "
-            f"most accurate err_pos_rms {fmt(best['err']) if best else 'n/a'} m in "
-            f"{fmt(best['wall']) if best else 'n/a'} s, non-dominated: "
-            f"{', '.join(_front_methods(series, front)) or 'none'}; measured floor "
-            + (f"{fmt(floor[0])} – {fmt(floor[1])} m ({len(floor[2])} methods)"
-               if is_finite(floor[0]) else "n/a") + "; reference error "
-            + (f"estimate {fmt(problem['ref_err_est'])} m (dotted line)"
-               if is_finite(problem["ref_err_est"]) else "not estimated"))
-    exclusive = all(p["exclusive"] for p in panels)
-    timing_text = (
-        "The point is the median wall time over the repeats, the bars span "
-        "their interquartile range (q1–q3). " + (
-            "Every run was timed alone (group key exclusive: no other run "
-            "shared the cores)." if exclusive else
-            "Runs of groups without the exclusive key (e.g. a tolerance ladder "
-            "with one repeat) were timed while other runs shared the cores: "
-            "their times are upper bounds.")
-        if spread else
-        "Wall time is the minimum over the repeats (these results carry no "
-        "timing spread: written before wall_s_median existed), so no error bars.")
+    _legend_axes(fig, gs[:, 2], style_legend_handles(
+        rows, _wp_legend_extra(problems, roundoff, narrow_any), ctx.styles))
+    parts = [_wp_problem_text(*detail) for detail in details]
     caption = (
         "Work-precision diagrams, one row per problem (scene, mode, μ, terrain, "
         "t_end: runs of different problems are never on one chart or front). "
@@ -235,17 +387,23 @@ def figure_work_precision(ctx):
         "markers, its own dashes. Ringed points are non-dominated: no other "
         "point of the problem is faster by more than the timing spread (the "
         "larger IQR of the two) and more accurate by more than 1 %. "
-        + timing_text + " The right axis is the same time per simulated second. "
-        + _checkpoint_text(rows) + _step_cap_text(rows) +
-        "Errors are against the problem's reference; a zoh method holds the "
-        "quasi-static twist over each Δt, so its error falls only as O(Δt) "
-        "(hold error) however accurate its integrator, while the coupled "
-        "methods converge at their integrator's order down to the error floor. "
+        + _timing_text(spread, all(p["exclusive"] for p in panels))
+        + " The right axis is the same time per simulated second. "
+        + _checkpoint_text(rows) + _step_cap_text(rows) + _hold_order_text(details) +
         "Measured floor (tan band): from the smallest error any method reaches "
         "at its tightest rung to the largest among the methods within a factor "
-        "10 of it (the spread of the best methods' tightest settings); grey: "
+        "10 of it (the spread of the best methods' tightest settings; a band "
+        "narrower than 1 % of its axis is drawn as a thick line); grey: "
         "below every method; dotted line: the reference's own estimated error. "
-        + " ".join(p + "." for p in parts) + _failed_note(ctx))
+        "Hatched: errors not resolved, below the reference's estimated error "
+        "(position panels) or below the force round-off floor (force panels, "
+        "dash-dotted: 1e3·ε·|N|, ε = 2.2e-16 the machine epsilon, |N| the "
+        "median normal force over the wheels and samples of the problem's most "
+        "accurate run with a trajectory). Their order cannot be told: for the "
+        "rings such errors count as equal to the floor, so among the points "
+        "there only time ranks (the fastest, within the timing spread, is "
+        "ringed). "
+        + " ".join(p + "." for p in parts) + _failed_note(ctx, problems))
     record = save_figure(fig, ctx.out_dir, "fig_work_precision",
                          "1. Work-precision", caption)
     record.data = {"panels": panels, "timing": "median" if spread else "min"}
@@ -307,33 +465,77 @@ def _checkpoint_text(rows):
 STEP_DRIFT = "drift_step_max"
 
 
+def coinciding(a, b, rel=0.05, share=0.95):
+    """True when two curves (t, y) lie on top of each other on a log axis:
+    the same sample times and, at >= `share` of the samples where both are
+    positive, within `rel` of each other."""
+    (ta, ya), (tb, yb) = a, b
+    ta, tb = np.asarray(ta, float), np.asarray(tb, float)
+    ya, yb = np.asarray(ya, float), np.asarray(yb, float)
+    if ta.shape != tb.shape or not np.allclose(ta, tb, rtol=0, atol=1e-12):
+        return False
+    both = np.isfinite(ya) & np.isfinite(yb) & (ya > 0) & (yb > 0)
+    if not both.any():
+        return False
+    close = np.abs(ya[both] - yb[both]) <= rel * np.maximum(ya[both], yb[both])
+    return float(close.mean()) >= share
+
+
+def plot_integrator_curves(ax, curves, styles):
+    """Curves [(run, t, y, label)] of runs with different integrators,
+    coloured by integrator (plotting.integrator_colour: they may share one
+    NLP and so one method colour), marker = integrator. A curve lying on an
+    earlier one (coinciding) is drawn dashed over it, its markers offset.
+    Returns [(dae, dae it lies on)]."""
+    drawn, pairs = [], []
+    for run, t, y, label in curves:
+        style = plot_style(styles.get(run["method"]) or method_style(run["method"]))
+        colour = integrator_colour(run["dae"])
+        style.update(color=colour, markerfacecolor=(
+            colour if style["markerfacecolor"] == style["color"] else style["markerfacecolor"]))
+        under = next((dae for dae, tt, yy in drawn if coinciding((t, y), (tt, yy))), None)
+        if under is not None:
+            pairs.append((run["dae"], under))
+            style.update(linestyle=(0, (4, 3)), linewidth=1.8)
+        ax.plot(t, y, markevery=(0.05, 0.1) if under else 0.1, label=label, **style)
+        drawn.append((run["dae"], t, y))
+    return pairs
+
+
+def _coincide_text(pairs):
+    if not pairs:
+        return ""
+    return (" Coinciding curves (within 5 % at 95 % of the samples), the later "
+            "drawn dashed over the first: " + "; ".join(
+                f"{a} on {b}" for a, b in pairs) + ".")
+
+
 def _plot_drift_vs_time(ax, ctx):
     """Drift at the samples over time, one representative run per
-    integrator; returns [(integrator, sample max, drift_step_max)]."""
+    integrator, colour = integrator; returns ([(integrator, sample max,
+    drift_step_max)], [coinciding pairs])."""
     reps = sel.drift_representatives(ctx.runs, ctx.trajectories.has, ctx.primary)
-    summary = []
-    plotted = []
+    summary, curves = [], []
     for dae, run in reps.items():
         traj = ctx.trajectories.get(run)
         if traj is None:
             continue
         drift = positive(traj["drift"])
-        plotted.append(drift)
-        ax.plot(traj["t"], drift, markevery=0.1, **plot_style(ctx.styles[run["method"]]),
-                label=f"{run['method']}, Δt={fmt(run['dt'])} s ({problem_label(run, ctx.references)})")
+        curves.append((run, traj["t"], drift, f"{run['method']}, Δt={fmt(run['dt'])} s "
+                       f"({problem_label(run, ctx.references)})"))
         summary.append((dae, np.nanmax(drift) if np.any(np.isfinite(drift)) else math.nan,
                         run.get(STEP_DRIFT, math.nan)))
     if not summary:
         no_data(ax, "no trajectory of a successful run")
-        return summary
+        return summary, []
+    pairs = plot_integrator_curves(ax, curves, ctx.styles)
     ax.set_yscale("log")
     ax.set_xlabel("t [s]")
     ax.set_ylabel("‖H‖∞ at the samples [m, rad]")
     ax.set_title("loop-closure drift, one run per integrator", fontsize=9)
-    # The lines share one colour (the NLP) and fill the axes: the legend
-    # gets a band of its own below them.
-    legend_below_log_data(ax, np.concatenate(plotted))
-    return summary
+    # The lines fill the axes: the legend gets a band of its own below them.
+    legend_below_log_data(ax, np.concatenate([c[2] for c in curves]))
+    return summary, pairs
 
 
 def _plot_step_drift_bars(ax, summary):
@@ -387,7 +589,7 @@ def figure_drift(ctx):
     gs = fig.add_gridspec(2 if steps else 1, n + 1,
                           width_ratios=[1.25] + [1] * (n - 1) + [0.5])
     over_time = fig.add_subplot(gs[0, 0])
-    summary = _plot_drift_vs_time(over_time, ctx)
+    summary, pairs = _plot_drift_vs_time(over_time, ctx)
     tops = [fig.add_subplot(gs[0, k + 1]) for k in range(len(problems))]
     n_rows = sum(_plot_drift_vs_dt(ax, ctx, p) for ax, p in zip(tops, problems))
     if not summary and not n_rows:
@@ -419,16 +621,134 @@ def figure_drift(ctx):
         "the states the runs return; left over time for one representative run per "
         "integrator (with the NLP of the paper figures where it ran, the smallest-Δt "
         "successful zoh run on the paper scene where "
-        "available, its problem in the legend), then its maximum against Δt per "
+        "available, its problem in the legend; colour = integrator in this panel "
+        "only, the NLP colour would paint them alike), then its maximum against Δt per "
         "method (median over repeats of a setting), one panel per work-precision "
         "problem; each problem's two panels share their axes; where methods differ "
         "only in their NLP their lines coincide (the drift does not depend on it) and "
-        "the NLP last in the legend covers the others." + second
-        + f"This run: {'; '.join(parts) or 'no trajectories'}." + _failed_note(ctx))
+        "the NLP last in the legend covers the others." + _coincide_text(pairs) + second
+        + f"This run: {'; '.join(parts) or 'no trajectories'}." + _failed_note(ctx, problems))
     covered = points_under_legend(fig, over_time)
     record = save_figure(fig, ctx.out_dir, "fig_drift", "2. Constraint drift", caption)
     record.data = {"panels": [p["label"] for p in problems], "step_drift": steps,
-                   "points_under_legend": covered}
+                   "points_under_legend": covered, "coinciding": pairs}
+    return record
+
+
+# ---------------------------------------------------------------- Fig. 15
+# (drawn here, not in figures_paper: it compares two methods' drift)
+
+# A drift curve levels off (a plateau) when its max over the last quarter of
+# the run exceeds its max before that by at most 10 %.
+PLATEAU_SHARE, PLATEAU_GROWTH = 0.25, 1.1
+
+
+def late_growth(t, drift, share=PLATEAU_SHARE):
+    """The max of drift over the last `share` of the time span divided by
+    its max before; nan when either part has no finite positive value."""
+    t, drift = np.asarray(t, float), np.asarray(drift, float)
+    if t.size < 2:
+        return math.nan
+    cut = t[0] + (1.0 - share) * (t[-1] - t[0])
+    ok = np.isfinite(drift) & (drift > 0)
+    late, early = drift[ok & (t >= cut)], drift[ok & (t < cut)]
+    return float(late.max() / early.max()) if late.size and early.size else math.nan
+
+
+def _gain(run):
+    """The run's Baumgarte gain σ, or None for an integrator without one (no
+    baumgarte_sigma in its option table: runs.csv sigma is then unused)."""
+    if not has_dae_option(run, "baumgarte_sigma"):
+        return None
+    try:
+        value = float(dae_option(run, "baumgarte_sigma", run["sigma"]))
+    except (TypeError, ValueError):
+        return None
+    return value if math.isfinite(value) else None
+
+
+def _stabilisation_text(entries):
+    """What Fig. 15's runs show: per run its sample drift (max, where, final)
+    and, for a Baumgarte run, whether it levels off (late_growth); then the
+    within-step drifts side by side (drift_step_max), the like-with-like
+    comparison: a projection run's samples are after its projection."""
+    parts = []
+    for run, t, drift, growth in entries:
+        ok = np.isfinite(drift)
+        text = (f"{run['dae']} at the samples max {fmt(float(np.max(drift[ok])))} at t = "
+                f"{fmt(float(t[ok][np.argmax(drift[ok])]))} s, final "
+                f"{fmt(float(drift[ok][-1]))}" if ok.any() else f"{run['dae']} no finite drift")
+        if _gain(run) is not None and is_finite(growth):
+            text += (f": levels off (max over the last quarter {growth:.2f}× the max "
+                     "before), bounded over this run" if growth <= PLATEAU_GROWTH else
+                     f": still growing at t_end (max over the last quarter {growth:.2f}× "
+                     f"the max before; a plateau would be ≤ {PLATEAU_GROWTH:g}×), so this "
+                     "run does not show the violation bounded")
+        elif "projection" in run["dae"]:
+            text += " (after its projection)"
+        parts.append(text)
+    out = "This run: " + "; ".join(parts) + "."
+    steps = [(run["dae"], run.get(STEP_DRIFT, math.nan)) for run, *_ in entries]
+    if all(is_finite(v) for _, v in steps):
+        out += (" Like with like, within the steps before any projection "
+                "(drift_step_max, dashed): " + ", ".join(f"{d} {fmt(v)}" for d, v in steps))
+        if len(steps) == 2 and min(v for _, v in steps) > 0:
+            (d0, v0), (d1, v1) = steps
+            out += (f" ({d1} {v1 / v0:.3g}× {d0})")
+        out += "."
+    else:
+        out += (" These results predate drift_step_max (the drift within the steps): "
+                "a projection run's curve is its drift after projection, not what its "
+                "steps commit, so the curves do not compare like with like.")
+    return out
+
+
+def figure_stabilisation(ctx):
+    pair = sel.stabilisation_pair(ctx.runs, ctx.trajectories.has, ctx.primary)
+    pair = [r for r in pair if r is not None and ctx.trajectories.get(r) is not None]
+    if not pair:
+        raise MissingData("no successful rk-baumgarte or rk-projection run with "
+                          "a trajectory for figure 15")
+    fig = new_figure(8, 4.2)
+    ax = fig.add_subplot()
+    curves, entries = [], []
+    for run in pair:
+        traj = ctx.trajectories.get(run)
+        drift = positive(traj["drift"])
+        curves.append((run, traj["t"], drift, f"{run['dae']} ({run['method']}, "
+                       f"Δt={fmt(run['dt'])} s" + (f", σ={fmt(_gain(run))} 1/s)"
+                                                   if _gain(run) is not None else ")")))
+        entries.append((run, np.asarray(traj["t"], float), drift,
+                        late_growth(traj["t"], drift)))
+    plot_integrator_curves(ax, curves, ctx.styles)
+    for run in pair:
+        step = run.get(STEP_DRIFT, math.nan)
+        if is_finite(step) and step > 0:
+            ax.axhline(step, color=integrator_colour(run["dae"]), linestyle="--",
+                       linewidth=1.0, label=f"within the steps: {run['dae']} "
+                       "(drift_step_max)")
+    if not any(np.any(d > 0) for _, _, d, _ in curves):
+        no_data(ax, "drift is zero everywhere")
+    else:
+        ax.set_yscale("log")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("‖H(Θ)‖∞ [m, rad]")
+    ax.legend(loc="best", fontsize=7)
+    missing = "" if len(pair) == 2 else " Only one of the pair is available."
+    caption = (
+        "Fig. 15 — the paper shows that Baumgarte stabilisation keeps the "
+        "holonomic loop-closure violation bounded. Solid: ‖H(Θ)‖∞ at the output "
+        "samples (colour = integrator); dashed: each run's largest drift within "
+        "its steps before any projection (runs.csv drift_step_max, docs/model.md "
+        "§8.10). A run levels off when its maximum over the last quarter of the "
+        f"run is at most {PLATEAU_GROWTH:g}× its maximum before. "
+        + _stabilisation_text(entries) + missing)
+    record = save_figure(fig, ctx.out_dir, "fig15_stabilisation",
+                         "Fig. 15 — constraint stabilisation", caption)
+    record.data = {"legend": [t.get_text() for t in ax.get_legend().get_texts()],
+                   "late_growth": {run["dae"]: g for run, _, _, g in entries},
+                   "step_drift": {run["dae"]: run.get(STEP_DRIFT, math.nan)
+                                  for run, *_ in entries}}
     return record
 
 
@@ -590,7 +910,11 @@ def _cause_handles(charts):
         else:
             label = f"{cls}: {detail}"
         handles.append(Patch(facecolor=colour, edgecolor="#777777", label=label))
-    handles.append(Patch(facecolor=NOT_RUN_COLOUR, edgecolor="#777777", label="not run"))
+    # "not run" only where some (row, value) cell has no run.
+    if any(len(p["cells"]) < len(p["rows"]) * len(p["values"])
+           for chart in charts for p in chart["panels"]):
+        handles.append(Patch(facecolor=NOT_RUN_COLOUR, edgecolor="#777777",
+                             label="not run"))
     return handles
 
 
@@ -617,6 +941,20 @@ def _axis_caption(chart):
                 "without a Baumgarte gain (no baumgarte_sigma in their option "
                 "table), for which σ is no parameter.")
     return out
+
+
+def _end_mark_text(cells):
+    """Caption sentence for failed cells whose worst run reached t_end
+    (selection.REACHED_END_MARKS after their 1.00); '' without any."""
+    marks = sorted({c.get("end_mark", "") for c in cells} - {""})
+    if not marks:
+        return ""
+    meaning = {"·drift": "drift_max broke the suite's drift bound",
+               "·gap": "gap_max broke the suite's gap bound"}
+    return (" " + "; ".join(f"1.00{m} = reached t_end, but "
+                            + meaning.get(m, "failed there (see its status)")
+                            for m in marks)
+            + " (a failure: docs/harness.md, Verdicts).")
 
 
 def _borrowed_cause_text(cells):
@@ -651,6 +989,9 @@ def _stability_figure(ctx, chart):
               for cls in ("success",) + sel.CAUSE_CLASSES}
     methods = sorted({r["method"] for r in sel.in_group(ctx.runs, chart["group"])}
                      - set(chart.get("left_out", [])))
+    # Rows as drawn: a method id per swept option value (baumgarte_sigma on
+    # the σ·Δt axis) is one row, its values in the columns.
+    n_rows = len({row for p in panels for row in p["rows"]})
     mu_text = "; ".join(f"{p['scene']}: μ_min(ref) {fmt(p['mu_min'])}" for p in panels
                         if chart["axis"] == "mu" and is_finite(p["mu_min"]))
     caption = (
@@ -665,7 +1006,13 @@ def _stability_figure(ctx, chart):
         "method can be judged by this model; grey = the harness did not "
         "classify the failure); text = "
         "fraction of t_end reached (worst run of the cell, k/n failed when "
-        f"repeats differ). This run: {len(methods)} methods, {counts['success']} "
+        f"repeats differ)." + _end_mark_text(cells)
+        + f" This run: {n_rows} method row{'s' if n_rows != 1 else ''}"
+        + (f" (from {len(methods)} method ids: the ids of a swept option's values "
+           "share a row)" if len(methods) > n_rows else
+           f" ({len(methods)} methods, split by a run setting that varies)"
+           if len(methods) < n_rows else "")
+        + f", {counts['success']} "
         f"cells succeeded, {counts['physical']} physical, {counts['numerical']} "
         f"numerical, {counts['model']} beyond the model, {counts['unknown']} "
         "unclassified."
@@ -710,4 +1057,5 @@ def figure_stability(ctx):
 
 
 __all__ = ["figure_work_precision", "figure_drift", "figure_stability",
+           "figure_stabilisation",
            "style_legend_handles", "UNKNOWN_COLOUR"]

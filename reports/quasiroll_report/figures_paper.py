@@ -2,6 +2,7 @@
 at μ = 0.5, the μ sweep, and a Baumgarte/projection pair."""
 
 import math
+import re
 
 import numpy as np
 from matplotlib.lines import Line2D
@@ -9,14 +10,14 @@ from matplotlib.patches import Patch, Rectangle
 from matplotlib.transforms import blended_transform_factory
 
 from . import selection as sel
-from .data import dae_option, has_dae_option, is_finite, is_success
+from .data import is_finite, is_success
 from .plotting import (COMPONENT_STYLES, MissingData, WHEEL_STYLES, fmt, span_text,
                        new_figure, no_data, positive, save_figure,
                        spans_decades, vline_label)
 from .figures_methods import style_legend_handles
 from . import robot
-from .problems import (fixed_label, method_style, plot_style, robot_geometry,
-                       scene_mode)
+from .problems import (fixed_label, method_style, plot_style, reference_field,
+                       robot_geometry, scene_mode)
 from .terrain import describe_terrain, terrain_height
 
 WHEELS = (1, 2, 3)
@@ -87,6 +88,14 @@ def _draw_robot(ax, geom, row, alpha=1.0):
                depthshade=False)
 
 
+def degrees_text(value):
+    """An angle in degrees with two significant digits and its sign ('+0.015°',
+    '-3.2e-05°'); an exact zero as '0°', never a signed zero."""
+    if not math.isfinite(value):
+        return "n/a"
+    return "0°" if value == 0 else f"{value:+.2g}°"
+
+
 def _camber_labels(ax, geom, traj, indices):
     """The camber angle δ of each rear wheel (wheels 2, 3) in degrees, written
     above the wheel at the given snapshots (Fig. 5: the last, drawn opaque):
@@ -97,8 +106,7 @@ def _camber_labels(ax, geom, traj, indices):
         row = robot.row_at(traj, k)
         frames = robot.wheel_frames_world(geom, row)
         for i, (_, centre) in zip((2, 3), frames[1:]):
-            delta = math.degrees(float(row[f"delta{i}"]))
-            text = f"δ{i}={delta:+.1f}°"
+            text = f"δ{i}={degrees_text(math.degrees(float(row[f'delta{i}'])))}"
             ax.text(centre[0], centre[1], centre[2] + 2.2 * geom["R"], text, fontsize=6.5,
                     ha="center", va="bottom", color="#111111", zorder=40,
                     bbox={"facecolor": "white", "alpha": 0.7, "edgecolor": "none",
@@ -142,12 +150,79 @@ def _snapshot_panel(ax, ctx, run, traj, geom):
     cambers = np.concatenate([traj["delta2"][finite], traj["delta3"][finite]])
     cambers = cambers[np.isfinite(cambers)]
     mode = scene_mode(run, ctx.references) or run["scene"]
-    ax.set_title(f"{run['scene']} ({mode} mode)\n{run['method']}, Δt={fmt(run['dt'])} s",
-                 fontsize=10)
+    ax.set_title(f"{run['scene']} ({mode} mode)\n{run['method']}, Δt={fmt(run['dt'])} s, "
+                 f"t_end={fmt(run.get('t_end', math.nan))} s", fontsize=10)
     return {"run": run, "times": [float(traj["t"][k]) for k in indices],
             "camber_labels": camber_labels,
             "max_camber_deg": float(np.degrees(np.max(np.abs(cambers)))) if cambers.size
             else math.nan, "spec": spec}
+
+
+# Run settings Fig. 5's two panels must share to differ only by the camber
+# mode: (runs.csv column, caption name, unit).
+_PAIR_SETTINGS = (("t_end", "t_end", " s"), ("dt", "Δt", " s"), ("mu", "μ", ""),
+                  ("eps", "ε", " m/s"), ("seed", "seed", ""), ("roughness", "roughness", ""),
+                  ("tol", "rtol", ""), ("nlp_tol", "NLP tolerance", ""))
+
+
+def _same_setting(a, b):
+    if isinstance(a, float) and isinstance(b, float):
+        return (math.isnan(a) and math.isnan(b)) or math.isclose(a, b, rel_tol=1e-9)
+    return a == b
+
+
+def _setting_text(value, unit):
+    if isinstance(value, float):
+        return fmt(value) + unit if math.isfinite(value) else "none"
+    return f"{value}{unit}" if value not in (None, "") else "none"
+
+
+def _scene_key(ctx, run):
+    """The run's reference key less what is compared apart (mode, μ, ε,
+    times) and the reference's own method: robot, mass, gravity, joint
+    rates, start, terrain; None without a reference."""
+    key = (ctx.references.get(run.get("ref_hash", "")) or {}).get("key", "")
+    if not key:
+        return None
+    return re.sub(r"(?:mode|mu|epsilon)=[^;]*;?|time\{[^}]*\};?", "", key.split("|")[0])
+
+
+def pair_differences(ctx, paper, pvc):
+    """(what differs between Fig. 5's two runs besides their scene name and
+    camber mode, the names of what was compared)."""
+    diffs, compared = [], ["method"]
+    if paper["method"] != pvc["method"]:
+        diffs.append(f"method {paper['method']} vs {pvc['method']}")
+    for column, name, unit in _PAIR_SETTINGS:
+        if column not in paper and column not in pvc:
+            continue
+        compared.append(name)
+        a, b = paper.get(column, math.nan), pvc.get(column, math.nan)
+        if not _same_setting(a, b):
+            diffs.append(f"{name} {_setting_text(a, unit)} vs {_setting_text(b, unit)}")
+    compared.append("terrain")
+    if ctx.terrain_of(paper) != ctx.terrain_of(pvc):
+        diffs.append("terrain")
+    keys = _scene_key(ctx, paper), _scene_key(ctx, pvc)
+    if None not in keys:
+        compared.append("robot, mass, gravity, joint rates and start (reference keys)")
+        if keys[0] != keys[1]:
+            diffs.append("robot, mass, gravity, joint rates or start (reference keys)")
+    return diffs, compared
+
+
+def _pair_sentence(paper, pvc, differences, compared):
+    """Fig. 5's claim about its two panels: 'differ only by the camber mode'
+    only when nothing compared differs; else the differences."""
+    if not differences:
+        return (f"Both panels from the same method, {paper['method']} (the method "
+                f"both scenes ran at μ = 0.5), with the same {', '.join(compared[1:])}, "
+                "so they differ only by the camber mode.")
+    start = (f"Both panels from the same method, {paper['method']}, but"
+             if paper["method"] == pvc["method"] else
+             "The two scenes share no successful method at μ = 0.5, and")
+    return (f"{start} the two runs differ in more than the camber mode (the closest "
+            f"pair the results hold): paper vs pvc {'; '.join(differences)}.")
 
 
 def figure_snapshots(ctx):
@@ -177,17 +252,14 @@ def figure_snapshots(ctx):
                      + ", ".join(f"{t:.3g}" for t in p["times"])
                      + f" s, largest camber |δ| {fmt(p['max_camber_deg'], 2)}°, terrain "
                      + surface)
+    differences = []
     if pvc is None:
         parts.append("no successful pvc-mode run at μ = 0.5 with a trajectory, so "
                      "only paper mode is shown")
         same = f"Method: {paper['method']}."
-    elif pvc["method"] == paper["method"]:
-        same = (f"Both panels from the same method, {paper['method']} (the method "
-                "both scenes ran at μ = 0.5), so they differ only by the camber mode.")
     else:
-        same = ("The two scenes share no successful method at μ = 0.5, so the "
-                f"panels are from different methods: {paper['method']} (paper), "
-                f"{pvc['method']} (pvc).")
+        differences, compared = pair_differences(ctx, paper, pvc)
+        same = _pair_sentence(paper, pvc, differences, compared)
     caption = (
         "Fig. 5 — the paper shows the robot crossing the rough terrain R1. "
         "Here the robot itself is drawn at true scale (no vertical exaggeration) "
@@ -203,7 +275,8 @@ def figure_snapshots(ctx):
                          "Fig. 5 — the robot on the terrain", caption)
     record.data = {"panels": [{"scene": p["run"]["scene"], "run_id": p["run"]["run_id"],
                                "method": p["run"]["method"], "times": p["times"],
-                               "camber_labels": p["camber_labels"]} for p in panels]}
+                               "camber_labels": p["camber_labels"]} for p in panels],
+                   "differences": differences}
     return record
 
 
@@ -218,11 +291,13 @@ def figure_locus(ctx):
         gx, gy, gz = _terrain_grid(spec, _terrain_box(traj), 120)
         filled = ax.contourf(gx, gy, gz, levels=20, cmap="gist_earth", alpha=0.45)
         fig.colorbar(filled, ax=ax, label="terrain height h [m]", shrink=0.8)
+    # The centre path first and thin, the contact paths over it: wheel 1's
+    # runs along it (it was hidden under a thicker centre line).
+    ax.plot(traj["x"], traj["y"], color="black", linewidth=0.9, zorder=2,
+            label="platform centre")
     for i, (colour, style) in zip(WHEELS, WHEEL_STYLES):
         ax.plot(traj[f"c{i}_x"], traj[f"c{i}_y"], color=colour, linestyle=style,
-                label=f"contact point wheel {i}")
-    ax.plot(traj["x"], traj["y"], color="black", linewidth=1.8,
-            label="platform centre")
+                linewidth=1.8, zorder=3, label=f"contact point wheel {i}")
     ax.plot(traj["x"][0], traj["y"][0], "ko", label="start")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [m]")
@@ -293,57 +368,203 @@ def figure_angular_velocity(ctx):
                        "Fig. 8 — platform angular velocity", caption)
 
 
-def _wheel_figure(ctx, column, ylabel, paper_text, total=False, log=False,
-                  absolute=False):
-    """One line per wheel of column.format(i=i) against t, plus the caption."""
+# A step over one sample interval is a jump when it exceeds this many times
+# the median step of the intervals around it (_is_jump).
+JUMP_RATIO = 8.0
+
+
+def _event_spans(events):
+    """[(lo, hi, always)]: where a plotted value may change within one sample
+    interval at the run's located events (switches/<run_id>.csv): each
+    event's bracket [t_lower, t_upper] (always = a solution jump: the whole
+    solution jumps there), and each wheel's stick window, from its
+    slide→stick to its next stick→slide switch (a slip reversing inside
+    turns the tractions, docs/model.md §8.6, Reversals)."""
+    spans, stuck = [], {}
+    for e in sorted(events, key=lambda e: e["t"]):
+        lo = e["t_lower"] if is_finite(e["t_lower"]) else e["t"]
+        hi = e["t_upper"] if is_finite(e["t_upper"]) else e["t"]
+        spans.append((lo, hi, e["kind"] == "solution_jump"))
+        if e["kind"] == "switch" and e["to"] == "stick":
+            stuck[e["wheel"]] = lo
+        elif e["kind"] == "switch" and e["to"] == "slide" and e["wheel"] in stuck:
+            spans.append((stuck.pop(e["wheel"]), hi, False))
+    return spans
+
+
+def _is_jump(steps, k, floor):
+    """Whether |step k| (sample k → k+1) is a jump: above floor and JUMP_RATIO
+    times the median |step| two to four intervals away on either side (the
+    adjacent ones left out: a jump may be split over two intervals)."""
+    step = steps[k]
+    around = [steps[j] for j in (k - 4, k - 3, k - 2, k + 2, k + 3, k + 4)
+              if 0 <= j < steps.size and math.isfinite(steps[j])]
+    if not math.isfinite(step) or step <= floor:
+        return False
+    return step > JUMP_RATIO * (float(np.median(around)) if around else 0.0)
+
+
+def break_cuts(t, values, spans):
+    """Sample intervals k (t_k → t_k+1) where the line of values is broken:
+    those that overlap a span of _event_spans and where values jump
+    (_is_jump; floor 1e-3 of the values' range), and every one that holds a
+    solution jump."""
+    t = np.asarray(t, dtype=float)
+    values = np.asarray(values, dtype=float)
+    steps = np.abs(np.diff(values))
+    finite = values[np.isfinite(values)]
+    floor = 1e-3 * float(np.ptp(finite)) if finite.size else 0.0
+    cuts = set()
+    for lo, hi, always in spans:
+        first = max(int(np.searchsorted(t, lo, side="right")) - 1, 0)
+        last = min(int(np.searchsorted(t, hi, side="left")), t.size - 1)
+        cuts.update(k for k in range(first, last) if always or _is_jump(steps, k, floor))
+    return sorted(cuts)
+
+
+def with_breaks(t, values, cuts):
+    """(t, values) with a nan inserted inside each cut interval: the line
+    stops at the sample before and resumes at the one after."""
+    t = np.asarray(t, dtype=float)
+    values = np.asarray(values, dtype=float)
+    if not cuts:
+        return t, values
+    at = np.asarray(cuts) + 1
+    return (np.insert(t, at, 0.5 * (t[at - 1] + t[at])), np.insert(values, at, np.nan))
+
+
+def between_breaks(cuts):
+    """Samples with a cut on both sides: inside a transition (drawn as dots,
+    left out of the caption's extremes)."""
+    cut = set(cuts)
+    return np.array(sorted(k + 1 for k in cut if k + 1 in cut), dtype=int)
+
+
+def _creep_level(run):
+    """10 ε: a wheel slipping slower creeps (docs/model.md §7.5); nan without
+    a finite ε. Figs. 10-12 mark creep by it."""
+    eps = run.get("eps", math.nan)
+    return 10 * eps if is_finite(eps) and eps > 0 else math.nan
+
+
+CREEP_UNDERLAY = "#b8b8b8"
+
+
+def _wheel_series(traj, column, total, absolute):
+    """[(label, colour, style, width, values, wheel)] of the wheels' columns,
+    then their sum labelled `total` (wheel None) if given."""
+    series = [(f"wheel {i}", colour, style, 1.4, np.asarray(traj[column.format(i=i)], float), i)
+              for i, (colour, style) in zip(WHEELS, WHEEL_STYLES)]
+    if total:
+        series.append((total, "black", ":", 1.0, sum(s[4] for s in series), None))
+    return [(label, colour, style, width, np.abs(values) if absolute else values, wheel)
+            for label, colour, style, width, values, wheel in series]
+
+
+def _wheel_figure(ctx, column, ylabel, total=None, log=False, absolute=False,
+                  creep=False):
+    """One line per wheel of column.format(i=i) against t (and their sum,
+    labelled `total`), each broken where it jumps at a located event
+    (break_cuts), a sample between two breaks drawn as a dot; with creep a
+    grey underlay where the wheel creeps (‖s_i‖ < 10 ε). Returns (fig, ax,
+    facts): the wheels' values outside transitions ("kept"), the times of
+    the samples inside one ("inside"), the number of breaks, the sum."""
     run, traj = _primary(ctx)
+    spans = _event_spans(ctx.trajectories.switches(run) or [])
+    t = np.asarray(traj["t"], dtype=float)
+    level = _creep_level(run) if creep else math.nan
     fig = new_figure(8, 4.2)
     ax = fig.add_subplot()
-    for i, (colour, style) in zip(WHEELS, WHEEL_STYLES):
-        values = traj[column.format(i=i)]
-        values = np.abs(values) if absolute else values
-        ax.plot(traj["t"], positive(values) if log else values, color=colour,
-                linestyle=style, label=f"wheel {i}")
-    if total:
-        summed = sum(traj[column.format(i=i)] for i in WHEELS)
-        ax.plot(traj["t"], positive(summed) if log else summed, color="black",
-                linewidth=1.0, linestyle=":", label="sum")
+    facts = {"kept": [], "inside": set(), "breaks": 0, "sum": None, "creep": {}}
+    for label, colour, style, width, values, wheel in _wheel_series(traj, column, total,
+                                                                    absolute):
+        cuts = break_cuts(t, values, spans)
+        inside = between_breaks(cuts)
+        drawn = positive(values) if log else values
+        ax.plot(*with_breaks(t, drawn, cuts), color=colour, linestyle=style,
+                linewidth=width, label=label, zorder=3)
+        if inside.size:
+            ax.plot(t[inside], drawn[inside], linestyle="none", marker="o",
+                    markersize=2.5, color=colour, zorder=3)
+        facts["breaks"] += len(cuts)
+        if wheel is None:
+            facts["sum"] = values
+            continue
+        keep = np.ones(t.size, dtype=bool)
+        keep[inside] = False
+        facts["kept"].append(values[keep])
+        facts["inside"].update(float(t[k]) for k in inside)
+        if is_finite(level):
+            creeping = np.asarray(traj[f"slip{wheel}"], dtype=float) < level
+            facts["creep"][wheel] = float(np.mean(creeping))
+            ax.plot(*with_breaks(t, np.where(creeping, values, np.nan), cuts),
+                    color=CREEP_UNDERLAY, linewidth=5, alpha=0.7, zorder=1,
+                    solid_capstyle="butt")
     ax.set_xlabel("t [s]")
     ax.set_ylabel(ylabel)
     if log:
         ax.set_yscale("log")
-    ax.legend(loc="best")
-    low, high = _extremes(traj, [column.format(i=i) for i in WHEELS])
-    caption = (f"{paper_text} This run: range [{fmt(low)}, {fmt(high)}] over "
-               f"the three wheels ({_run_text(run)}).")
-    return fig, caption
+    return fig, ax, facts
+
+
+def _sample_extremes(facts):
+    kept = np.concatenate(facts["kept"]) if facts["kept"] else np.array([])
+    kept = kept[np.isfinite(kept)]
+    return (float(kept.min()), float(kept.max())) if kept.size else (math.nan, math.nan)
+
+
+def _range_text(facts, run, unit):
+    """'This run: the samples range over [a, b] <unit> over the three
+    wheels', leaving out the samples inside a transition (and saying so)."""
+    low, high = _sample_extremes(facts)
+    inside = sorted(facts["inside"])
+    left_out = ""
+    if inside:
+        left_out = (f", leaving out {len(inside)} sample(s) that fall inside a "
+                    "transition (between two breaks, drawn as dots) at t = "
+                    + ", ".join(f"{fmt(x, 5)}" for x in inside[:6]) + " s")
+    return (f" This run: the output samples range over [{fmt(low)}, {fmt(high)}] {unit} "
+            f"over the three wheels{left_out} ({_run_text(run)}).")
+
+
+def _finish_legend(ax, handles=(), labels=()):
+    """The axes' own entries, then the given ones, right of the axes: with
+    the event kinds and the creep marks there are too many to sit on the data."""
+    own_handles, own_labels = ax.get_legend_handles_labels()
+    ax.legend(list(own_handles) + list(handles), list(own_labels) + list(labels),
+              loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+              fontsize=7)
 
 
 # The per-wheel force figures: (file stem, title, column, y label, what the
-# paper shows, with the sum over the wheels).
+# paper shows, which force).
 _WHEEL_FORCE_FIGURES = {
     "normal_forces": (
         "fig09_normal_forces", "Fig. 9 — normal forces", "n{i}",
         "normal force N_i [N]",
         "Fig. 9 — the paper shows the three normal forces redistributing as "
-        "the wheels cross the bumps, their sum balancing the weight.", True),
+        "the wheels cross the bumps, their sum balancing the weight.", "normal"),
     "longitudinal_traction": (
         "fig10_longitudinal_traction", "Fig. 10 — longitudinal traction",
         "t{i}_lon", "longitudinal traction [N]",
-        "Fig. 10 — the paper shows the longitudinal traction each wheel must "
-        "provide to climb and descend the bumps.", False),
+        "Fig. 10 — the paper shows the longitudinal traction of each wheel as "
+        "the robot climbs and descends the bumps.", "longitudinal"),
     "lateral_traction": (
         "fig11_lateral_traction", "Fig. 11 — lateral traction", "t{i}_lat",
         "lateral traction [N]",
         "Fig. 11 — the paper shows the lateral traction that keeps the wheels "
-        "from side-slipping on the sloped terrain.", False),
+        "from side-slipping on the sloped terrain.", "lateral"),
 }
 
 
-# Vertical event lines of the force figures: kind -> (legend label, style).
+# Vertical event lines: kind -> (legend label, dash pattern), none of them
+# shaped like a wheel's (WHEEL_STYLES: solid, dashed, dash-dotted): dotted,
+# dash-dot-dotted, long and short dashes.
 _EVENT_LINES = {"switch": ("stick/slide switch", (0, (1, 2))),
-                "creep_reversal": ("creep reversal", (0, (6, 2, 1, 2))),
-                "solution_jump": ("solution jump", (0, (4, 2)))}
+                "creep_reversal": ("creep reversal", (0, (5, 1.5, 1, 1.5, 1, 1.5))),
+                "solution_jump": ("solution jump", (0, (8, 2, 3, 2)))}
+# Their codes in the labels along the top edge (+ the wheel).
+_EVENT_CODES = {"switch": "S", "creep_reversal": "R", "solution_jump": "J"}
 
 
 def _jump_lines(jumps):
@@ -356,71 +577,103 @@ def _jump_lines(jumps):
 def _jump_sentence(jump_lines):
     if not jump_lines:
         return ""
-    return (f" Dashed black: {len(jump_lines)} solution jump(s), where the "
-            "root the run followed ends in a fold and the slips of all wheels "
+    return (f" Dashed black: {len(jump_lines)} solution jump(s) (long and short "
+            "dashes), where "
+            "the root the run followed ends in a fold and the slips of all wheels "
             "jump to another root (docs/model.md §8.6; in the limit ε → 0 a "
             "wheel starts to slide there): "
-            + ", ".join(f"{fmt(e['t'])} s" for e in jump_lines[:8]) + ".")
+            + ", ".join(f"{fmt(e['t'], 5)} s" for e in jump_lines[:8]) + ".")
 
 
-def _mark_jumps(ctx, run, ax):
-    """The run's solution jumps as black dashed verticals (labelled for the
-    legend); the caption's sentence, "" when there are none or no
-    switches/ file."""
-    events = ctx.trajectories.switches(run)
-    lines = _jump_lines([e for e in events or ()
-                         if e["kind"] == "solution_jump"])
-    label, style = _EVENT_LINES["solution_jump"]
-    for k, e in enumerate(lines):
-        ax.axvline(e["t"], color="black", linestyle=style, linewidth=0.9,
-                   alpha=0.8, label=label if k == 0 else None)
-    if lines:
-        ax.legend(loc="best")
-    return _jump_sentence(lines)
+def label_groups(items, px_per_unit, line_px=11.0):
+    """[(t, text)] in groups whose labels, one line each along the top edge,
+    would overlap (closer than their lines' width, line_px pixels each):
+    such labels share one tick."""
+    groups = []
+    for item in sorted(items):
+        groups.append([item])
+        while len(groups) > 1:
+            a, b = groups[-2], groups[-1]
+            gap = (np.mean([x for x, _ in b]) - np.mean([x for x, _ in a])) * px_per_unit
+            if gap >= line_px * (len(a) + len(b)) / 2 + 2:
+                break
+            groups[-2:] = [a + b]
+    return groups
+
+
+def _label_events(ax, items):
+    """Each event's time (5 significant digits) and code along the top edge,
+    rotated; labels that would overlap share one tick, one line each.
+    Returns the tick texts."""
+    if not items:
+        return []
+    low, high = ax.get_xlim()
+    fig = ax.figure
+    width_px = ax.get_position().width * fig.get_figwidth() * fig.dpi
+    groups = label_groups(items, width_px / max(high - low, 1e-12))
+    top = ax.secondary_xaxis("top")
+    texts = ["\n".join(text for _, text in g) for g in groups]
+    top.set_xticks([float(np.mean([x for x, _ in g])) for g in groups], texts)
+    top.tick_params(axis="x", labelsize=6, labelrotation=90, pad=1, length=3)
+    return texts
+
+
+def _draw_events(ax, events):
+    """The located events as verticals in their own styles (_EVENT_LINES):
+    switches and creep reversals in the wheel's colour, a solution jump once
+    in black; labelled along the top edge. Returns (legend handles, labels,
+    {kind: drawn events}, the top labels)."""
+    colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
+    drawn = {"switch": [e for e in events if e["kind"] == "switch"],
+             "creep_reversal": [e for e in events if e["kind"] == "creep_reversal"],
+             "solution_jump": _jump_lines([e for e in events
+                                           if e["kind"] == "solution_jump"])}
+    handles, labels, items = [], [], []
+    for kind, lines in drawn.items():
+        label, style = _EVENT_LINES[kind]
+        for e in lines:
+            ax.axvline(e["t"], color=colours.get(e["wheel"], "black"), linestyle=style,
+                       linewidth=0.8, alpha=0.8, zorder=2)
+            items.append((e["t"], f"{fmt(e['t'], 5)} {_EVENT_CODES[kind]}{e['wheel'] or ''}"))
+        if lines:
+            handles.append(Line2D([], [], linestyle=style, linewidth=0.8,
+                                  color="black" if kind == "solution_jump" else "grey"))
+            labels.append(label)
+    return handles, labels, drawn, _label_events(ax, items)
 
 
 def _mark_switches(ctx, run, ax):
-    """Vertical lines at the run's located stick/slide switches and creep
-    reversals, in the wheel's colour; the caption's sentences about them."""
+    """Vertical lines at the run's located events (_draw_events); (the
+    caption's sentences about them, legend handles, labels, drawn events)."""
     events = ctx.trajectories.switches(run)
     if events is None:
         return (" The run's switch times are not in the results "
-                "(no switches/ file), so none are marked.")
-    switches = [e for e in events if e["kind"] == "switch"]
-    reversals = [e for e in events if e["kind"] == "creep_reversal"]
-    jumps = [e for e in events if e["kind"] == "solution_jump"]
-    colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
-    handles, labels = ax.get_legend_handles_labels()
-    jump_lines = _jump_lines(jumps)
-    for kind, drawn in (("switch", switches), ("creep_reversal", reversals),
-                        ("solution_jump", jump_lines)):
-        label, style = _EVENT_LINES[kind]
-        for e in drawn:
-            ax.axvline(e["t"], color=colours.get(e["wheel"], "black"),
-                       linestyle=style, linewidth=0.9, alpha=0.8)
-        if drawn:
-            handles.append(Line2D(
-                [], [], linestyle=style,
-                color="black" if kind == "solution_jump" else "grey"))
-            labels.append(label)
-    if events:
-        ax.legend(handles, labels, loc="best")
+                "(no switches/ file), so none are marked.", [], [],
+                {"switch": [], "creep_reversal": [], "solution_jump": []})
+    handles, labels, drawn, _ = _draw_events(ax, events)
+    switches, reversals = drawn["switch"], drawn["creep_reversal"]
     turns = ""
     if reversals:
-        turns = (f" Dash-dotted: the {len(reversals)} creep reversal(s), a "
-                 "creeping wheel's slip reversing, where the tractions turn "
-                 "within a time proportional to ε (docs/model.md §8.6): "
-                 + ", ".join(f"{fmt(e['t'])} s (wheel {e['wheel']})"
-                             for e in reversals[:8]) + ".")
-    turns += _jump_sentence(jump_lines)
+        turns = (f" Dash-dotted: the {len(reversals)} creep reversal(s) (dash-dot-dot, "
+                 "in the wheel's colour), a creeping wheel's slip reversing, where "
+                 "the tractions turn within a time proportional to ε (docs/model.md "
+                 "§8.6): " + ", ".join(f"{fmt(e['t'], 5)} s (wheel {e['wheel']})"
+                                       for e in reversals[:8]) + ".")
+    turns += _jump_sentence(drawn["solution_jump"])
+    if drawn["switch"] or reversals or drawn["solution_jump"]:
+        turns += (" Along the top edge each event's located time (5 significant "
+                  "digits) with S<i> a stick/slide switch of wheel i, R<i> a creep "
+                  "reversal, J a solution jump; events too close to label apart "
+                  "share one tick, one line each.")
     if not switches:
-        return (" No wheel changed between sticking and sliding in this run "
+        text = (" No wheel changed between sticking and sliding in this run "
                 "(switch location on)." + turns
                 if run.get("locate_switches") != "false"
                 else " Switch location was off for this run.")
+        return text, handles, labels, drawn
     located = sum(1 for e in switches if e["located"])
     listed = ", ".join(
-        f"{fmt(e['t'])} s (wheel {e['wheel']} {e['from']}→{e['to']})"
+        f"{fmt(e['t'], 5)} s (wheel {e['wheel']} {e['from']}→{e['to']})"
         for e in switches[:8])
     more = f" and {len(switches) - 8} more" if len(switches) > 8 else ""
     return (f" Dotted verticals, in the wheel's colour: the {len(switches)} "
@@ -428,18 +681,127 @@ def _mark_switches(ctx, run, ax):
             f"switch tolerance where a wheel's friction margin crosses 5e-5, "
             f"docs/model.md §8.6; a wheel that reaches its cone slowly starts "
             f"to slide later than that, at a solution jump where there is "
-            f"one): {listed}{more}." + turns)
+            f"one): {listed}{more}." + turns), handles, labels, drawn
+
+
+def _breaks_text(run, facts):
+    return (f" Lines join the output samples (Δt = {fmt(run['dt'])} s) except at "
+            f"{facts['breaks']} break(s): where a value jumps within a sample "
+            "interval that holds a located event's bracket or lies in a wheel's "
+            "stick window (slide→stick to stick→slide), or holds a solution jump, "
+            "the line stops at the sample before and resumes at the one after; "
+            "a steep but continuous change elsewhere (the tractions' turns, whose "
+            "width is proportional to ε, docs/model.md §8.6) still shows as a "
+            "slope between two samples.")
+
+
+def _weight(ctx, run):
+    """m g [N] from the run's reference key (the scene's mass and gravity),
+    nan without one."""
+    reference = ctx.references.get(run.get("ref_hash", ""))
+    try:
+        return (float(reference_field(reference, "mass"))
+                * float(reference_field(reference, "gravity")))
+    except ValueError:
+        return math.nan
+
+
+def vertical_force_sum(ctx, run, traj):
+    """Σ_i F_i·e_z per sample, F_i = N n_g + t_lon l + t_lat n_g × l
+    (robot.contact_force_world, docs/model.md §7.6) with n_g the terrain
+    normal at the contact; None without the terrain."""
+    spec = ctx.terrain_of(run)
+    if spec is None:
+        return None
+    geom = robot_geometry(ctx.references.get(run.get("ref_hash", "")))
+    total = np.full(len(traj["t"]), np.nan)
+    for k in range(total.size):
+        row = robot.row_at(traj, k)
+        if not robot.finite_pose(row):
+            continue
+        total[k] = sum(robot.contact_force_world(
+            rot_w, robot.terrain_normal(spec, row[f"c{i}_x"], row[f"c{i}_y"],
+                                        terrain_height),
+            row[f"n{i}"], row[f"t{i}_lon"], row[f"t{i}_lat"])[2]
+            for i, (rot_w, _) in zip(WHEELS, robot.wheel_frames_world(geom, row)))
+    return total
+
+
+def _weight_text(ctx, run, traj, ax, facts):
+    """Draws m g (grey) and says how Σ N_i and the contact forces' vertical
+    components compare with it."""
+    weight = _weight(ctx, run)
+    summed = facts["sum"][np.isfinite(facts["sum"])]
+    span = f"[{fmt(float(summed.min()))}, {fmt(float(summed.max()))}] N" if summed.size \
+        else "n/a"
+    if not is_finite(weight):
+        return (f" Σ N_i (black dotted) ranges over {span}; the weight m g is not "
+                "drawn (no reference key with the scene's mass and gravity).")
+    ax.axhline(weight, color="grey", linewidth=1.0, zorder=2, label=f"m g = {fmt(weight)} N")
+    text = (f" Grey: the weight m g = {fmt(weight)} N (mass and gravity from the "
+            f"scene's reference key). Σ N_i (black dotted) ranges over {span}: it "
+            "is not m g, because on the slopes the normals tilt and the "
+            "tractions have vertical components")
+    vertical = vertical_force_sum(ctx, run, traj)
+    if vertical is None or not np.any(np.isfinite(vertical)):
+        return text + " (not computed here: no terrain file)."
+    off = float(np.nanmax(np.abs(vertical - weight)))
+    return text + (f"; the vertical components of the contact forces, Σ_i F_i·e_z "
+                   "with F_i = N_i n_g + t_lon l + t_lat n_g × l (docs/model.md §7.6, "
+                   f"n_g the terrain normal at the contact), balance m g within "
+                   f"{fmt(off)} N.")
+
+
+def _traction_text(ctx, run, traj, column, facts, net):
+    """What the per-wheel tractions are in this mode: in paper mode internal
+    (antagonistic) forces that scale with μ and, for creeping wheels, are
+    fixed by the creep regularisation; the net (with net) and creep shares."""
+    values = np.array([traj[column.format(i=i)] for i in WHEELS], dtype=float)
+    ok = np.all(np.isfinite(values), axis=0)
+    values = values[:, ok]
+    mode = scene_mode(run, ctx.references) or run["scene"]
+    if mode == "pvc":
+        return (" In pvc mode the statics are determinate (docs/model.md §7.5): "
+                "the tractions follow from the loads, not from the regularisation.")
+    opposed = float(np.mean((values.min(axis=0) < 0) & (values.max(axis=0) > 0))) \
+        if values.size else math.nan
+    text = (" In paper mode the robot is over-actuated (docs/model.md §7.5): the "
+            "per-wheel tractions include internal, antagonistic forces — the wheels "
+            f"pull against each other (signs differ) in {fmt(100 * opposed)} % "
+            "of the samples — which scale with μ, and a creeping wheel's traction "
+            "is statically indeterminate, fixed by the creep regularisation (its "
+            "slip in units of ε), not by the terrain.")
+    if net and values.size:
+        total = values.sum(axis=0)
+        text += (f" Their sum (black dotted, the net traction) stays within "
+                 f"[{fmt(float(total.min()))}, {fmt(float(total.max()))}] N while "
+                 f"single wheels reach {fmt(float(np.abs(values).max()))} N.")
+    if facts["creep"]:
+        text += (f" Grey underlay: the wheel creeps (‖s_i‖ < 10 ε = "
+                 f"{fmt(_creep_level(run))} m/s, as in Fig. 12): "
+                 + ", ".join(f"wheel {i} {fmt(100 * share)} %"
+                             for i, share in sorted(facts["creep"].items()))
+                 + " of the samples.")
+    return text
 
 
 def _wheel_force_figure(ctx, name):
-    stem, title, column, ylabel, paper_text, total = _WHEEL_FORCE_FIGURES[name]
-    fig, caption = _wheel_figure(ctx, column, ylabel, paper_text, total=total)
-    run, _ = _primary(ctx)
-    caption += _mark_switches(ctx, run, fig.axes[0])
-    caption += (f" Lines join the output samples (Δt = {fmt(run['dt'])} s): a "
-                "change faster than that — at a switch, or the tractions' "
-                "turns between switches, whose width is proportional to ε "
-                "(docs/model.md §8.6) — shows as a slope between two samples.")
+    stem, title, column, ylabel, paper_text, force = _WHEEL_FORCE_FIGURES[name]
+    run, traj = _primary(ctx)
+    total = {"normal": "sum", "longitudinal": "sum (net)"}.get(force)
+    fig, ax, facts = _wheel_figure(ctx, column, ylabel, total=total,
+                                   creep=force != "normal")
+    if force == "normal":
+        extra = _weight_text(ctx, run, traj, ax, facts)
+    else:
+        extra = _traction_text(ctx, run, traj, column, facts, net=total is not None)
+    events, handles, labels, _ = _mark_switches(ctx, run, ax)
+    if facts["creep"]:
+        handles.append(Line2D([], [], color=CREEP_UNDERLAY, linewidth=5, alpha=0.7))
+        labels.append("wheel creeping (‖s‖ < 10 ε)")
+    _finish_legend(ax, handles, labels)
+    caption = (paper_text + _range_text(facts, run, "N") + extra + events
+               + _breaks_text(run, facts))
     return save_figure(fig, ctx.out_dir, stem, title, caption)
 
 
@@ -459,17 +821,15 @@ def _mark_creep_band(run, ax, slips, log):
     """Shades the slips below 10 ε, where a wheel creeps (docs/model.md §7.5:
     a slip proportional to ε, the regularisation standing in for sticking),
     and says so; "" without a finite ε or on a linear axis."""
-    eps = run.get("eps", math.nan)
-    if not (log and is_finite(eps) and eps > 0):
+    level = _creep_level(run)
+    if not (log and is_finite(level)):
         return ""
-    level = 10 * eps
     low, high = ax.get_ylim()
     where = "none of the wheel samples lies there"
     if level > low:
         ax.axhspan(low, min(level, high), color="grey", alpha=0.15,
                    linewidth=0, label="creep (‖s‖ < 10 ε)")
         ax.set_ylim(low, high)
-        ax.legend(loc="best")
         share = float(np.mean(slips < level)) if slips.size else math.nan
         where = f"shaded; {fmt(100 * share, 2)} % of the wheel samples lie there"
     return (f" Below 10 ε = {fmt(level)} m/s a wheel creeps — its slip is "
@@ -477,24 +837,45 @@ def _mark_creep_band(run, ax, slips, log):
             "sticking, not motion (docs/model.md §7.5): " + where + ".")
 
 
+def _mark_reversals(ax, reversals):
+    """A ▲ at the bottom edge, in the wheel's colour, at each located creep
+    reversal: its slip passes through zero there. The caption's sentence."""
+    if not reversals:
+        return ""
+    colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
+    trans = blended_transform_factory(ax.transData, ax.transAxes)
+    for k, e in enumerate(reversals):
+        ax.plot([e["t"]], [0.02], marker="^", markersize=7, linestyle="none",
+                color=colours.get(e["wheel"], "black"), transform=trans, zorder=5,
+                clip_on=False, label="located creep reversal (slip = 0)" if k == 0 else None)
+    return (" ▲ at the bottom: the located creep reversals, "
+            + ", ".join(f"{fmt(e['t'], 5)} s (wheel {e['wheel']})" for e in reversals[:8])
+            + ": there the wheel's slip passes through zero, at the located time; the "
+            "depth of its dip on the log axis is that of the output sample nearest "
+            "to it (a finer grid dips deeper), not a minimum of the slip. A dip "
+            "between a wheel's slide→stick and stick→slide switches (dotted) is a "
+            "reversal inside its stick window, located only by those two switches.")
+
+
 def figure_slip(ctx):
     run, traj = _primary(ctx)
     slips = np.concatenate([traj[f"slip{i}"] for i in WHEELS])
     log = bool(np.any(slips > 0))
-    fig, _ = _wheel_figure(
-        ctx, "slip{i}", "slip speed ‖s_i‖ [m/s]", "", log=log,
-        absolute=True)
+    fig, ax, facts = _wheel_figure(ctx, "slip{i}", "slip speed ‖s_i‖ [m/s]", log=log,
+                                   absolute=True)
     finite = slips[np.isfinite(slips)]
-    jumps = _mark_jumps(ctx, run, fig.axes[0])
+    events, handles, labels, drawn = _mark_switches(ctx, run, ax)
+    reversals = _mark_reversals(ax, drawn["creep_reversal"]) if log else ""
+    creep = _mark_creep_band(run, ax, finite, log)
+    _finish_legend(ax, handles, labels)
     caption = (
         "Fig. 12 — the paper shows that the wheels roll with (near-)zero slip "
         "when friction suffices (μ = 0.5). This run: max slip "
-        f"{fmt(float(finite.max()) if finite.size else math.nan)} m/s, median "
+        f"{fmt(_sample_extremes(facts)[1])} m/s over the output samples, median "
         f"{fmt(float(np.median(finite)) if finite.size else math.nan)} m/s"
         + ("" if log else " (all zero: linear axis)")
-        + f" ({_run_text(run)})." + _mark_creep_band(run, fig.axes[0], finite, log)
-        + jumps + (" The lines join the output samples: a jump shows as a "
-                   "slope over the interval that holds it." if jumps else ""))
+        + f" ({_run_text(run)})." + creep + reversals + events
+        + _breaks_text(run, facts))
     return save_figure(fig, ctx.out_dir, "fig12_slip",
                        "Fig. 12 — slip speeds", caption)
 
@@ -555,12 +936,22 @@ def _sweep_data(ctx):
 
 
 def _scene_mu_min(ctx, scene):
-    """μ_min the scene needs (ref_mu_min), from its μ-sweep rows, else from
+    """(μ_min the scene needs (ref_mu_min), the horizon it is maximised over:
+    the t_end of the rows that carry it), from its μ-sweep rows, else from
     any row of the scene; nan when the results do not carry it."""
-    value = sel.scene_mu_min([r for r in sel.mu_sweep_rows(ctx.runs) if r["scene"] == scene])
-    if not is_finite(value):
-        value = sel.scene_mu_min([r for r in ctx.runs if r["scene"] == scene])
-    return value
+    for rows in ([r for r in sel.mu_sweep_rows(ctx.runs) if r["scene"] == scene],
+                 [r for r in ctx.runs if r["scene"] == scene]):
+        value = sel.scene_mu_min(rows)
+        if is_finite(value):
+            ends = [r.get("t_end", math.nan) for r in rows if r.get("ref_mu_min") == value]
+            ends = [e for e in ends if is_finite(e)]
+            return value, (max(ends) if ends else math.nan)
+    return math.nan, math.nan
+
+
+def _horizon_text(horizon):
+    """' over 0–20 s' (the μ_min(ref) horizon), '' when unknown."""
+    return f" over 0–{fmt(horizon)} s" if is_finite(horizon) else ""
 
 
 def _method_medians(ok, metrics, key, styles):
@@ -628,12 +1019,13 @@ def _room_for_failures(axes, strip=FAILURE_STRIP):
         ax.set_ylim(10 ** a if log else a, hi)
 
 
-def _mu_min_line(ax, mu_min):
-    """The dotted μ_min(ref) line, labelled inside the axes beside the line
-    (never over the panel title)."""
+def _mu_min_line(ax, mu_min, horizon=math.nan):
+    """The dotted μ_min(ref) line, labelled with its horizon inside the axes
+    beside the line (never over the panel title)."""
     if is_finite(mu_min):
         ax.axvline(mu_min, color="grey", linestyle=":", linewidth=1.6)
-        return vline_label(ax, mu_min, f"μ_min(ref) = {fmt(mu_min)}")
+        return vline_label(ax, mu_min, f"μ_min(ref) = {fmt(mu_min)}"
+                           + (f" (0–{fmt(horizon)} s)" if is_finite(horizon) else ""))
     return None
 
 
@@ -661,8 +1053,10 @@ def _failed_text(failed):
 
 
 def _mu_min_needs(panels):
-    """'<scene> needs μ ≥ <μ_min>' of each panel with a μ_min, '; '-joined."""
-    return "; ".join(f"{p['scene']} needs μ ≥ {fmt(p['mu_min'])}" for p in panels
+    """'<scene> needs μ ≥ <μ_min> over 0–<t_end> s' of each panel with a
+    μ_min, '; '-joined."""
+    return "; ".join(f"{p['scene']} needs μ ≥ {fmt(p['mu_min'])}"
+                     f"{_horizon_text(p.get('mu_min_horizon', math.nan))}" for p in panels
                      if is_finite(p["mu_min"]))
 
 
@@ -735,13 +1129,13 @@ def figure_traction_vs_mu(ctx):
         mine_ok = [r for r in ok if r["scene"] == scene]
         mine_failed = [r for r in failed if r["scene"] == scene]
         ax_total = fig.add_subplot(gs[0, k], sharey=share_total)
-        ax_wheel = fig.add_subplot(gs[1, k], sharey=share_wheel)
+        ax_wheel = fig.add_subplot(gs[1, k], sharey=share_wheel, sharex=ax_total)
         share_total, share_wheel = share_total or ax_total, share_wheel or ax_wheel
         curves = _per_method_curve(ax_total, mine_ok, metrics, "mean_total_traction",
                                    ctx.styles)
         _mark_failures(ax_total, mine_failed)
-        mu_min = _scene_mu_min(ctx, scene)
-        _mu_min_line(ax_total, mu_min)
+        mu_min, horizon = _scene_mu_min(ctx, scene)
+        _mu_min_line(ax_total, mu_min, horizon)
         title = _scene_title(ctx, scene, mine_ok + mine_failed)
         ax_total.set_title(f"{title}\ntotal traction per method", fontsize=9)
         ax_total.set_xlabel("friction coefficient μ [-]")
@@ -750,7 +1144,7 @@ def figure_traction_vs_mu(ctx):
             no_data(ax_total, "no successful run")
             no_data(ax_wheel, "no successful run")
             panels.append({"scene": scene, "methods": [], "mu_min": mu_min,
-                           "title": title})
+                           "mu_min_horizon": horizon, "title": title})
             continue
         main = _main_method(ctx, mine_ok)
         runs = sorted((r for r in mine_ok if r["method"] == main), key=lambda r: r["mu"])
@@ -758,33 +1152,52 @@ def figure_traction_vs_mu(ctx):
             ax_wheel.plot([r["mu"] for r in runs],
                           [metrics[r["run_id"]]["mean_abs_lon"][i - 1] for r in runs],
                           color=colour, linestyle=style, marker="o", label=f"wheel {i}")
-        _mu_min_line(ax_wheel, mu_min)
+        _mu_min_line(ax_wheel, mu_min, horizon)
         ax_wheel.set_xlabel("friction coefficient μ [-]")
         ax_wheel.set_ylabel("mean |longitudinal traction| [N]")
         ax_wheel.set_title(f"{scene}: per wheel, {main}", fontsize=9)
         ax_wheel.legend(loc="best", fontsize=7)
         panels.append({"scene": scene, "methods": sorted(curves), "mu_min": mu_min,
+                       "mu_min_horizon": horizon, "main": main,
                        "curves": {m: c for m, c in curves.items()}, "title": title})
     _room_for_failures(fig.axes)
     _sweep_legend(fig, gs[:, n], ok, failed, ctx.styles)
     mu, values = _common_mu_ratio(ctx, scenes, ok, metrics, "mean_total_traction")
     compare = (", ".join(f"{s} {fmt(v)} N" for s, v in values.items()) + f" at μ={fmt(mu)}"
                if values else "no μ where every scene succeeded")
-    needs = _mu_min_needs(panels)
-    caption = (
-        "Fig. 13 — the paper shows how the traction the wheels develop varies "
-        "with μ, for the paper's fixed-camber mode and for the passive variable "
-        "camber (pvc). One column per scene/mode (never averaged over them), one "
-        "curve per method (median over runs at a μ); bottom row per wheel for one "
-        f"method. This run: mean total traction {compare}"
-        + (f"; {needs} (μ_min(ref): the solver's μ_min maximised over the "
-           "reference trajectory)" if needs else
-           "; μ_min not drawn (these results carry no ref_mu_min column)")
-        + f"; {_failed_text(failed)}.")
     record = save_figure(fig, ctx.out_dir, "fig13_traction_vs_mu",
-                         "Fig. 13 — traction vs μ", caption)
+                         "Fig. 13 — traction vs μ",
+                         _traction_vs_mu_caption(panels, compare, failed))
     record.data = {"panels": panels}
     return record
+
+
+def _traction_vs_mu_caption(panels, compare, failed):
+    growth = "; ".join(
+        f"{p['scene']} ({p['main']}) {fmt(curve[0][1])} N at μ={fmt(curve[0][0])} to "
+        f"{fmt(curve[-1][1])} N at μ={fmt(curve[-1][0])}"
+        for p in panels if p.get("main") for curve in [p["curves"].get(p["main"], [])]
+        if curve)
+    needs = _mu_min_needs(panels)
+    return (
+        "Fig. 13 — the paper shows how the traction the wheels develop varies "
+        "with μ, for the paper's fixed-camber mode and for the passive variable "
+        "camber (pvc). One column per scene/mode (never averaged over them), its "
+        "two rows on one μ axis. Top row: per method (median over runs at a μ) "
+        "the run's mean of the total traction norm Σ_i ‖(t_lon, t_lat)_i‖; bottom "
+        "row: per wheel, for one method, the mean |longitudinal traction| only "
+        "(not the norm). In paper mode the robot is over-actuated: the per-wheel "
+        "tractions include internal (antagonistic) forces that scale with μ and, "
+        "for creeping wheels, are fixed by the creep regularisation (statically "
+        "indeterminate, docs/model.md §7.5), so their growth with μ is not "
+        "traction the terrain demands (Fig. 10 shows the wheels pulling against "
+        "each other); pvc mode is statically determinate. This run: mean total "
+        f"traction {growth + '; ' if growth else ''}{compare}"
+        + (f"; {needs} (μ_min(ref): the solver's μ_min maximised over the "
+           "reference trajectory of that horizon; over a shorter one, as the "
+           "stability charts' runs, it can be smaller)" if needs else
+           "; μ_min not drawn (these results carry no ref_mu_min column)")
+        + f"; {_failed_text(failed)}.")
 
 
 def _main_method(ctx, ok):
@@ -828,7 +1241,7 @@ def _slip_panel(ax, mine_ok, metrics, styles, split, log):
     creep = _creep_curves(ax, mine_ok, metrics, styles)
     slides = any(v > 0 for c in curves.values() for _, v in c)
     if mine_ok and not slides:
-        ax.text(0.5, 0.62, "no sliding at any μ\n(sliding_distance = 0):\n"
+        ax.text(0.5, 0.5, "no sliding at any μ\n(sliding_distance = 0):\n"
                 "grey is creep only, ∝ ε", transform=ax.transAxes, ha="center",
                 va="center", fontsize=8, color="#333333",
                 bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.85})
@@ -852,8 +1265,8 @@ def figure_total_slip_vs_mu(ctx):
         curves, creep, slides = _slip_panel(ax, mine_ok, metrics, ctx.styles,
                                             split, log)
         _mark_failures(ax, [r for r in failed if r["scene"] == scene])
-        mu_min = _scene_mu_min(ctx, scene)
-        _mu_min_line(ax, mu_min)
+        mu_min, horizon = _scene_mu_min(ctx, scene)
+        _mu_min_line(ax, mu_min, horizon)
         if log:
             ax.set_yscale("log")
         ax.set_xlabel("friction coefficient μ [-]")
@@ -864,6 +1277,7 @@ def figure_total_slip_vs_mu(ctx):
         if not mine_ok:
             no_data(ax, "no successful run")
         panels.append({"scene": scene, "methods": sorted(curves), "mu_min": mu_min,
+                       "mu_min_horizon": horizon,
                        "curves": curves, "creep_curves": creep, "slides": slides,
                        "title": title})
     extra = ([Line2D([], [], color=CREEP_COLOUR, marker="o", markerfacecolor="none",
@@ -910,56 +1324,4 @@ def figure_total_slip_vs_mu(ctx):
                          "Fig. 14 — total slip vs μ", caption)
     record.data = {"panels": panels, "compare_mu": mu, "per_scene": per_scene,
                    "regimes": regimes, "split": split}
-    return record
-
-
-# ---------------------------------------------------------------- Fig. 15
-
-def _sigma(run):
-    """The run's Baumgarte gain σ, or None for an integrator without one (its
-    option table has no baumgarte_sigma: the runs.csv sigma column is only
-    the unused shorthand there)."""
-    if not has_dae_option(run, "baumgarte_sigma"):
-        return None
-    value = dae_option(run, "baumgarte_sigma", run["sigma"])
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        return None
-    return value if math.isfinite(value) else None
-
-
-def figure_stabilisation(ctx):
-    pair = sel.stabilisation_pair(ctx.runs, ctx.trajectories.has, ctx.primary)
-    pair = [r for r in pair if r is not None]
-    if not pair:
-        raise MissingData("no successful rk-baumgarte or rk-projection run with "
-                          "a trajectory for figure 15")
-    fig = new_figure(8, 4.2)
-    ax = fig.add_subplot()
-    parts = []
-    for run in pair:
-        traj = ctx.trajectories.get(run)
-        ax.plot(traj["t"], positive(traj["drift"]), **plot_style(ctx.styles[run["method"]]),
-                markevery=0.1, label=f"{run['dae']} ({run['method']}, "
-                f"Δt={fmt(run['dt'])} s"
-                + (f", σ={fmt(_sigma(run))} 1/s)" if _sigma(run) is not None else ")"))
-        finite = traj["drift"][np.isfinite(traj["drift"])]
-        parts.append(f"{run['dae']} max {fmt(float(finite.max()) if finite.size else math.nan)}"
-                     f", final {fmt(float(finite[-1]) if finite.size else math.nan)}")
-    if not any(np.any(positive(ctx.trajectories.get(r)["drift"]) > 0) for r in pair):
-        no_data(ax, "drift is zero everywhere")
-    else:
-        ax.set_yscale("log")
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("‖H(Θ)‖∞ [m, rad]")
-    ax.legend(loc="best")
-    missing = "" if len(pair) == 2 else " (only one of the pair is available)"
-    caption = (
-        "Fig. 15 — the paper shows that Baumgarte stabilisation keeps the "
-        "holonomic loop-closure violation bounded. This run: "
-        + "; ".join(parts) + missing + ".")
-    record = save_figure(fig, ctx.out_dir, "fig15_stabilisation",
-                         "Fig. 15 — constraint stabilisation", caption)
-    record.data = {"legend": [t.get_text() for t in ax.get_legend().get_texts()]}
     return record

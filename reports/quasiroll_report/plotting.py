@@ -70,6 +70,36 @@ UNKNOWN_COLOUR = "#9e9e9e"
 MODEL_COLOUR = "#8c8c1a"
 
 
+# Integrator colours for panels whose lines share one NLP (the drift
+# representatives, Fig. 15), where the NLP colour would paint them alike.
+INTEGRATOR_COLOURS = {"cvode-projection": "#d95f02", "ida": "#7570b3",
+                      "rk-baumgarte": "#e7298a", "rk-projection": "#1b9e77"}
+_EXTRA_INTEGRATOR_COLOURS = ["#66a61e", "#e6ab02", "#a6761d", "#1f78b4", "#666666"]
+
+
+def integrator_colour(dae):
+    """A fixed colour per integrator (a stable pick for unknown ones)."""
+    if dae in INTEGRATOR_COLOURS:
+        return INTEGRATOR_COLOURS[dae]
+    return _EXTRA_INTEGRATOR_COLOURS[sum(map(ord, dae)) % len(_EXTRA_INTEGRATOR_COLOURS)]
+
+
+def wrap_label(text, width):
+    """text in lines of at most `width` characters, broken only after a '/'
+    or ',' or at a space (the space dropped), never inside a token: a token
+    longer than `width` keeps a line of its own, whole."""
+    import re
+    lines, line = [], ""
+    for piece in re.findall(r"[^/, ]+[/,]?|[/,]| +", text):
+        if line and len(line.rstrip()) + len(piece.rstrip()) > width:
+            lines.append(line.rstrip())
+            line = ""
+        if line or not piece.isspace():
+            line += piece
+    lines.append(line.rstrip())
+    return "\n".join(lines)
+
+
 def cause_colour(cls, detail):
     if cls == "success":
         return SUCCESS_COLOUR

@@ -8,8 +8,8 @@ import numpy as np
 
 from .data import (dae_option, dae_option_known, is_finite, is_success, is_variant,
                    method_base, method_without)
-from .problems import (fixed_label, group_by_problem, method_style, problem_label,
-                       scene_mode)
+from .problems import (fixed_label, group_by_problem, method_style, problem_key,
+                       problem_label, scene_mode)
 
 PAPER_SCENE = "paper"
 PAPER_MU = 0.5
@@ -40,6 +40,17 @@ def failed_only_methods(runs):
     """Methods that have runs but no successful one, sorted."""
     ok = {run["method"] for run in runs if is_success(run)}
     return sorted({run["method"] for run in runs} - ok)
+
+
+def failed_only_in(runs, problems):
+    """failed_only_methods over the runs of the given work-precision problems
+    only (any status: the rows of the work-precision groups, or every run
+    when there are none, whose problem_key is one of the problems' keys), so
+    a figure's omission note names only methods of the problems it draws."""
+    keys = {tuple(p["key"]) for p in problems}
+    grouped = ([r for r in runs if is_work_precision_group(r.get("suite_group", ""))]
+               if has_group_column(runs) else [])
+    return failed_only_methods([r for r in grouped or runs if problem_key(r) in keys])
 
 
 def runs_of(runs, **equal):
@@ -212,23 +223,39 @@ def timing_spread(point):
     return q3 - q1 if is_finite(q1) and is_finite(q3) and q3 >= q1 else 0.0
 
 
-def dominates(b, a, error_tie=ERROR_TIE):
+def resolved_error(point, floor=math.nan):
+    """A point's error as far as it can be ranked: an error below `floor`
+    (the reference's estimated error, or a round-off floor) is not resolved
+    and counts as the floor itself (tied with every other such error)."""
+    err = point["err"]
+    return max(err, floor) if is_finite(floor) and floor > 0 else err
+
+
+def dominates(b, a, error_tie=ERROR_TIE, floor=math.nan):
     """True when point b dominates point a (dicts with err, wall, wall_q1,
     wall_q3): a is slower than b by more than the timing spread, i.e. the
     difference of the medians exceeds the larger of the two IQRs, AND a's
     error exceeds b's by more than `error_tie` (1 %) relative. A point
     within either tolerance of another is never dominated by it: ties in
-    error or time within the measurement's noise do not decide the front."""
+    error or time within the measurement's noise do not decide the front.
+    With a `floor`, errors below it are not resolved (resolved_error): two
+    points both at or below it are equally accurate as far as can be told,
+    so only time ranks them (the faster one, by more than the spread,
+    dominates); otherwise a point below the floor would stay on the front
+    only through an error difference nobody can measure."""
     spread = max(timing_spread(a), timing_spread(b))
+    ea, eb = resolved_error(a, floor), resolved_error(b, floor)
+    unresolved = is_finite(floor) and floor > 0 and ea <= floor and eb <= floor
     return (a["wall"] - b["wall"] > spread
-            and a["err"] > b["err"] * (1.0 + error_tie))
+            and (unresolved or ea > eb * (1.0 + error_tie)))
 
 
-def non_dominated(points, error_tie=ERROR_TIE):
-    """The points no other point dominates (`dominates`), sorted by error
-    then wall time: the work-precision front of one problem."""
+def non_dominated(points, error_tie=ERROR_TIE, floor=math.nan):
+    """The points no other point dominates (`dominates`, errors below `floor`
+    tied at it), sorted by error then wall time: the work-precision front of
+    one problem."""
     front = [a for a in points
-             if not any(dominates(b, a, error_tie) for b in points if b is not a)]
+             if not any(dominates(b, a, error_tie, floor) for b in points if b is not a)]
     return sorted(front, key=lambda p: (p["err"], p["wall"]))
 
 
@@ -248,6 +275,41 @@ def error_floor(series):
     best = sorted((line for line, e in tightest.items() if e <= 10 * low),
                   key=lambda line: tightest[line])
     return low, max(tightest[line] for line in best), best
+
+
+# A force error below ROUNDOFF_FACTOR·ε·|F| (ε = 2.2e-16, the double
+# precision machine epsilon; |F| a typical contact force of the problem) is
+# round-off of the quasi-static solves, not a method's error: 1e3·ε ≈
+# 2.2e-13 relative, ~3.6e-12 N for a 16 N wheel load. Errors below it are
+# tied at it for the work-precision front (dominates, floor).
+ROUNDOFF_FACTOR = 1e3
+
+
+def roundoff_floor(typical_force):
+    """ROUNDOFF_FACTOR · ε · |typical_force| [N], nan without a force."""
+    if not is_finite(typical_force) or typical_force == 0:
+        return math.nan
+    return ROUNDOFF_FACTOR * float(np.finfo(float).eps) * abs(typical_force)
+
+
+def observed_orders(series, min_rungs=3):
+    """{line: p}: the observed order of each line's Δt ladder, the
+    least-squares slope of log(err) against log(Δt) over its points at one
+    rtol (the rtol with the most Δt values), for lines with at least
+    `min_rungs` Δt values; other lines are left out."""
+    orders = {}
+    for line, points in series.items():
+        by_tol = {}
+        for p in points:
+            if is_finite(p["dt"]) and p["dt"] > 0 and is_finite(p["err"]) and p["err"] > 0:
+                by_tol.setdefault(p["tol"] if is_finite(p["tol"]) else None,
+                                  []).append(p)
+        ladder = max(by_tol.values(), key=len, default=[])
+        if len({p["dt"] for p in ladder}) >= min_rungs:
+            slope = np.polyfit(np.log([p["dt"] for p in ladder]),
+                               np.log([p["err"] for p in ladder]), 1)[0]
+            orders[line] = float(slope)
+    return orders
 
 
 def recommendation_targets(points, floor_low):
@@ -488,11 +550,15 @@ def paper_run(runs, has_trajectory, scene=PAPER_SCENE):
 
 
 def snapshot_pair(runs, has_trajectory, pvc, primary=None):
-    """(paper run, pvc run) for Fig. 5 and the replay: both of one method
-    (nlp/dae/coupling with its options) where the two scenes share one
-    successful μ = 0.5 run with a trajectory, preferring the primary's
-    method, then the pvc run's Δt closest to the paper run's; else the two
-    scenes' own picks (paper_run). pvc = the pvc scene name or None."""
+    """(paper run, pvc run) for Fig. 5 and the replay: two successful μ = 0.5
+    runs with a trajectory of one method (nlp/dae/coupling with its
+    options) that differ in as little else as the results allow: equal
+    t_end first, then equal Δt, then the fewest other differing settings
+    (ε, seed, roughness, rtol, NLP tolerance); among equals the longest
+    pair, the primary run, the settings and method nearest the primary's,
+    a pair from one suite group, then each scene's own order (paper_run:
+    reference, longest, finest Δt, most accurate). Without a common method
+    the two scenes' own picks (paper_run). pvc = the pvc scene name or None."""
     primary = primary if primary is not None else paper_run(runs, has_trajectory)
     if pvc is None or primary is None:
         return primary, None if pvc is None else paper_run(runs, has_trajectory, pvc)
@@ -500,18 +566,29 @@ def snapshot_pair(runs, has_trajectory, pvc, primary=None):
     def ok(scene):
         return [r for r in successful(runs) if r["scene"] == scene
                 and mu_equals(r, PAPER_MU) and has_trajectory(r)]
-    paper_ok, pvc_ok = ok(primary["scene"]), ok(pvc)
-    common = {r["method"] for r in paper_ok} & {r["method"] for r in pvc_ok}
-    if not common:
+    pairs = [(p, q) for p in ok(primary["scene"]) for q in ok(pvc)
+             if p["method"] == q["method"]]
+    if not pairs:
         return primary, paper_run(runs, has_trajectory, pvc)
-    if primary["method"] in common:
-        paper = primary
-    else:
-        paper = paper_run([r for r in paper_ok if r["method"] in common],
-                          has_trajectory, primary["scene"])
-    twins = [r for r in pvc_ok if r["method"] == paper["method"]]
-    same_dt = [r for r in twins if _same(r["dt"], paper["dt"])]
-    return paper, paper_run(same_dt or twins, has_trajectory, pvc)
+
+    def differs(p, q, name):
+        return not _same(p.get(name, math.nan), q.get(name, math.nan))
+    settings = ("eps", "seed", "roughness", "tol", "nlp_tol")
+
+    def own_order(r):
+        reached = r["t_reached"] if is_finite(r["t_reached"]) else -math.inf
+        dt = r["dt"] if is_finite(r["dt"]) else math.inf
+        return (not is_reference(r), -reached, dt, _accuracy_key(r))
+
+    def key(pair):
+        p, q = pair
+        return (differs(p, q, "t_end"), differs(p, q, "dt"),
+                sum(differs(p, q, n) for n in settings),
+                max(own_order(p)[1], own_order(q)[1]), p["run_id"] != primary["run_id"],
+                sum(differs(p, primary, n) for n in settings),
+                sum(p[n] != primary[n] for n in ("method", "nlp", "dae", "coupling")),
+                p.get("suite_group") != q.get("suite_group"), own_order(p), own_order(q))
+    return min(pairs, key=key)
 
 
 def _preference(run, scene):
@@ -675,6 +752,12 @@ def stability_cell(rows):
         label = f"{math.floor(frac * 100) / 100:.2f}".lstrip("0")
     else:
         label = "?"
+    # A failure that reached t_end (e.g. drift_max beyond the suite's bound
+    # at the end): "1.00" alone would read as a full run; a mark says why.
+    end_mark = ""
+    if cls != "success" and is_finite(frac) and frac >= 1.0 - 1e-12:
+        end_mark = REACHED_END_MARKS.get(worst["status"], REACHED_END_OTHER)
+        label += end_mark
     if 0 < failed < len(rows):
         label += f" ({failed}/{len(rows)})"
     # The reference itself failed numerically (runs.csv reference_stop): what
@@ -684,11 +767,15 @@ def stability_cell(rows):
         label += REFERENCE_FAILURE_MARK
     return {"cls": cls, "detail": detail, "frac": frac, "label": label,
             "n": len(rows), "failed": failed, "status": worst["status"],
-            "run_id": worst["run_id"], "ref_failed": ref_failed}
+            "run_id": worst["run_id"], "ref_failed": ref_failed, "end_mark": end_mark}
 
 
 # Appended to a stability cell's label whose reference failed numerically.
 REFERENCE_FAILURE_MARK = "†"
+# Appended to the "1.00" of a failed cell whose worst run reached t_end: why
+# it failed there (the suite's drift / gap bound, docs/harness.md Verdicts).
+REACHED_END_MARKS = {"drift_exceeded": "·drift", "gap_exceeded": "·gap"}
+REACHED_END_OTHER = "·fail"
 
 
 def is_reference_failure(run):
