@@ -1699,6 +1699,33 @@ class MethodFigureRefereeTest(unittest.TestCase):
     """The referee's defects of the method figures (work-precision, drift,
     Fig. 15, stability charts): each check failed before its fix."""
 
+    def test_rk4_limit_line_only_over_rk4_rows(self):
+        """The RK4 limit says nothing about an IDA row: the line spans the
+        fixed-step RK4 rows only."""
+        from quasiroll_report import figures_methods as fm
+        rk4 = _base_row(method="n/rk-baumgarte/zoh", dae="rk-baumgarte",
+                        dae_options=json.dumps({"baumgarte_sigma": 5, "rk_method": "rk4"}))
+        ida = _base_row(method="n/ida/zoh", dae="ida",
+                        dae_options=json.dumps({"baumgarte_sigma": 5}))
+        limit_rows = sel.rk4_limit_rows([rk4, ida], lambda r: r["method"])
+        self.assertEqual(limit_rows, {1: ["n/rk-baumgarte/zoh"]})
+        rows = ["n/ida/coupled", "n/ida/zoh", "n/rk-baumgarte/coupled", "n/rk-baumgarte/zoh"]
+        plotting.apply_style()
+        fig = plotting.new_figure(7, 2.5)
+        ax = fig.add_subplot()
+        panel = {"rows": rows, "values": [1.0, 2.5, 3.0, 10.0], "numeric": True, "log": True,
+                 "cells": {(r, j): {"cls": "success", "detail": "", "label": "1"}
+                           for r in rows for j in range(4)},
+                 "label": "x", "mu_min": float("nan"), "limits": [(2.785, 1)],
+                 "limit_rows": {1: rows[2:]}}
+        fm._draw_stability_panel(ax, panel, "σ·Δt [-]", "sigma_dt")
+        spans = [seg for coll in ax.collections if coll.get_linestyle()[0][1]
+                 for seg in coll.get_segments()]
+        self.assertEqual(len(spans), 1)
+        self.assertAlmostEqual(spans[0][0][0], 2.785)
+        self.assertEqual(sorted([spans[0][0][1], spans[0][1][1]]), [1.5, 3.5])
+        plotting.plt.close(fig)
+
     @staticmethod
     def _wp_row(method, dt, err, wall, tol=1e-6):
         nlp, dae, coupling = method.split("/")

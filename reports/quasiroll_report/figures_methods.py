@@ -851,6 +851,23 @@ def _draw_value_cells(ax, panel):
     ax.xaxis.set_minor_formatter(NullFormatter())
 
 
+def _draw_limit_line(ax, x, rows, limited_rows):
+    """The RK4 limit at x, over the rows it applies to (contiguous runs of
+    them), over the whole height when the panel does not say which."""
+    style = {"color": "#222222", "linestyle": "--", "linewidth": 1.4}
+    if limited_rows is None:
+        ax.axvline(x, **style)
+        return
+    index = sorted(rows.index(r) for r in limited_rows if r in rows)
+    start = None
+    for k, i in enumerate(index):
+        if start is None:
+            start = i
+        if k + 1 == len(index) or index[k + 1] != i + 1:
+            ax.vlines(x, start - 0.5, i + 0.5, **style)
+            start = None
+
+
 def _draw_stability_panel(ax, panel, axis_label, axis):
     rows = panel["rows"]
     if panel.get("numeric"):
@@ -879,7 +896,7 @@ def _draw_stability_panel(ax, panel, axis_label, axis):
         lo, hi = ax.get_xlim()
         if x >= hi:
             ax.set_xlim(lo, x * (1.15 if panel.get("log") else 1.05))
-        ax.axvline(x, color="#222222", linestyle="--", linewidth=1.4)
+        _draw_limit_line(ax, x, rows, panel.get("limit_rows", {}).get(substeps))
         marks.append((x, "RK4 limit σ·h = 2.785" + (f" (h = Δt/{substeps})"
                                                     if substeps != 1 else "")))
     if marks:
@@ -932,7 +949,8 @@ def _axis_caption(chart):
     if limits:
         steps = ", ".join(f"substeps = {n}: h = Δt/{n}, line at σ·Δt = "
                           f"{sel.RK4_SIGMA_H_LIMIT * n:g}" for n in limits)
-        out += (" Dashed line: the stability limit of fixed-step RK4 for the "
+        out += (" Dashed line (over the fixed-step RK4 rows only): the "
+                "stability limit of fixed-step RK4 for the "
                 "Baumgarte drift equation dH/dt = −σH, σ·h = 2.785, where h is "
                 "the integrator step: h = Δt/substeps, substeps being the RK4 "
                 f"steps per output interval Δt (here {steps}).")
@@ -1037,6 +1055,7 @@ def _stability_figure(ctx, chart):
          "values": [sel.format_value(v) for v in p["values"]],
          "numeric": p.get("numeric", False), "log": p.get("log", False),
          "limits": [x for x, _ in p.get("limits", [])],
+         "limit_rows": {str(n): names for n, names in p.get("limit_rows", {}).items()},
          "substeps": p.get("substeps", []),
          "mu_min": p["mu_min"],
          "cells": [{"row": row, "value": sel.format_value(p["values"][j]),

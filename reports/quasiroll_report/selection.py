@@ -792,12 +792,26 @@ def substeps_of(run):
     return int(value) if is_finite(value) and value >= 1 else 1
 
 
+def _is_rk4(run):
+    return str(dae_option(run, "rk_method", "")) == "rk4"
+
+
 def rk4_limit_lines(rows):
     """[(σ·Δt, substeps)] where σ·h = RK4_SIGMA_H_LIMIT for the fixed-step
     RK4 runs among rows (h = Δt / substeps), one per substeps value."""
-    steps = sorted({substeps_of(r) for r in rows
-                    if str(dae_option(r, "rk_method", "")) == "rk4"})
+    steps = sorted({substeps_of(r) for r in rows if _is_rk4(r)})
     return [(RK4_SIGMA_H_LIMIT * n, n) for n in steps]
+
+
+def rk4_limit_rows(rows, row_of):
+    """{substeps: sorted row names} of the rows holding a fixed-step RK4 run
+    with that many substeps: the rows a limit line applies to (an IDA row's
+    stability has nothing to do with it)."""
+    out = {}
+    for r in rows:
+        if _is_rk4(r):
+            out.setdefault(substeps_of(r), set()).add(row_of(r))
+    return {n: sorted(names) for n, names in out.items()}
 
 
 def _has_axis_option(rows, option):
@@ -889,6 +903,8 @@ def stability_charts(runs, references=None):
                            "mu_min": mu_min, "numeric": numeric,
                            "log": numeric and _spans_decades(values, 1.0),
                            "limits": rk4_limit_lines(mine) if name in _AXIS_NEEDS else [],
+                           "limit_rows": rk4_limit_rows(
+                               mine, lambda r: _row_label(r, extra, options)),
                            "substeps": sorted({substeps_of(r) for r in mine})})
         charts.append({"group": group, "axis": name, "axis_label": label,
                        "panels": panels, "left_out": left_out})
