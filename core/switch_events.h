@@ -182,7 +182,7 @@ using SlipVectorEvaluator =
 // Reversals: a wheel that slides at both ends of [t0, t1] with its slip
 // vector reversed (s(t0) . s(t1) < 0) has passed through s = 0: for
 // |s| < kappa eps it sticks (two class changes ~ 2 kappa eps / |s'| apart,
-// 1.5 ms on the paper scene at 15.5 s, both inside one interval at
+// 0.15 s on the paper scene at 15.5 s, both inside one interval at
 // Delta t >= 0.2 s and so invisible to the class test), and its traction
 // -mu f_n s / sqrt(|s|^2 + eps^2) flips within ~ eps / |s'|: a jump of the
 // right-hand side as eps -> 0. A wheel that creeps at both ends with its
