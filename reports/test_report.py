@@ -1107,6 +1107,19 @@ class PaperFigureRefereeTest(unittest.TestCase):
         self.assertNotIn("must provide", caption)
         plotting.plt.close(fig)
 
+    # 9. Fig. 11: the lateral tractions get their net line too
+    def test_lateral_traction_net_line(self):
+        from quasiroll_report import figures_paper as fp
+        plotting.apply_style()
+        ctx = self.context(self.traj(t1_lat=np.full(21, -4.0), t2_lat=np.full(21, 1.5),
+                                     t3_lat=np.full(21, 2.0)), [], eps=1e-8)
+        fig, caption = self.capture(fp.figure_lateral_traction, ctx)
+        self.addCleanup(plotting.plt.close, fig)
+        lines = {line.get_label(): line for line in fig.axes[0].get_lines()}
+        self.assertTrue(np.allclose(lines["sum (net)"].get_ydata(), -0.5))
+        self.assertIn("Their sum (black dotted, the net traction) stays within "
+                      "[-0.5, -0.5] N", caption)
+
     # 7. Figs. 13-14: the μ_min horizon; Fig. 13's rows and shared μ axes
     def test_mu_min_horizon_and_traction_rows(self):
         from quasiroll_report import figures_paper as fp
@@ -1780,8 +1793,9 @@ class MethodFigureRefereeTest(unittest.TestCase):
         self.assertIn(fast, front)
         self.assertIn(coarse, front)
         self.assertNotIn(accurate, front)
-        # a resolved point is still not beaten by an error difference below 1 %
-        self.assertFalse(sel.dominates(fast, dict(accurate, err=6.05e-10), floor=6e-10))
+        # a resolved point within 1 % of the floor but slower is dominated: a
+        # tie in error does not keep a slow point on the front
+        self.assertTrue(sel.dominates(fast, dict(accurate, err=6.05e-10), floor=6e-10))
         # the panel: hatched below the estimate, one ring there
         rows = [self._wp_row("a/b/zoh", 0.1, 5e-10, 1.0), self._wp_row("c/d/zoh", 0.1, 1e-11, 2.0),
                 self._wp_row("e/f/zoh", 0.1, 1e-6, 0.1)]
@@ -1848,7 +1862,7 @@ class MethodFigureRefereeTest(unittest.TestCase):
         entry = self.manifest()["fig15_stabilisation"]
         caption = entry["caption"]
         self.assertIn("Like with like, within the steps before any projection "
-                      "(drift_step_max, dashed)", caption)
+                      "(drift_step_max, the marks at the right edge)", caption)
         self.assertTrue("levels off (" in caption or "still growing at t_end" in caption)
         self.assertEqual(sorted(entry["data"]["step_drift"]), ["rk-baumgarte", "rk-projection"])
         self.assertTrue(any(t.startswith("within the steps:") for t in entry["data"]["legend"]))
@@ -1922,6 +1936,215 @@ class MethodFigureRefereeTest(unittest.TestCase):
         self.assertEqual(label.replace("\n", ""), method)
         self.assertTrue(all(part[-1] in "/," for part in label.split("\n")[:-1]), label)
 
+    # 11. drift vs Δt: a point is one setting's repeats, never an rtol ladder pooled
+    def test_drift_vs_dt_point_is_one_setting(self):
+        from quasiroll_report import figures_methods as fm
+
+        def row(method, dt, tol, drift, step):
+            nlp, dae, coupling = method.split("/")
+            return _base_row(run_id=f"{method}-{dt}-{tol}", method=method, nlp=nlp, dae=dae,
+                             coupling=coupling, dt=dt, tol=tol, drift_max=drift,
+                             drift_step_max=step)
+        ladder = "n/cvode-projection/coupled"
+        rows = ([row(ladder, dt, 1e-8, 1e-15, 5e-9 * dt / 0.1) for dt in (0.4, 0.2, 0.1)]
+                + [row(ladder, 0.1, tol, 1e-13, step) for tol, step in
+                   ((1e-3, 4.1e-5), (1e-4, 2.1e-5), (1e-10, 3.7e-11))]
+                + [row("n/dp/coupled", 0.1, tol, 1e-12, step) for tol, step in
+                   ((1e-3, 4.6e-9), (1e-8, 4.6e-9), (1e-10, 2.9e-11))])
+        plotting.apply_style()
+        fig = plotting.new_figure(5, 4)
+        self.addCleanup(plotting.plt.close, fig)
+        ax = fig.add_subplot()
+        ctx = types.SimpleNamespace(styles=sel.method_styles(rows))
+        drawn, left_out = fm._plot_drift_vs_dt(ax, ctx, {"rows": rows, "label": "p"},
+                                               "drift_step_max")
+        self.assertEqual((drawn, len(left_out)), (4, 5))
+        lines = {len(line.get_xdata()): line for line in ax.lines}
+        # the Δt ladder at its own rtol: 5e-9 at Δt 0.1, not the median of 4 rtols
+        self.assertEqual(list(lines[3].get_xdata()), [0.1, 0.2, 0.4])
+        self.assertAlmostEqual(lines[3].get_ydata()[0], 5e-9)
+        # a tolerance ladder at one Δt: its point at the Δt ladders' rtol (1e-8)
+        self.assertEqual(list(lines[1].get_ydata()), [4.6e-9])
+        text = fm._left_out_rtol_text(left_out)
+        self.assertIn("Left out: 5 runs of 2 methods' rtol ladders", text)
+        self.assertIn("at other rtols (1.00e-10 to 0.001)", text)
+        self.assertIn("their drift within the steps 2.90e-11 to 4.10e-05", text)
+
+    # 12. the front: Pareto dominance with tolerances, ties in error decided by time
+    def test_equally_accurate_slow_point_is_not_ringed(self):
+        newton = {"err": 4.37e-9, "wall": 0.097, "wall_q1": 0.095, "wall_q3": 0.099}
+        ipopt = {"err": 4.34e-9, "wall": 4.91, "wall_q1": 4.8, "wall_q3": 5.0}
+        self.assertTrue(sel.dominates(newton, ipopt))      # 0.7 % worse, 50x faster
+        self.assertEqual(sel.non_dominated([newton, ipopt]), [newton])
+        # more accurate by > 1 % at a time within the spread dominates too
+        close = {"err": 4.5e-9, "wall": 0.098, "wall_q1": 0.096, "wall_q3": 0.1}
+        self.assertTrue(sel.dominates(newton, close))
+        caption = self.manifest()["fig_work_precision"]["caption"]
+        self.assertIn("of two points equally accurate within 1 % the slower one", caption)
+
+    def _wp_text(self, rows, estimate, force_rows=None, ref_kind=""):
+        from quasiroll_report import figures_methods as fm
+        problem = {"label": "p", "groups": ["g"], "ref_err_est": estimate,
+                   "ref_kind": ref_kind, "rows": force_rows or rows}
+        series = sel.work_precision_series(None, "err_pos_rms", rows=rows)
+        points = [p for rungs in series.values() for p in rungs]
+        front = sel.non_dominated(points, floor=estimate)
+        floor = sel.error_floor(series)
+        force_series = sel.work_precision_series(None, "err_force_rms",
+                                                 rows=force_rows or rows)
+        roundoff = sel.roundoff_floor(16.0)
+        stats = fm._force_stats(problem, force_series, roundoff)
+        return fm._wp_problem_text(problem, series, front, floor, False,
+                                   (16.0, {"run_id": "x"}), stats)
+
+    # 13. the most accurate point and the floor below the reference's estimate
+    def test_most_accurate_below_the_estimate_is_not_resolved(self):
+        rows = [self._wp_row("a/b/zoh", 0.1, 9.49e-11, 0.0957),
+                self._wp_row("c/d/zoh", 0.1, 7.32e-10, 0.5)]
+        text = self._wp_text(rows, 6.31e-10)
+        self.assertIn("most accurate err_pos_rms 9.49e-11 m in 0.0957 s — below the "
+                      "reference's estimated error 6.31e-10 m, not resolved", text)
+        self.assertIn("its low end below the reference's estimated error, not resolved",
+                      text)
+        text = self._wp_text(rows, 1e-11)
+        self.assertNotIn("not resolved", text.split("reference error")[0])
+
+    # 14. zero force errors counted; points below the round-off floor; analytic reference
+    def test_zero_force_errors_and_analytic_reference_are_stated(self):
+        rows = [self._wp_row("a/b/zoh", dt, 1e-3 * dt, 0.1 / dt) for dt in (0.4, 0.2, 0.1)]
+        rows[0]["err_force_rms"] = 0.0
+        rows[1]["err_force_rms"] = 3e-15
+        text = self._wp_text(rows, float("nan"), ref_kind="analytic:circle")
+        self.assertIn("1 run with zero force error not drawn on the log axis", text)
+        self.assertIn("1 of the force panel's 2 points below it (not resolved)", text)
+        self.assertIn("the reference is analytic (ref_kind analytic:circle)", text)
+        self.assertNotIn("not estimated", text)
+        self.assertIn("reference error not estimated", self._wp_text(rows, float("nan")))
+
+    # 15. a line joining a Δt and an rtol ladder labels its points with both
+    def test_joined_ladders_label_dt_and_rtol(self):
+        rows = ([self._wp_row("a/b/coupled", dt, 1e-3 * dt, 1.0 / dt, tol=1e-8)
+                 for dt in (0.4, 0.2)]
+                + [self._wp_row("a/b/coupled", 0.1, 1e-3 * tol, 1.0 / tol ** 0.1, tol=tol)
+                   for tol in (1e-3, 1e-6, 1e-8)])
+        labels = [p["label"] for p in sel.work_precision_series(
+            None, "err_pos_rms", rows=rows)["a/b/coupled"]]
+        self.assertEqual(labels, ["0.4/1e-8", "0.2/1e-8", "0.1/1e-3", "0.1/1e-6",
+                                  "0.1/1e-8"])
+        # Δt and rtol stepped together: the Δt alone tells the points apart
+        rows = [self._wp_row("a/b/coupled", dt, 1e-3 * dt, 1.0 / dt, tol=dt * 1e-3)
+                for dt in (0.2, 0.1, 0.05)]
+        self.assertEqual([p["label"] for p in sel.work_precision_series(
+            None, "err_pos_rms", rows=rows)["a/b/coupled"]], ["0.2", "0.1", "0.05"])
+        self.assertEqual(sel.rung_label(0.1, 1e-6, True), "1e-6")
+        self.assertEqual(sel.rung_label(0.1, 1e-6, False), "0.1")
+
+    # 16. a flat or negative zoh fit is no order: rtol-limited
+    def test_flat_zoh_fit_reads_rtol_limited(self):
+        from quasiroll_report import figures_methods as fm
+
+        def line(errs, dae, method):
+            return [{"dt": dt, "tol": 1e-8, "err": e, "coupling": "zoh", "dae": dae,
+                     "run": _base_row(dae=dae, method=method)}
+                    for dt, e in zip((0.4, 0.2, 0.1, 0.05), errs)]
+        series = {"n/cvode-projection/zoh": line([1.9e-9, 6.8e-9, 1.5e-8, 2.9e-8],
+                                                 "cvode-projection", "n/cvode-projection/zoh"),
+                  "n/ida/zoh": line([2.2e-9, 1.8e-8, 1.9e-8, 2.2e-9], "ida", "n/ida/zoh"),
+                  "n/rk-projection/zoh": line([7.8e-10, 5.1e-11, 3.2e-12, 2.0e-13],
+                                              "rk-projection", "n/rk-projection/zoh")}
+        text = fm._hold_order_text([({"label": "C"}, series)])
+        self.assertIn("cvode-projection rtol-limited (no Δt order)", text)
+        self.assertIn("ida rtol-limited (no Δt order)", text)
+        self.assertIn("rk-projection 4.0", text)
+        self.assertNotIn("-1.3", text)
+        self.assertEqual(sel.order_text(0.1, False), "flat (no Δt order)")
+
+    # 17. the stability chart's μ_min(ref) names its horizon
+    def test_stability_mu_min_names_its_horizon(self):
+        from quasiroll_report import figures_methods as fm
+        rows = [_base_row(run_id=f"s{k}", suite_group="stability_mu", scene="paper_pvc",
+                          mu=mu, t_end=6.0, ref_mu_min=0.115, ref_status="success")
+                for k, mu in enumerate((0.1, 0.2, 0.5))]
+        panel, = sel.stability_charts(rows)[0]["panels"]
+        self.assertEqual(panel["mu_min_horizon"], 6.0)
+        plotting.apply_style()
+        fig = plotting.new_figure(6, 2)
+        self.addCleanup(plotting.plt.close, fig)
+        ax = fig.add_subplot()
+        fm._draw_stability_panel(ax, panel, "μ [-]", "mu")
+        fig.canvas.draw()
+        top = [t.get_text() for child in ax.child_axes for t in child.get_xticklabels()]
+        self.assertIn("μ_min(ref) = 0.115 over 0–6 s", top)
+        caption = self.manifest()["fig_stability_mu"]["caption"]
+        self.assertRegex(caption, r"μ_min\(ref\) [0-9.]+ over 0–[0-9.]+ s")
+
+    # 18. an rtol axis says where one step per output sample makes rtol moot
+    def test_stability_tol_names_step_capped_rows(self):
+        from quasiroll_report import figures_methods as fm
+
+        def row(nlp, tol, steps, err):
+            return _base_row(run_id=f"{nlp}{tol}", suite_group="stability_tol", nlp=nlp,
+                             dae="rk-baumgarte", method=f"{nlp}/rk-baumgarte[rk_method=dp54]"
+                             "/coupled", coupling="coupled", dt=0.1, tol=tol, steps=steps,
+                             t_reached=4.0, t_end=4.0, err_pos_rms=err)
+        rows = [row(nlp, tol, steps, err) for nlp in ("ceres", "newton")
+                for tol, steps, err in ((1e-3, 44, 3.5684e-8), (1e-6, 44, 3.5684e-8),
+                                        (1e-9, 91, 7e-10))]
+        ctx = types.SimpleNamespace(runs=rows)
+        text = fm._tol_plateau_text(ctx, {"axis": "tol", "group": "stability_tol"})
+        self.assertIn("rk-baumgarte[rk_method=dp54]/coupled with ceres, newton (rtol 0.001 "
+                      "to 1.00e-06 at Δt = 0.1 s)", text)
+        self.assertIn("rtol changes neither the steps nor the outcome", text)
+        self.assertEqual(fm._tol_plateau_text(ctx, {"axis": "mu", "group": "stability_tol"}),
+                         "")
+
+    # 19. Fig. 15: the ratio's Δt stated; drift_step_max a mark at the right edge
+    def test_stabilisation_ratio_dt_and_step_marks(self):
+        from quasiroll_report import figures_methods as fm
+        t = np.linspace(0.0, 20.0, 41)
+        base = _base_row(dae="rk-baumgarte", dt=0.025, drift_step_max=8.79e-10)
+        proj = _base_row(dae="cvode-projection", dt=0.05, drift_step_max=3.53e-7)
+        drift = np.full(41, 1e-13)
+        entries = [(base, t, drift, 1.0), (proj, t, drift, 1.0)]
+        text = fm._stabilisation_text(entries)
+        self.assertIn("(cvode-projection 402× rk-baumgarte, cvode-projection at Δt = 0.05 s, "
+                      "rk-baumgarte at Δt = 0.025 s)", text)
+        proj["dt"] = 0.025
+        self.assertIn("402× rk-baumgarte, both at Δt = 0.025 s)",
+                      fm._stabilisation_text(entries))
+        plotting.apply_style()
+        fig = plotting.new_figure(6, 3)
+        self.addCleanup(plotting.plt.close, fig)
+        ax = fig.add_subplot()
+        ax.plot(t, drift)
+        fm._mark_step_drift(ax, [base, proj])
+        marks = [line for line in ax.lines if line.get_label().startswith("within the steps")]
+        self.assertEqual(len(marks), 2)
+        for mark in marks:
+            self.assertEqual(list(mark.get_xdata()), [1.0 - fm.STEP_MARK_SHARE, 1.0])
+        self.assertIn("short marks (◄) at the right edge",
+                      self.manifest()["fig15_stabilisation"]["caption"])
+
+    # 20. every value column keeps a tick label: a crowded one on a second line
+    def test_crowded_value_ticks_keep_their_labels(self):
+        from quasiroll_report import figures_methods as fm
+        rows = ["n/rk-baumgarte/zoh"]
+        panel = {"rows": rows, "values": [1.0, 2.5, 3.0, 10.0], "numeric": True, "log": True,
+                 "cells": {(rows[0], j): {"cls": "success", "detail": "", "label": "1"}
+                           for j in range(4)},
+                 "label": "x", "mu_min": float("nan"), "limits": [(2.785, 1)],
+                 "limit_rows": {1: rows}}
+        plotting.apply_style()
+        fig = plotting.new_figure(4.5, 1.6)
+        self.addCleanup(plotting.plt.close, fig)
+        ax = fig.add_subplot()
+        fm._draw_stability_panel(ax, panel, "σ·Δt [-]", "sigma_dt")
+        # the crowded 3 on a second line below 2.5
+        self.assertEqual([t.get_text() for t in ax.get_xticklabels()],
+                         ["1", "2.5", "\n3", "10"])
+        self.assertEqual(fm.value_tick_layout([0, 10, 15, 30]), [False, True, None, False])
+        self.assertEqual(fm.value_tick_layout([0, 17], rotated=True), [False, None])
+
 
 if __name__ == "__main__":
     sys.exit(main())
@@ -1952,28 +2175,37 @@ class WorkPrecisionRulesTest(unittest.TestCase):
     """The dominance rule and the recommendation table (issue 21 item 7), on
     hand-made points whose verdicts follow from the rule's two thresholds."""
 
-    def test_tie_in_error_never_dominates(self):
-        # 1.6x slower but only 2e-6 relative error apart: the tie of the old
-        # front. Neither is worse by more than 1 % in error: both stay.
+    def test_tie_in_error_slower_is_dominated(self):
+        # 1.6x slower and only 2e-6 relative error apart: equally accurate
+        # within 1 %, so the faster one dominates (Pareto with tolerances).
         fast, slow = _point(1.0e-4, 1.0), _point(1.0e-4 * (1 + 2e-6), 1.6)
-        self.assertFalse(sel.dominates(fast, slow))
-        self.assertEqual(len(sel.non_dominated([fast, slow])), 2)
+        self.assertTrue(sel.dominates(fast, slow))
+        self.assertEqual(sel.non_dominated([fast, slow]), [fast])
+        # within both tolerances of each other: neither dominates
+        twin = _point(1.0e-4 * 1.005, 1.05, iqr=0.2)
+        self.assertFalse(sel.dominates(fast, twin))
+        self.assertFalse(sel.dominates(twin, fast))
 
-    def test_timing_within_iqr_never_dominates(self):
-        # 10x the error but only 0.05 s slower with an IQR of 0.1 s.
+    def test_timing_within_iqr_ranks_by_error(self):
+        # 10x the error and 0.05 s slower with an IQR of 0.1 s: the times are
+        # indistinguishable, the error is not, so b dominates a ...
         a, b = _point(1e-3, 1.05, iqr=0.1), _point(1e-4, 1.0, iqr=0.02)
-        self.assertFalse(sel.dominates(b, a))
-        # the same slowdown with no spread is beyond the timing noise
-        self.assertTrue(sel.dominates(_point(1e-4, 1.0), _point(1e-3, 1.05)))
+        self.assertTrue(sel.dominates(b, a))
+        # ... also when b is the slower one within the spread
+        self.assertTrue(sel.dominates(_point(1e-4, 1.08, iqr=0.1), a))
+        # but not when b is slower beyond it
+        self.assertFalse(sel.dominates(_point(1e-4, 1.3, iqr=0.1), a))
 
-    def test_worse_beyond_both_thresholds_is_dominated(self):
+    def test_worse_beyond_either_threshold_is_dominated(self):
         best = _point(1e-5, 1.0, iqr=0.1)
         worse = _point(1e-5 * 1.02, 1.2, iqr=0.1)   # +2 % error, +0.2 s > IQR
-        edge = _point(1e-5 * 1.009, 1.5, iqr=0.1)   # +0.9 % error only
-        front = sel.non_dominated([best, worse, edge])
+        edge = _point(1e-5 * 1.009, 1.5, iqr=0.1)   # +0.9 % error, slower
+        fast = _point(1e-5 * 1.5, 0.5, iqr=0.1)     # worse but faster
+        front = sel.non_dominated([best, worse, edge, fast])
         self.assertIn(best, front)
         self.assertNotIn(worse, front)
-        self.assertIn(edge, front)
+        self.assertNotIn(edge, front)
+        self.assertIn(fast, front)
 
     def test_error_floor_spread_of_best_tightest_rungs(self):
         series = {"a": [_point(1e-2, 1), _point(1e-6, 4)],

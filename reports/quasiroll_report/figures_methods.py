@@ -13,8 +13,8 @@ from . import selection as sel
 from .data import dae_option, has_dae_option, is_finite
 from .plotting import (MissingData, NOT_RUN_COLOUR, UNKNOWN_COLOUR, cause_colour,
                        integrator_colour, legend_below_log_data, points_under_legend,
-                       fmt, new_figure, no_data, positive, save_figure,
-                       text_colour, wrap_label)
+                       fmt, horizon_text, new_figure, no_data, positive, save_figure,
+                       span_text, text_colour, wrap_label)
 from .data import is_variant
 from .problems import (coupling_line, dae_marker, method_style, nlp_colour, plot_style,
                        problem_label)
@@ -101,7 +101,7 @@ def _plot_series(ax, series, styles):
 
 def _draw_front(ax, front):
     """The non-dominated points (selection.dominates): black rings (not
-    joined: under the tie rule the set need not be monotone)."""
+    joined: with the tolerances the set need not be monotone)."""
     if not front:
         return
     fx = [p["err"] for p in front]
@@ -243,8 +243,8 @@ def _wp_panel_data(problem, metric, series, front, floor, unresolved, narrow):
 
 def _wp_legend_extra(problems, roundoff, narrow):
     extra = [Line2D([], [], color="black", linestyle="none", marker="o", markersize=9,
-                    markerfacecolor="none", label="non-dominated (beaten by\n"
-                    "> IQR in time and > 1 %\nin error by no point)"),
+                    markerfacecolor="none", label="non-dominated (Pareto\n"
+                    "within IQR in time and\n1 % in error)"),
              Patch(facecolor=FLOOR_COLOUR, alpha=0.5,
                    label="measured floor: spread of\nthe best methods' tightest\nrungs"),
              Patch(facecolor="#bbbbbb", alpha=0.5, label="below every method")]
@@ -264,30 +264,86 @@ def _wp_legend_extra(problems, roundoff, narrow):
     return extra
 
 
-def _wp_problem_text(problem, series, front, floor, narrow, force, force_min):
-    """A problem's sentence of the work-precision caption (position panel,
-    with the force panel's round-off floor)."""
-    best = min(front, key=lambda p: p["err"]) if front else None
+def _force_stats(problem, series, floor):
+    """The force panel's numbers for the caption: its smallest drawn error,
+    how many of its points lie below the round-off `floor`, and how many
+    runs have an error of exactly 0 (left off the log axis)."""
+    errs = [p["err"] for rungs in series.values() for p in rungs]
+    return {"min": min(errs, default=math.nan), "points": len(errs),
+            "below": sum(1 for e in errs if is_finite(floor) and e < floor),
+            "zero": sel.zero_error_runs(problem["rows"], "err_force_rms")}
+
+
+def _unresolved_note(value, estimate):
+    """' — below the reference's estimated error E m, not resolved' when
+    value lies below the estimate, else ''."""
+    if not (is_finite(value) and is_finite(estimate) and value < estimate):
+        return ""
+    return f" — below the reference's estimated error {fmt(estimate)} m, not resolved"
+
+
+def _reference_error_text(problem, below):
+    """The reference's own error: its estimate and the points below it; an
+    analytic reference (runs.csv ref_kind analytic:*) says so."""
     estimate = problem["ref_err_est"]
-    below = sum(1 for rungs in series.values() for p in rungs
-                if is_finite(estimate) and p["err"] < estimate)
+    if is_finite(estimate):
+        return (f"estimate {fmt(estimate)} m (dotted line; "
+                + (f"{below} points below it, not resolved)" if below
+                   else "no point below it)"))
+    kind = str(problem.get("ref_kind", ""))
+    if kind.startswith("analytic"):
+        return (f"none: the reference is analytic (ref_kind {kind}), exact up to "
+                "round-off, so no estimate")
+    return "not estimated"
+
+
+def _force_text(force, stats):
+    """The force panel's part of a problem's sentence: its round-off floor,
+    the points below it and the zero-error runs left off the log axis."""
+    floor = sel.roundoff_floor(force[0])
+    text = ""
+    if force[1]:
+        text += (f"; force round-off floor {fmt(floor)} N (median |N| {fmt(force[0])} N "
+                 f"of {force[1]['run_id']}"
+                 + ("" if stats["min"] < 10 * floor else
+                    "; over a decade below every force error, off the axis") + ")")
+        if stats["below"]:
+            text += (f", {stats['below']} of the force panel's {stats['points']} points "
+                     "below it (not resolved)")
+    if stats["zero"]:
+        text += (f"; {stats['zero']} run{'s' if stats['zero'] != 1 else ''} with zero "
+                 "force error not drawn on the log axis")
+    return text
+
+
+def _wp_problem_text(problem, series, front, floor, narrow, force, force_stats):
+    """A problem's sentence of the work-precision caption (position panel,
+    with the force panel's round-off floor): the most accurate point and the
+    measured floor say when they lie below the reference's estimated error
+    (not resolved)."""
+    points = [p for rungs in series.values() for p in rungs]
+    best = min(points, key=lambda p: (p["err"], p["wall"])) if points else None
+    estimate = problem["ref_err_est"]
+    below = sum(1 for p in points if is_finite(estimate) and p["err"] < estimate)
+    floor_note = ""
+    if is_finite(floor[0]) and _unresolved_note(floor[0], estimate):
+        floor_note = ("; its whole band" if floor[1] < estimate else "; its low end") \
+            + " below the reference's estimated error, not resolved"
     return (
         f"{problem['label']} (groups {', '.join(problem['groups'])}): "
-        f"{sum(len(s) for s in series.values())} rungs of {len(series)} lines, "
+        f"{len(points)} rungs of {len(series)} lines, "
         f"most accurate err_pos_rms {fmt(best['err']) if best else 'n/a'} m in "
-        f"{fmt(best['wall']) if best else 'n/a'} s, non-dominated: "
-        f"{', '.join(_front_methods(series, front)) or 'none'}; measured floor "
+        f"{fmt(best['wall']) if best else 'n/a'} s"
+        + (_unresolved_note(best["err"], estimate) if best else "")
+        + ("" if not best or any(p is best for p in front) else
+           " (not ringed: a faster point is as accurate within the tolerances)")
+        + f"; non-dominated: {', '.join(_front_methods(series, front)) or 'none'}; "
+        "measured floor "
         + (f"{fmt(floor[0])} – {fmt(floor[1])} m ({len(floor[2])} methods"
-           + ("; narrower than 1 % of the axis: thick line" if narrow else "") + ")"
-           if is_finite(floor[0]) else "n/a") + "; reference error "
-        + (f"estimate {fmt(estimate)} m (dotted line; "
-           + (f"{below} points below it, not resolved)" if below else "no point below it)")
-           if is_finite(estimate) else "not estimated")
-        + (f"; force round-off floor {fmt(sel.roundoff_floor(force[0]))} N (median "
-           f"|N| {fmt(force[0])} N of {force[1]['run_id']}"
-           + ("" if force_min < 10 * sel.roundoff_floor(force[0]) else
-              "; over a decade below every force error, off the axis") + ")"
-           if force[1] else ""))
+           + ("; narrower than 1 % of the axis: thick line" if narrow else "")
+           + floor_note + ")" if is_finite(floor[0]) else "n/a")
+        + "; reference error " + _reference_error_text(problem, below)
+        + _force_text(force, force_stats))
 
 
 # zoh lines whose observed order lies in this range fall as O(Δt).
@@ -299,7 +355,9 @@ def _hold_order_text(details):
     problem the observed orders of its zoh lines' Δt ladders
     (selection.observed_orders); O(Δt) is said only of the problems where
     every zoh line's order lies in ZOH_FIRST_ORDER, the others are named
-    with their orders per integrator (median over its NLPs)."""
+    with their orders per integrator (median over its NLPs); a median order
+    below selection.FLAT_ORDER is no order and reads 'rtol-limited (no Δt
+    order)' (selection.order_text)."""
     first, other = [], []
     for problem, series, *_ in details:
         zoh = {line: rungs for line, rungs in series.items()
@@ -313,13 +371,18 @@ def _hold_order_text(details):
             continue
         by_dae = {}
         for line, order in orders.items():
-            by_dae.setdefault(zoh[line][0]["dae"], []).append(order)
+            point = zoh[line][0]
+            by_dae.setdefault(point["dae"], []).append(
+                (order, sel.is_adaptive(point.get("run", point))))
         other.append(f"{problem['label']} (zoh orders per integrator: " + ", ".join(
-            f"{dae} {float(np.median(ps)) + 0.0:.1f}".replace("-0.0", "0.0")
+            f"{dae} " + sel.order_text(float(np.median([o for o, _ in ps])),
+                                       all(a for _, a in ps))
             for dae, ps in sorted(by_dae.items())) + ")")
     text = ("Errors are against the problem's reference. Observed order: the "
             "least-squares slope of log error against log Δt over a line's Δt "
-            "ladder (3 or more Δt at one rtol). ")
+            "ladder (3 or more Δt at one rtol); a fit that is flat or negative "
+            f"(below {sel.FLAT_ORDER:g}) is no order: for an adaptive integrator its "
+            "error is set by rtol, so it reads rtol-limited (no Δt order). ")
     if first:
         text += ("A zoh method holds the quasi-static twist over each Δt; where that "
                  "hold error dominates, its error falls only as O(Δt) however accurate "
@@ -367,12 +430,13 @@ def figure_work_precision(ctx):
             if metric == "err_pos_rms":
                 detail = (problem, series, front, floor, narrow, force)
             else:
-                details.append(detail + (min((p["err"] for rungs in series.values()
-                                              for p in rungs), default=math.nan),))
+                details.append(detail + (_force_stats(problem, series,
+                                                      unresolved[metric]),))
             panels.append(_wp_panel_data(problem, metric, series, front, floor,
                                          unresolved[metric], narrow))
     # The legend names the round-off line where a force panel draws it.
-    roundoff = any(d[6] < 10 * sel.roundoff_floor(d[5][0]) for d in details if d[5][1])
+    roundoff = any(d[6]["min"] < 10 * sel.roundoff_floor(d[5][0]) for d in details
+                   if d[5][1])
     rows = [r for p in problems for r in p["rows"]]
     _legend_axes(fig, gs[:, 2], style_legend_handles(
         rows, _wp_legend_extra(problems, roundoff, narrow_any), ctx.styles))
@@ -381,12 +445,17 @@ def figure_work_precision(ctx):
         "Work-precision diagrams, one row per problem (scene, mode, μ, terrain, "
         "t_end: runs of different problems are never on one chart or front). "
         "Each line is one method through its Δt (or rtol) ladder, median error "
-        "over repeats, every point labelled with its Δt [s] or rtol; line style: "
+        "over repeats, every point labelled with its Δt [s] or rtol (Δt/rtol, e.g. "
+        "0.4/1e-8, on a line joining a Δt ladder and an rtol ladder where one alone "
+        "would label two points alike); line style: "
         "solid = zoh, dashed = coupled; a method with non-default backend "
         "options (e.g. an adaptive RK scheme) is a line of its own, hollow "
-        "markers, its own dashes. Ringed points are non-dominated: no other "
-        "point of the problem is faster by more than the timing spread (the "
-        "larger IQR of the two) and more accurate by more than 1 %. "
+        "markers, its own dashes. Ringed points are non-dominated (Pareto "
+        "dominance with tolerances): no other point of the problem is faster by "
+        "more than the timing spread (the larger IQR of the two) while at most "
+        "1 % less accurate, or more accurate by more than 1 % while at most the "
+        "spread slower; so of two points equally accurate within 1 % the slower "
+        "one (beyond the spread) is not ringed. "
         + _timing_text(spread, all(p["exclusive"] for p in panels))
         + " The right axis is the same time per simulated second. "
         + _checkpoint_text(rows) + _step_cap_text(rows) + _hold_order_text(details) +
@@ -432,15 +501,34 @@ def _step_cap_text(rows):
                <= 0.05 * rungs[last]["err_pos_rms"]):
             last += 1
         if last > 0:
-            notes.append(f"{method} (rtol {fmt(rungs[0]['tol'])} to "
-                         f"{fmt(rungs[last]['tol'])} at Δt = {fmt(dt)} s)")
+            notes.append((method, f" (rtol {fmt(rungs[0]['tol'])} to "
+                          f"{fmt(rungs[last]['tol'])} at Δt = {fmt(dt)} s)"))
     if not notes:
         return ""
+    notes = _join_nlps(notes)
     return ("Plateaus: where an rtol ladder gives one error level, the step is "
             "limited by the output interval Δt, not by rtol (the run takes about "
             "one step per output interval, runs.csv steps): "
             + "; ".join(notes[:8]) + (f" and {len(notes) - 8} more" if len(notes) > 8
                                       else "") + ". ")
+
+
+def _join_nlps(notes):
+    """[(method, suffix)] -> ['method suffix']: methods nlp/rest that differ
+    only in their NLP and share the suffix are one note, 'rest with nlp1,
+    nlp2 suffix'."""
+    groups = {}
+    for method, suffix in notes:
+        nlp, _, rest = method.partition("/")
+        key = (rest, suffix) if rest else (method, suffix)
+        groups.setdefault(key, []).append(nlp if rest else None)
+    out = []
+    for (rest, suffix), nlps in groups.items():
+        if len(nlps) > 1 and all(nlps):
+            out.append(f"{rest} with {', '.join(sorted(nlps))}{suffix}")
+        else:
+            out += [f"{nlp}/{rest}{suffix}" if nlp else f"{rest}{suffix}" for nlp in nlps]
+    return out
 
 
 def _checkpoint_text(rows):
@@ -556,10 +644,13 @@ def _plot_step_drift_bars(ax, summary):
 
 
 def _plot_drift_vs_dt(ax, ctx, problem, column="drift_max"):
+    """A problem's `column` against Δt, one line per method through its Δt
+    ladder at one rtol (selection.drift_ladders): a point is the median over the
+    repeats of one setting. Returns (rows drawn, rows left out)."""
     rows = [r for r in problem["rows"]
             if is_finite(r.get(column, math.nan)) and r[column] > 0 and is_finite(r["dt"])]
-    for line in sorted({sel.line_key(r) for r in rows}):
-        mine = [r for r in rows if sel.line_key(r) == line]
+    ladders, left_out = sel.drift_ladders(rows)
+    for line, (_, mine) in ladders.items():
         dts = sorted({r["dt"] for r in mine})
         med = [float(np.median([r[column] for r in mine if r["dt"] == dt])) for dt in dts]
         ax.plot(dts, med, **plot_style(ctx.styles[mine[0]["method"]]))
@@ -567,7 +658,7 @@ def _plot_drift_vs_dt(ax, ctx, problem, column="drift_max"):
     ax.set_title(f"{where} — {problem['label']}", fontsize=9)
     if not rows:
         no_data(ax, f"no finite {column}")
-        return 0
+        return 0, []
     ax.set_xscale("log")
     ax.set_yscale("log")
     # Ticks at the run's Δt values: a log axis over less than a decade
@@ -577,7 +668,23 @@ def _plot_drift_vs_dt(ax, ctx, problem, column="drift_max"):
     ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("Δt [s]")
     ax.set_ylabel("max ‖H‖∞ over the run [m, rad]")
-    return len(rows)
+    return len(rows) - len(left_out), left_out
+
+
+def _left_out_rtol_text(left_out):
+    """Caption sentence on the rtol-ladder rungs the drift-vs-Δt panels leave
+    out (selection.drift_ladders), with the range of their drift_step_max; '' without."""
+    if not left_out:
+        return ""
+    tols = sorted({r["tol"] for r in left_out if is_finite(r["tol"])})
+    steps = [r.get(STEP_DRIFT, math.nan) for r in left_out]
+    steps = [v for v in steps if is_finite(v) and v > 0]
+    lines = sorted({sel.line_key(r) for r in left_out})
+    return (f" Left out: {len(left_out)} runs of {len(lines)} methods' rtol ladders at "
+            f"other rtols ({span_text(tols) if tols else 'n/a'}), each a setting of its "
+            "own, not a repeat of the drawn point"
+            + (f", their drift within the steps {span_text(steps)}" if steps else "")
+            + " (Fig. 1 shows their errors against rtol).")
 
 
 def figure_drift(ctx):
@@ -591,14 +698,16 @@ def figure_drift(ctx):
     over_time = fig.add_subplot(gs[0, 0])
     summary, pairs = _plot_drift_vs_time(over_time, ctx)
     tops = [fig.add_subplot(gs[0, k + 1]) for k in range(len(problems))]
-    n_rows = sum(_plot_drift_vs_dt(ax, ctx, p) for ax, p in zip(tops, problems))
+    drawn = [_plot_drift_vs_dt(ax, ctx, p) for ax, p in zip(tops, problems)]
+    n_rows = sum(n for n, _ in drawn)
     if not summary and not n_rows:
         raise MissingData("no successful run for figure 'drift'")
     if steps:
         _plot_step_drift_bars(fig.add_subplot(gs[1, 0]), summary)
         for k, (top, p) in enumerate(zip(tops, problems)):
             bottom = fig.add_subplot(gs[1, k + 1], sharex=top, sharey=top)
-            _plot_drift_vs_dt(bottom, ctx, p, STEP_DRIFT)
+            drawn.append(_plot_drift_vs_dt(bottom, ctx, p, STEP_DRIFT))
+    left_out = list({r["run_id"]: r for _, out in drawn for r in out}.values())
     rows = [r for p in problems for r in p["rows"]]
     _legend_axes(fig, gs[:, n], style_legend_handles(rows or sel.successful(ctx.runs),
                                                      styles=ctx.styles))
@@ -623,10 +732,13 @@ def figure_drift(ctx):
         "successful zoh run on the paper scene where "
         "available, its problem in the legend; colour = integrator in this panel "
         "only, the NLP colour would paint them alike), then its maximum against Δt per "
-        "method (median over repeats of a setting), one panel per work-precision "
+        "method through its Δt ladder at one rtol (the rtol with the most Δt values, "
+        "else the one the problem's Δt ladders share), a point being the median over "
+        "the repeats of that one setting, one panel per work-precision "
         "problem; each problem's two panels share their axes; where methods differ "
         "only in their NLP their lines coincide (the drift does not depend on it) and "
-        "the NLP last in the legend covers the others." + _coincide_text(pairs) + second
+        "the NLP last in the legend covers the others." + _left_out_rtol_text(left_out)
+        + _coincide_text(pairs) + second
         + f"This run: {'; '.join(parts) or 'no trajectories'}." + _failed_note(ctx, problems))
     covered = points_under_legend(fig, over_time)
     record = save_figure(fig, ctx.out_dir, "fig_drift", "2. Constraint drift", caption)
@@ -688,19 +800,43 @@ def _stabilisation_text(entries):
             text += " (after its projection)"
         parts.append(text)
     out = "This run: " + "; ".join(parts) + "."
-    steps = [(run["dae"], run.get(STEP_DRIFT, math.nan)) for run, *_ in entries]
-    if all(is_finite(v) for _, v in steps):
+    steps = [(run["dae"], run.get(STEP_DRIFT, math.nan), run["dt"]) for run, *_ in entries]
+    if all(is_finite(v) for _, v, _ in steps):
         out += (" Like with like, within the steps before any projection "
-                "(drift_step_max, dashed): " + ", ".join(f"{d} {fmt(v)}" for d, v in steps))
-        if len(steps) == 2 and min(v for _, v in steps) > 0:
-            (d0, v0), (d1, v1) = steps
-            out += (f" ({d1} {v1 / v0:.3g}× {d0})")
+                "(drift_step_max, the marks at the right edge): "
+                + ", ".join(f"{d} {fmt(v)}" for d, v, _ in steps))
+        if len(steps) == 2 and min(v for _, v, _ in steps) > 0:
+            (d0, v0, dt0), (d1, v1, dt1) = steps
+            out += (f" ({d1} {v1 / v0:.3g}× {d0}, " + (
+                f"both at Δt = {fmt(dt0)} s)" if dt0 == dt1 else
+                f"{d1} at Δt = {fmt(dt1)} s, {d0} at Δt = {fmt(dt0)} s)"))
         out += "."
     else:
         out += (" These results predate drift_step_max (the drift within the steps): "
                 "a projection run's curve is its drift after projection, not what its "
                 "steps commit, so the curves do not compare like with like.")
     return out
+
+
+# Fig. 15's drift_step_max marks: a short thick stroke over this share of
+# the axis width at its right edge, a ◄ at its left end.
+STEP_MARK_SHARE = 0.04
+
+
+def _mark_step_drift(ax, runs):
+    """Each run's drift_step_max (one maximum over the run, not a time
+    series) as a short mark at the right edge of the axes, in the run's
+    integrator colour, at its value on the y axis."""
+    from matplotlib.transforms import blended_transform_factory
+    edge = blended_transform_factory(ax.transAxes, ax.transData)
+    for run in runs:
+        step = run.get(STEP_DRIFT, math.nan)
+        if is_finite(step) and step > 0:
+            ax.plot([1.0 - STEP_MARK_SHARE, 1.0], [step, step], transform=edge,
+                    color=integrator_colour(run["dae"]), linewidth=3.0,
+                    solid_capstyle="butt", marker="<", markevery=[0], markersize=6,
+                    zorder=4, label=f"within the steps: {run['dae']} "
+                    "(drift_step_max, max over the run)")
 
 
 def figure_stabilisation(ctx):
@@ -721,12 +857,7 @@ def figure_stabilisation(ctx):
         entries.append((run, np.asarray(traj["t"], float), drift,
                         late_growth(traj["t"], drift)))
     plot_integrator_curves(ax, curves, ctx.styles)
-    for run in pair:
-        step = run.get(STEP_DRIFT, math.nan)
-        if is_finite(step) and step > 0:
-            ax.axhline(step, color=integrator_colour(run["dae"]), linestyle="--",
-                       linewidth=1.0, label=f"within the steps: {run['dae']} "
-                       "(drift_step_max)")
+    _mark_step_drift(ax, pair)
     if not any(np.any(d > 0) for _, _, d, _ in curves):
         no_data(ax, "drift is zero everywhere")
     else:
@@ -738,9 +869,11 @@ def figure_stabilisation(ctx):
     caption = (
         "Fig. 15 — the paper shows that Baumgarte stabilisation keeps the "
         "holonomic loop-closure violation bounded. Solid: ‖H(Θ)‖∞ at the output "
-        "samples (colour = integrator); dashed: each run's largest drift within "
-        "its steps before any projection (runs.csv drift_step_max, docs/model.md "
-        "§8.10). A run levels off when its maximum over the last quarter of the "
+        "samples (colour = integrator); the short marks (◄) at the right edge, in "
+        "the run's colour: each run's largest drift within its steps before any "
+        "projection (runs.csv drift_step_max, docs/model.md §8.10), one maximum "
+        "over the run, not a time series. A run levels off when its maximum over "
+        "the last quarter of the "
         f"run is at most {PLATEAU_GROWTH:g}× its maximum before. "
         + _stabilisation_text(entries) + missing)
     record = save_figure(fig, ctx.out_dir, "fig15_stabilisation",
@@ -837,18 +970,40 @@ def _draw_value_cells(ax, panel):
                         color=text, clip_on=True)
     ax.set_xlim(edges[0], edges[-1])
     ax.set_ylim(len(rows) - 0.5, -0.5)
-    # Tick labels by value; a label too close to the previous one is left out
-    # (the value is still ticked, and in the table below the figure).
-    shown, last = [], -math.inf
-    for value in values:
-        at = ((np.log10(value / edges[0]) if log else value - edges[0]) / span * width_pt)
-        shown.append(sel.format_value(value) if at - last >= 18 else "")
-        if shown[-1]:
-            last = at
+    at = [((np.log10(v / edges[0]) if log else v - edges[0]) / span * width_pt)
+          for v in values]
+    crowded = value_tick_layout(at, rotated=len(values) > 8)
     ax.xaxis.set_major_locator(FixedLocator(values))
-    ax.set_xticklabels(shown, rotation=90 if len(values) > 8 else 0, fontsize=8)
+    ax.set_xticklabels(["" if c is None else ("\n" if c else "") + sel.format_value(v)
+                        for v, c in zip(values, crowded)],
+                       rotation=90 if len(values) > 8 else 0, fontsize=8)
     ax.xaxis.set_minor_locator(NullLocator())
     ax.xaxis.set_minor_formatter(NullFormatter())
+
+
+# Value-axis tick labels: a label at least TICK_GAP_PT from the previous one
+# is set as usual; a closer one (the σ·Δt axis's 3 beside 2.5, either side
+# of the RK4 limit) on a second line below, where it is that far from the
+# previous second-line label; only one crowded on both lines is left out.
+TICK_GAP_PT = 18.0
+
+
+def value_tick_layout(at, rotated=False):
+    """Per tick at positions `at` [pt, increasing]: False = a label on the
+    first line, True = on the second line (crowded), None = left out (the
+    value is still ticked, and in the table below the figure). Rotated
+    labels (many values) have no second line."""
+    out, first, second = [], -math.inf, -math.inf
+    for x in at:
+        if x - first >= TICK_GAP_PT:
+            out.append(False)
+            first = x
+        elif not rotated and x - second >= TICK_GAP_PT:
+            out.append(True)
+            second = x
+        else:
+            out.append(None)
+    return out
 
 
 def _draw_limit_line(ax, x, rows, limited_rows):
@@ -891,7 +1046,8 @@ def _draw_stability_panel(ax, panel, axis_label, axis):
         lo, hi = ax.get_xlim()
         if x is not None and min(lo, hi) <= x <= max(lo, hi):
             ax.axvline(x, color="black", linestyle=":", linewidth=2)
-            marks.append((x, f"μ_min(ref) = {fmt(panel['mu_min'])}"))
+            marks.append((x, f"μ_min(ref) = {fmt(panel['mu_min'])}"
+                          + horizon_text(panel.get("mu_min_horizon", math.nan))))
     for x, substeps in panel.get("limits", []):
         lo, hi = ax.get_xlim()
         if x >= hi:
@@ -989,6 +1145,17 @@ def _borrowed_cause_text(cells):
             "from it each run stopped is runs.csv err_stop_t.")
 
 
+def _tol_plateau_text(ctx, chart):
+    """On an rtol axis, the rows whose step the output interval caps
+    (_step_cap_text, as in the work-precision caption): rtol changes
+    nothing there. '' on other axes or without such rows."""
+    if chart["axis"] != "tol":
+        return ""
+    text = _step_cap_text(sel.successful(sel.in_group(ctx.runs, chart["group"])))
+    return (" " + text + "In those rows rtol changes neither the steps nor the "
+            "outcome.") if text else ""
+
+
 def _stability_figure(ctx, chart):
     panels = chart["panels"]
     n_cols = max(len(p["values"]) for p in panels)
@@ -1010,7 +1177,8 @@ def _stability_figure(ctx, chart):
     # Rows as drawn: a method id per swept option value (baumgarte_sigma on
     # the σ·Δt axis) is one row, its values in the columns.
     n_rows = len({row for p in panels for row in p["rows"]})
-    mu_text = "; ".join(f"{p['scene']}: μ_min(ref) {fmt(p['mu_min'])}" for p in panels
+    mu_text = "; ".join(f"{p['scene']}: μ_min(ref) {fmt(p['mu_min'])}"
+                        + horizon_text(p.get("mu_min_horizon", math.nan)) for p in panels
                         if chart["axis"] == "mu" and is_finite(p["mu_min"]))
     caption = (
         f"Stability along {chart['axis_label'].split(' [')[0]} (group {chart['group']}): "
@@ -1035,7 +1203,10 @@ def _stability_figure(ctx, chart):
         f"numerical, {counts['model']} beyond the model, {counts['unknown']} "
         "unclassified."
         + (f" Dotted line: the friction the scene needs, {mu_text} (the solver's "
-           "μ_min maximised over the reference trajectory)." if mu_text else "")
+           "μ_min maximised over the reference trajectory of the panel's t_end; "
+           "over a longer horizon, as in Figs. 13–14, it can be larger)."
+           if mu_text else "")
+        + _tol_plateau_text(ctx, chart)
         + _axis_caption(chart) + _borrowed_cause_text(cells)
         + (f" {sel.REFERENCE_FAILURE_MARK} = the reference of that cell failed "
            "numerically before t_end although its retry ladder ran "

@@ -12,6 +12,7 @@ from matplotlib.transforms import blended_transform_factory
 from . import selection as sel
 from .data import is_finite, is_success
 from .plotting import (COMPONENT_STYLES, MissingData, WHEEL_STYLES, fmt, span_text,
+                       horizon_text,
                        new_figure, no_data, positive, save_figure,
                        spans_decades, vline_label)
 from .figures_methods import style_legend_handles
@@ -788,7 +789,8 @@ def _traction_text(ctx, run, traj, column, facts, net):
 def _wheel_force_figure(ctx, name):
     stem, title, column, ylabel, paper_text, force = _WHEEL_FORCE_FIGURES[name]
     run, traj = _primary(ctx)
-    total = {"normal": "sum", "longitudinal": "sum (net)"}.get(force)
+    # The net line for both tractions: the caption argues antagonism from it.
+    total = {"normal": "sum", "longitudinal": "sum (net)", "lateral": "sum (net)"}.get(force)
     fig, ax, facts = _wheel_figure(ctx, column, ylabel, total=total,
                                    creep=force != "normal")
     if force == "normal":
@@ -943,15 +945,8 @@ def _scene_mu_min(ctx, scene):
                  [r for r in ctx.runs if r["scene"] == scene]):
         value = sel.scene_mu_min(rows)
         if is_finite(value):
-            ends = [r.get("t_end", math.nan) for r in rows if r.get("ref_mu_min") == value]
-            ends = [e for e in ends if is_finite(e)]
-            return value, (max(ends) if ends else math.nan)
+            return value, sel.mu_min_horizon(rows, value)
     return math.nan, math.nan
-
-
-def _horizon_text(horizon):
-    """' over 0–20 s' (the μ_min(ref) horizon), '' when unknown."""
-    return f" over 0–{fmt(horizon)} s" if is_finite(horizon) else ""
 
 
 def _method_medians(ok, metrics, key, styles):
@@ -1025,7 +1020,7 @@ def _mu_min_line(ax, mu_min, horizon=math.nan):
     if is_finite(mu_min):
         ax.axvline(mu_min, color="grey", linestyle=":", linewidth=1.6)
         return vline_label(ax, mu_min, f"μ_min(ref) = {fmt(mu_min)}"
-                           + (f" (0–{fmt(horizon)} s)" if is_finite(horizon) else ""))
+                           + horizon_text(horizon, " (0–{} s)"))
     return None
 
 
@@ -1056,7 +1051,7 @@ def _mu_min_needs(panels):
     """'<scene> needs μ ≥ <μ_min> over 0–<t_end> s' of each panel with a
     μ_min, '; '-joined."""
     return "; ".join(f"{p['scene']} needs μ ≥ {fmt(p['mu_min'])}"
-                     f"{_horizon_text(p.get('mu_min_horizon', math.nan))}" for p in panels
+                     f"{horizon_text(p.get('mu_min_horizon', math.nan))}" for p in panels
                      if is_finite(p["mu_min"]))
 
 

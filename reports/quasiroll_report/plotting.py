@@ -11,6 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .data import ReportError  # noqa: E402
+from .problems import dae_colour  # noqa: E402
 
 DPI = 100
 
@@ -70,18 +71,9 @@ UNKNOWN_COLOUR = "#9e9e9e"
 MODEL_COLOUR = "#8c8c1a"
 
 
-# Integrator colours for panels whose lines share one NLP (the drift
-# representatives, Fig. 15), where the NLP colour would paint them alike.
-INTEGRATOR_COLOURS = {"cvode-projection": "#d95f02", "ida": "#7570b3",
-                      "rk-baumgarte": "#e7298a", "rk-projection": "#1b9e77"}
-_EXTRA_INTEGRATOR_COLOURS = ["#66a61e", "#e6ab02", "#a6761d", "#1f78b4", "#666666"]
-
-
 def integrator_colour(dae):
-    """A fixed colour per integrator (a stable pick for unknown ones)."""
-    if dae in INTEGRATOR_COLOURS:
-        return INTEGRATOR_COLOURS[dae]
-    return _EXTRA_INTEGRATOR_COLOURS[sum(map(ord, dae)) % len(_EXTRA_INTEGRATOR_COLOURS)]
+    """A fixed colour per integrator (problems.dae_colour)."""
+    return dae_colour(dae)
 
 
 def wrap_label(text, width):
@@ -250,6 +242,13 @@ def fmt(value, digits=3):
     if value != 0 and (abs(value) < 1e-3 or abs(value) >= 1e4):
         return f"{value:.{digits - 1}e}"
     return f"{value:.{digits}g}"
+
+
+def horizon_text(horizon, template=" over 0–{} s"):
+    """The horizon of a μ_min(ref) (the t_end it is maximised over) by
+    `template`: ' over 0–20 s'; '' when unknown."""
+    ok = isinstance(horizon, (int, float)) and math.isfinite(horizon)
+    return template.format(fmt(horizon)) if ok else ""
 
 
 def span_text(values):

@@ -65,6 +65,17 @@ def dae_marker(dae):
     return _style("dae", dae, _MARKERS)
 
 
+# Integrator colours for panels whose lines share one NLP (the drift
+# representatives, Fig. 15), where the NLP colour would paint them alike:
+# by the integrator's place in meta.json's backend list, as the markers.
+_DAE_COLOURS = ["#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02",
+                "#a6761d", "#666666"]
+
+
+def dae_colour(dae):
+    return _style("dae", dae, _DAE_COLOURS)
+
+
 def coupling_line(coupling):
     return COUPLING_LINES.get(coupling, ":")
 

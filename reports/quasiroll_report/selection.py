@@ -151,6 +151,51 @@ def _ladder_key(run):
             run["tol"] if is_finite(run["tol"]) else -1.0)
 
 
+def ladder_tol(rows, prefer=None):
+    """The rtol of a line's Δt ladder (rows of one line, dicts with dt and
+    tol; a non-finite tol counts as one value, -1): the rtol at which it has
+    the most Δt values; among equals `prefer` (e.g. common_tol of the
+    problem: the rtol the Δt ladders share), then the tightest. None
+    without rows."""
+    dts = {}
+    for r in rows:
+        dts.setdefault(_ladder_key(r)[1], set()).add(r["dt"])
+    if not dts:
+        return None
+    return max(dts, key=lambda tol: (len(dts[tol]), prefer is not None and tol == prefer,
+                                     -tol))
+
+
+def common_tol(rows):
+    """The rtol most rows share (-1 for a non-finite one; the tightest among
+    equals), None without rows: a problem's Δt-ladder rtol."""
+    counts = Counter(_ladder_key(r)[1] for r in rows)
+    return max(counts, key=lambda tol: (counts[tol], -tol)) if counts else None
+
+
+def drift_ladders(rows):
+    """{line: (rtol, rows at it)}: each line's Δt ladder at its own rtol
+    (ladder_tol, ties to the rtol the problem's Δt ladders share),
+    and the left-out rows: the other rungs of an rtol ladder, which are
+    settings of their own, not repeats. Returns (ladders, left_out)."""
+    prefer = common_tol(rows)
+    ladders, left_out = {}, []
+    for line in sorted({line_key(r) for r in rows}):
+        mine = [r for r in rows if line_key(r) == line]
+        tol = ladder_tol(mine, prefer)
+        at = [r for r in mine if _ladder_key(r)[1] == tol]
+        ladders[line] = (tol, at)
+        left_out += [r for r in mine if _ladder_key(r)[1] != tol]
+    return ladders, left_out
+
+
+def zero_error_runs(rows, metric):
+    """How many successful rows have an error of exactly 0 in `metric`:
+    work_precision_series leaves them out (no place on a log axis)."""
+    return sum(1 for r in successful(rows)
+               if is_finite(r.get(metric, math.nan)) and r[metric] == 0)
+
+
 def line_key(run):
     """A work-precision line: the method (with its options, so a DP5(4)
     tolerance ladder is a line of its own)."""
@@ -179,8 +224,12 @@ def work_precision_series(runs, metric, rows=None):
     series = OrderedDict()
     for line in sorted(rungs):
         points = []
-        # A tolerance ladder: its rungs differ in rtol, not (only) in Δt.
-        by_tol = len({k[1] for k in rungs[line]}) > len({k[0] for k in rungs[line]})
+        # A tolerance ladder: its rungs differ in rtol, not (only) in Δt; a
+        # line joining a Δt ladder and an rtol ladder, where that one
+        # parameter would label two rungs alike, labels both.
+        n_tol, n_dt = (len({k[i] for k in rungs[line]}) for i in (1, 0))
+        by_tol = n_tol > n_dt
+        both = (n_tol if by_tol else n_dt) < len(rungs[line])
         for key in sorted(rungs[line], reverse=True):
             members = rungs[line][key]
             first = members[0][4]
@@ -193,7 +242,7 @@ def work_precision_series(runs, metric, rows=None):
                 "wall_q1": float(min(m[5][1] for m in members)),
                 "wall_q3": float(max(m[5][2] for m in members)),
                 "exclusive": all(timed_alone(m[4]) for m in members),
-                "label": rung_label(key[0], key[1], by_tol),
+                "label": rung_label(key[0], key[1], by_tol, both),
                 "t_end": first.get("t_end", math.nan),
                 "t_reached": float(np.median([m[4]["t_reached"] for m in members])),
                 "n": len(members), "run": first, "method": first["method"],
@@ -203,13 +252,21 @@ def work_precision_series(runs, metric, rows=None):
     return series
 
 
-def rung_label(dt, tol, by_tol):
+def rung_label(dt, tol, by_tol, both=False):
     """A work-precision point's ladder parameter as a short label: its rtol
     ('1e-6') on a line whose rungs differ in rtol (a tolerance ladder), else
-    its output interval Δt ('0.1')."""
-    if by_tol and is_finite(tol) and tol > 0:
-        return f"{tol:.0e}".replace("e-0", "e-").replace("e+0", "e")
-    return f"{dt:g}" if is_finite(dt) and dt > 0 else ""
+    its output interval Δt ('0.1'); with `both` (a line joining a Δt ladder
+    and an rtol ladder, where one parameter alone would label two of its
+    rungs alike) 'Δt/rtol' ('0.4/1e-8'), so no two points of the line carry
+    one label."""
+    tol_text = (f"{tol:.0e}".replace("e-0", "e-").replace("e+0", "e")
+                if is_finite(tol) and tol > 0 else "")
+    dt_text = f"{dt:g}" if is_finite(dt) and dt > 0 else ""
+    if both and tol_text and dt_text:
+        return f"{dt_text}/{tol_text}"
+    if by_tol and tol_text:
+        return tol_text
+    return dt_text
 
 
 # Relative error difference below which two work-precision points count as
@@ -233,21 +290,26 @@ def resolved_error(point, floor=math.nan):
 
 def dominates(b, a, error_tie=ERROR_TIE, floor=math.nan):
     """True when point b dominates point a (dicts with err, wall, wall_q1,
-    wall_q3): a is slower than b by more than the timing spread, i.e. the
-    difference of the medians exceeds the larger of the two IQRs, AND a's
-    error exceeds b's by more than `error_tie` (1 %) relative. A point
-    within either tolerance of another is never dominated by it: ties in
-    error or time within the measurement's noise do not decide the front.
-    With a `floor`, errors below it are not resolved (resolved_error): two
-    points both at or below it are equally accurate as far as can be told,
-    so only time ranks them (the faster one, by more than the spread,
-    dominates); otherwise a point below the floor would stay on the front
-    only through an error difference nobody can measure."""
+    wall_q3): Pareto dominance with tolerances, where "faster" means the
+    difference of the median wall times exceeds the timing spread (the
+    larger of the two IQRs) and "more accurate" means an error smaller by
+    more than `error_tie` (1 %) relative. b dominates a when
+      b is faster AND b's error is not worse than a's by more than 1 %, or
+      b is more accurate AND b is not slower than a by more than the spread.
+    So a point as accurate as another (within 1 %) but slower beyond the
+    timing noise is dominated, and so is one as fast (within the spread)
+    but less accurate beyond 1 %; two points within both tolerances of each
+    other never dominate one another. With a `floor`, errors below it are
+    not resolved and count as the floor itself (resolved_error): points
+    both at or below it are equally accurate as far as can be told, so only
+    time ranks them (the fastest, beyond the spread, dominates the rest)."""
     spread = max(timing_spread(a), timing_spread(b))
     ea, eb = resolved_error(a, floor), resolved_error(b, floor)
-    unresolved = is_finite(floor) and floor > 0 and ea <= floor and eb <= floor
-    return (a["wall"] - b["wall"] > spread
-            and (unresolved or ea > eb * (1.0 + error_tie)))
+    faster = a["wall"] - b["wall"] > spread
+    not_slower = b["wall"] - a["wall"] <= spread
+    not_worse = eb <= ea * (1.0 + error_tie)
+    more_accurate = ea > eb * (1.0 + error_tie)
+    return (faster and not_worse) or (more_accurate and not_slower)
 
 
 def non_dominated(points, error_tie=ERROR_TIE, floor=math.nan):
@@ -310,6 +372,29 @@ def observed_orders(series, min_rungs=3):
                                np.log([p["err"] for p in ladder]), 1)[0]
             orders[line] = float(slope)
     return orders
+
+
+# An observed order below this (a flat fit, or an error that grows as Δt
+# shrinks) is no Δt order: the ladder's error is set by something else.
+FLAT_ORDER = 0.5
+
+
+def is_adaptive(run):
+    """True for an integrator whose step follows rtol: the SUNDIALS ones
+    (ida, cvode-*) and an RK scheme other than the fixed-step rk4."""
+    dae = str(run.get("dae", ""))
+    if dae.startswith("rk-"):
+        return str(dae_option(run, "rk_method", "rk4")) != "rk4"
+    return bool(dae)
+
+
+def order_text(order, adaptive):
+    """An observed order for a caption: '4.0'; a flat or negative one (below
+    FLAT_ORDER) is no order: 'rtol-limited (no Δt order)' for an adaptive
+    integrator, whose error its rtol sets, else 'flat (no Δt order)'."""
+    if order < FLAT_ORDER:
+        return "rtol-limited (no Δt order)" if adaptive else "flat (no Δt order)"
+    return f"{order + 0.0:.1f}"
 
 
 def recommendation_targets(points, floor_low):
@@ -388,6 +473,8 @@ def work_precision_problems(runs, references=None):
             "rows": rows, "t_end": rows[0].get("t_end", math.nan),
             "ref_hash": rows[0].get("ref_hash", ""),
             "ref_err_est": max(estimates) if estimates else math.nan,
+            # e.g. "analytic:circle" or "numerical" (runs.csv ref_kind)
+            "ref_kind": rows[0].get("ref_kind", "") or "",
             "groups": sorted({r.get("suite_group", "") for r in rows})})
     return problems
 
@@ -853,7 +940,8 @@ def stability_charts(runs, references=None):
     methods that ran there (split by other varying method parameters),
     values the axis values that ran, cells[(row, i)] a stability_cell or
     absent; mu_min the largest ref_mu_min of a successful reference of that
-    scene (μ axis only, nan when not recorded).
+    scene (μ axis only, nan when not recorded), mu_min_horizon the t_end it
+    is maximised over (mu_min_horizon).
     """
     charts = []
     groups = sorted({r.get("suite_group", "") for r in runs})
@@ -890,9 +978,7 @@ def stability_charts(runs, references=None):
                                and _same(getter(r), value)]
                     if members:
                         cells[(row_name, i)] = stability_cell(members)
-            mu_min = math.nan
-            if name == "mu":
-                mu_min = scene_mu_min(mine)
+            mu_min = scene_mu_min(mine) if name == "mu" else math.nan
             numeric = axis_is_numeric(name, values)
             panels.append({"scene": scene,
                            # The parameters held fixed over the panel's runs;
@@ -901,6 +987,7 @@ def stability_charts(runs, references=None):
                                                 omit=_AXIS_SWEEPS.get(name, ())),
                            "values": values, "rows": row_names, "cells": cells,
                            "mu_min": mu_min, "numeric": numeric,
+                           "mu_min_horizon": mu_min_horizon(mine, mu_min),
                            "log": numeric and _spans_decades(values, 1.0),
                            "limits": rk4_limit_lines(mine) if name in _AXIS_NEEDS else [],
                            "limit_rows": rk4_limit_rows(
@@ -920,6 +1007,16 @@ def scene_mu_min(rows):
     if not values:
         values = [r["ref_mu_min"] for r in rows if is_finite(r.get("ref_mu_min", math.nan))]
     return max(values) if values else math.nan
+
+
+def mu_min_horizon(rows, value):
+    """The horizon a scene's μ_min(ref) `value` is maximised over: the
+    largest t_end of the rows whose ref_mu_min is that value [s]; nan when
+    unknown."""
+    ends = [r.get("t_end", math.nan) for r in rows
+            if is_finite(value) and r.get("ref_mu_min") == value]
+    ends = [e for e in ends if is_finite(e)]
+    return max(ends) if ends else math.nan
 
 
 def value_position(values, x):
