@@ -606,6 +606,14 @@ struct Simulator::Session {
   // The slips the class test reads at the last sample / at the one just
   // solved (ClassSlips): the sample's own unless its root is loose.
   std::array<Eigen::Vector2d, 3> class_prev, class_now;
+  // class_prev's predecessor (the sample before the last), valid when both
+  // samples were classified: a creeping wheel's turn that the grid splits
+  // over two intervals is located against it (IsSplitReversal).
+  std::array<Eigen::Vector2d, 3> class_before;
+  bool class_prev_classified = false, have_class_before = false;
+  // Bit i: wheel i + 1 had an event located in the current interval (its
+  // turn is then not searched again against class_before).
+  unsigned wheel_events = 0;
   // The slip integrals of the interval ending at slip_increments_t, split
   // at its located switches and sliding-level crossings
   // (RestartAtSwitches); NaN: none.
@@ -724,6 +732,7 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   s.ode_native_iterations_seen = s.ode.nlp_iterations_native();
   s.ode.ResetKkt();
   s.have_prev = false;
+  s.class_prev_classified = s.have_class_before = false;
   s.t_stop = s.t_lower = s.t_upper = kNaN;
   s.pending_limit = "";
   s.pending_wheel = -1;
@@ -981,9 +990,15 @@ bool Simulator::Interval(SimulationResult* result) {
   const bool classify = options_.locate_switches && !pending &&
                         sol.status == QuasiStaticStatus::kOk;
   if (classify) ClassSlips(result);
+  s.wheel_events = 0;
   if (classify && s.have_prev) RestartAtSwitches(t, result);
   for (int i = 0; i < 3; ++i) s.slip_prev[i] = sol.contacts[i].slip;
+  s.class_before = s.class_prev;
+  for (int i = 0; i < 3; ++i)
+    if ((s.wheel_events >> i) & 1u) s.class_before[i].setZero();
+  s.have_class_before = s.class_prev_classified && classify;
   s.class_prev = classify ? s.class_now : s.slip_prev;
+  s.class_prev_classified = classify;
   const bool check_contact =
       options_.second_contact_check_every > 0 &&
       (k % options_.second_contact_check_every == 0 || pending);
@@ -1452,7 +1467,9 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     change = change || (g0 >= 0) != (g1 >= 0);  // false for a NaN
     // A wheel whose slip reverses while it slides or while it creeps
     // (LocateSwitchesAndReversals).
-    change = change || IsReversal(slip0[i], slip1[i], eps);
+    change = change || IsReversal(slip0[i], slip1[i], eps) ||
+             (s.have_class_before &&
+              IsSplitReversal(s.class_before[i], slip0[i], slip1[i], eps));
     band = band || InSwitchBand(s1, eps);
     // The sliding/creep split's level (below the switches') crossed.
     regime = regime || (std::isfinite(s0) && std::isfinite(s1) &&
@@ -1513,10 +1530,13 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   if (change)
     LocateSwitchesAndReversals(s.t_prev, t, slip0, slip1, eps,
                                options_.event_tolerance, evaluate,
-                               &result->switches);
+                               &result->switches, nullptr,
+                               s.have_class_before ? &s.class_before : nullptr);
   // After the switches, so that their probes start as before.
   const bool jumped = suspect && LocateSolutionJump(t, result);
   if (jumped) SortAppended(first, &result->switches);
+  for (std::size_t j = first; j < result->switches.size(); ++j)
+    s.wheel_events |= 1u << (result->switches[j].wheel - 1);
   // The zoh samples' linear predictor would extrapolate across the jump
   // (from the ended root through the new one): the next sample starts from
   // this one's root instead (model.md §7.3; kept across switches and creep

@@ -295,6 +295,15 @@ bool IsReversal(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1,
   return g0 < 0 && g1 < 0 && n0 >= floor && n1 >= floor;
 }
 
+bool IsSplitReversal(const Eigen::Vector2d& r, const Eigen::Vector2d& s0,
+                     const Eigen::Vector2d& s1, double epsilon) {
+  if (!(SwitchIndicator(s0.norm(), epsilon) < 0) ||
+      !(s0.norm() >= kCreepReversalSlipOverEpsilon * epsilon))
+    return false;
+  return r.dot(s0) > 0 && !(s0.dot(s1) < 0) && IsReversal(r, s1, epsilon) &&
+         SwitchIndicator(r.norm(), epsilon) < 0;
+}
+
 namespace {
 // LocateSwitchesAndReversals with the wheels whose reversal in [t0, t1] is
 // already recorded (bit i - 1 of located_reversals): the piece before a
@@ -309,7 +318,8 @@ int LocateInPiece(double t0, double t1,
                   const std::array<Eigen::Vector2d, 3>& slip1, double epsilon,
                   double tolerance, const SlipVectorEvaluator& evaluate,
                   unsigned located_reversals, std::vector<SwitchEvent>* out,
-                  bool* reversed) {
+                  bool* reversed,
+                  const std::array<Eigen::Vector2d, 3>* before) {
   if (reversed) *reversed = false;
   SlipEvaluator norms = [&](double t, std::array<double, 3>* s) {
     std::array<Eigen::Vector2d, 3> v;
@@ -325,13 +335,21 @@ int LocateInPiece(double t0, double t1,
   const std::size_t first = out->size();
   for (int i = 0; i < 3; ++i) {
     if ((located_reversals >> i) & 1u) continue;
-    if (!IsReversal(slip0[i], slip1[i], epsilon)) continue;
+    // The direction the turn is measured from: the start's, or for a turn
+    // the grid split, the sample's before it.
+    Eigen::Vector2d from = slip0[i];
+    if (!IsReversal(slip0[i], slip1[i], epsilon)) {
+      if (!before ||
+          !IsSplitReversal((*before)[i], slip0[i], slip1[i], epsilon))
+        continue;
+      from = (*before)[i];
+    }
     const bool creeping = SwitchIndicator(slip0[i].norm(), epsilon) < 0;
     double a = t0, b = t1, t_at_b = t1;
     std::array<Eigen::Vector2d, 3> at_b = slip1, v;
     auto eval = [&](double t, double* f, bool* start) {
       if (!evaluate(t, &v)) return false;
-      *f = v[i].dot(slip0[i]);
+      *f = v[i].dot(from);
       *start = *f > 0;
       if (!*start) {
         at_b = v;
@@ -339,9 +357,8 @@ int LocateInPiece(double t0, double t1,
       }
       return true;
     };
-    const bool located =
-        NarrowBracket(tolerance, eval, &a, &b, slip0[i].squaredNorm(),
-                      slip1[i].dot(slip0[i]));
+    const bool located = NarrowBracket(tolerance, eval, &a, &b,
+                                       slip0[i].dot(from), slip1[i].dot(from));
     // The split's slips (a later point on b's side may have replaced them).
     if (b < t1 && t_at_b != b && !evaluate(b, &at_b)) break;
     // Not narrowed (the crossing lies within the tolerance of t1): no split
@@ -354,9 +371,9 @@ int LocateInPiece(double t0, double t1,
       out->push_back(e);
     }
     LocateInPiece(t0, b, slip0, at_b, epsilon, tolerance, evaluate,
-                  located_reversals | (1u << i), out, nullptr);
+                  located_reversals | (1u << i), out, nullptr, before);
     LocateInPiece(b, t1, at_b, slip1, epsilon, tolerance, evaluate,
-                  located_reversals, out, nullptr);
+                  located_reversals, out, nullptr, before);
     SortAppended(first, out);
     return static_cast<int>(out->size() - first);
   }
@@ -370,9 +387,10 @@ int LocateSwitchesAndReversals(double t0, double t1,
                                const std::array<Eigen::Vector2d, 3>& slip1,
                                double epsilon, double tolerance,
                                const SlipVectorEvaluator& evaluate,
-                               std::vector<SwitchEvent>* out, bool* reversed) {
+                               std::vector<SwitchEvent>* out, bool* reversed,
+                               const std::array<Eigen::Vector2d, 3>* before) {
   return LocateInPiece(t0, t1, slip0, slip1, epsilon, tolerance, evaluate, 0u,
-                       out, reversed);
+                       out, reversed, before);
 }
 
 bool IntegrateResolved(double a, double b, double tolerance, double min_step,

@@ -108,6 +108,17 @@ inline constexpr double kCreepReversalSlipOverEpsilon = 0.1;
 bool IsReversal(const Eigen::Vector2d& s0, const Eigen::Vector2d& s1,
                 double epsilon);
 
+// A creeping wheel's turn that the output grid splits over two intervals:
+// with r its slip at the sample before t0, the turn from r to s0 and from
+// s0 to s1 is each no reversal, but from r to s1 it is (r . s1 < 0), all
+// three creeping and at least kCreepReversalSlipOverEpsilon eps. A sample
+// near the slip's closest approach to 0 (where its traction turns, within
+// ~eps/|s'|) leaves two intervals that each turn by less than 90 degrees
+// (model.md §8.6, Reversals). The turn is then located in [t0, t1] on the
+// sign of s(t) . r, which is positive at t0 and negative at t1.
+bool IsSplitReversal(const Eigen::Vector2d& r, const Eigen::Vector2d& s0,
+                     const Eigen::Vector2d& s1, double epsilon);
+
 // g = (|s| - kappa eps)/(|s| + kappa eps); NaN for a NaN slip.
 double SwitchIndicator(double slip_speed, double epsilon);
 
@@ -195,17 +206,19 @@ using SlipVectorEvaluator =
 // Such an interval is split at the reversal, located on the sign of
 // s(t) . s(t0) to `tolerance`, and the class changes of every piece are
 // located as by LocateSwitches (slips at the split from `evaluate`; the
-// reversal's bracket narrowed as there). Without a reversal this is
-// LocateSwitches. Returns the number of events appended (in time order);
-// *reversed (if not null) receives whether a reversal was found. Throws as
-// LocateSwitches.
-int LocateSwitchesAndReversals(double t0, double t1,
-                               const std::array<Eigen::Vector2d, 3>& slip0,
-                               const std::array<Eigen::Vector2d, 3>& slip1,
-                               double epsilon, double tolerance,
-                               const SlipVectorEvaluator& evaluate,
-                               std::vector<SwitchEvent>* out,
-                               bool* reversed = nullptr);
+// reversal's bracket narrowed as there). With `before` (the slips at the
+// sample before t0, when both samples were classified), a creeping wheel's
+// turn split over [t_before, t0] and [t0, t1] (IsSplitReversal) is a
+// reversal too, located on the sign of s(t) . before. Without a reversal
+// this is LocateSwitches. Returns the number of events appended (in time
+// order); *reversed (if not null) receives whether a reversal was found.
+// Throws as LocateSwitches.
+int LocateSwitchesAndReversals(
+    double t0, double t1, const std::array<Eigen::Vector2d, 3>& slip0,
+    const std::array<Eigen::Vector2d, 3>& slip1, double epsilon,
+    double tolerance, const SlipVectorEvaluator& evaluate,
+    std::vector<SwitchEvent>* out, bool* reversed = nullptr,
+    const std::array<Eigen::Vector2d, 3>* before = nullptr);
 
 // The shortest piece IntegrateResolved refines to in the simulator [s].
 inline constexpr double kSwitchMinStep = 1e-7;

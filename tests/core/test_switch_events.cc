@@ -236,6 +236,82 @@ TEST(SwitchEvents, ACreepingWheelsReversalIsLocatedAboveTheNoiseFloor) {
   EXPECT_FALSE(IsReversal(Eigen::Vector2d(200 * kEps, 0), large, kEps));
 }
 
+// A creeping wheel's slip that passes near 0 with a sample at its closest
+// approach: each interval turns by less than 90 degrees, so neither is a
+// reversal by itself (the work_precision run of the paper scene, rk-baumgarte
+// zoh dt 0.025, wheel 2 at 15.5 s: 124.5 -> 62.2 -> 13.7 degrees). With the
+// slips of the sample before, the turn is located in the second interval
+// where s(t) is perpendicular to them.
+TEST(SwitchEvents, ATurnTheGridSplitsOverTwoIntervalsIsLocated) {
+  // Wheel 2: s(t) = (rate (t - tc), miss) in m/s, closest to 0 (0.5 eps)
+  // at tc, 2e-6 s after the sample t0 (within miss^2 / (rate^2 dt) of it,
+  // so both intervals turn by less than 90 degrees), |s| 34 eps at the
+  // outer samples; wheels 1 and 3 creep and slide steadily.
+  const double t_before = 15.475, t0 = 15.5, t1 = 15.525, tc = t0 + 2e-6;
+  const double rate = 1.37e-5, miss = 0.5 * kEps;
+  auto slips = [&](double t) -> std::array<Eigen::Vector2d, 3> {
+    return {Eigen::Vector2d(6e-10, 1e-10),
+            Eigen::Vector2d(rate * (t - tc), miss), Eigen::Vector2d(3e-5, 0.0)};
+  };
+  SlipVectorEvaluator evaluate = [&](double t,
+                                     std::array<Eigen::Vector2d, 3>* s) {
+    *s = slips(t);
+    return true;
+  };
+  const auto before = slips(t_before), start = slips(t0), end = slips(t1);
+  ASSERT_FALSE(IsReversal(before[1], start[1], kEps));
+  ASSERT_FALSE(IsReversal(start[1], end[1], kEps));
+  EXPECT_TRUE(IsSplitReversal(before[1], start[1], end[1], kEps));
+  std::vector<SwitchEvent> plain;
+  EXPECT_EQ(LocateSwitchesAndReversals(t0, t1, start, end, kEps, 1e-9, evaluate,
+                                       &plain),
+            0);
+  std::vector<SwitchEvent> out;
+  bool reversed = false;
+  ASSERT_EQ(LocateSwitchesAndReversals(t0, t1, start, end, kEps, 1e-9, evaluate,
+                                       &out, &reversed, &before),
+            1);
+  EXPECT_TRUE(reversed);
+  const SwitchEvent& e = out[0];
+  EXPECT_TRUE(e.reversal);
+  EXPECT_EQ(e.wheel, 2);
+  EXPECT_TRUE(e.located);
+  EXPECT_LE(e.t_upper - e.t_lower, 1e-9);
+  // s(t) . s(t_before) = 0: rate^2 (t - tc)(t_before - tc) + miss^2 = 0.
+  const double expected = tc - miss * miss / (rate * rate * (t_before - tc));
+  EXPECT_LE(e.t_lower, expected + 1e-12);
+  EXPECT_GE(e.t_upper, expected - 1e-12);
+  // A wheel that slides at an end, or turns in the first interval already,
+  // is no split turn.
+  EXPECT_FALSE(IsSplitReversal(-end[1], start[1], end[1], kEps));
+  EXPECT_FALSE(IsSplitReversal(before[1], start[1],
+                               Eigen::Vector2d(200 * kEps, 0.0), kEps));
+  EXPECT_FALSE(
+      IsSplitReversal(Eigen::Vector2d::Zero(), start[1], end[1], kEps));
+}
+
+// The same turn in a run: the paper scene (rk-baumgarte, zoh, dt 0.025 s)
+// records wheel 2's turn inside its stick window at ~15.5 s as a
+// creep_reversal; before, only the window's two switches.
+TEST(SwitchEvents, PaperScenesTurnInsideWheel2sStickWindowIsLocated) {
+  const Scene scene =
+      LoadScene(std::string(QUASIROLL_SOURCE_DIR) + "/bench/scenes/paper.yaml");
+  SimulationOptions o = BuiltinOptions("rk-baumgarte", Coupling::kZoh, 0.025);
+  o.t_end = 15.6;
+  const SimulationResult r = Simulator(scene, o).Run();
+  ASSERT_TRUE(r.success()) << r.stop_reason;
+  std::vector<double> window, turns;
+  for (const SwitchEvent& e : r.switches) {
+    if (e.wheel != 2 || e.t < 15.0) continue;
+    (e.reversal ? turns : window).push_back(e.t);
+  }
+  ASSERT_EQ(window.size(), 2u);
+  ASSERT_EQ(turns.size(), 1u);
+  EXPECT_GT(turns[0], window[0]);
+  EXPECT_LT(turns[0], window[1]);
+  EXPECT_NEAR(turns[0], 15.5, 0.0025);
+}
+
 // A creeping wheel's slip that turns steeply (its traction's turn, width ~
 // eps/|s'|) is already past 0.1 eps at the far end b of the located
 // bracket, so the piece before the split, [t0, b], holds the same sign
