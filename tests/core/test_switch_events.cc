@@ -194,6 +194,20 @@ TEST(SwitchEvents, AReversalOfASlidingWheelIsSplitAndBothChangesLocated) {
   EXPECT_FALSE(reversed);
 }
 
+// A creep_reversal of `wheel` (stick -> stick) located to 1e-9 s around t
+// (up to round-off in t).
+void ExpectCreepReversalAt(const SwitchEvent& e, int wheel, double t) {
+  EXPECT_TRUE(e.reversal);
+  EXPECT_STREQ(SwitchKindName(e), "creep_reversal");
+  EXPECT_EQ(e.wheel, wheel);
+  EXPECT_FALSE(e.from_sliding);
+  EXPECT_FALSE(e.to_sliding);
+  EXPECT_TRUE(e.located);
+  EXPECT_LE(e.t_upper - e.t_lower, 1e-9);
+  EXPECT_LE(e.t_lower, t + 1e-12);
+  EXPECT_GE(e.t_upper, t - 1e-12);
+}
+
 // A creeping wheel whose slip reverses (|s| well below the sliding level at
 // both ends) is split at the reversal and recorded as a creep_reversal
 // event (stick -> stick); below kCreepReversalSlipOverEpsilon eps at an end
@@ -217,16 +231,7 @@ TEST(SwitchEvents, ACreepingWheelsReversalIsLocatedAboveTheNoiseFloor) {
                                        evaluate, &out, &reversed),
             1);
   EXPECT_TRUE(reversed);
-  const SwitchEvent& e = out[0];
-  EXPECT_TRUE(e.reversal);
-  EXPECT_EQ(e.wheel, 3);
-  EXPECT_FALSE(e.from_sliding);
-  EXPECT_FALSE(e.to_sliding);
-  EXPECT_TRUE(e.located);
-  EXPECT_LE(e.t_upper - e.t_lower, 1e-9);
-  EXPECT_LE(e.t_lower, tr + 1e-12);
-  EXPECT_GE(e.t_upper, tr - 1e-12);
-  EXPECT_STREQ(SwitchKindName(e), "creep_reversal");
+  ExpectCreepReversalAt(out[0], 3, tr);
   // Below the floor at an end: no reversal.
   const Eigen::Vector2d small(0.05 * kEps, 0.0), large(-2.0 * kEps, 0.0);
   EXPECT_FALSE(IsReversal(small, large, kEps));
@@ -272,15 +277,9 @@ TEST(SwitchEvents, ATurnTheGridSplitsOverTwoIntervalsIsLocated) {
                                        &out, &reversed, &before),
             1);
   EXPECT_TRUE(reversed);
-  const SwitchEvent& e = out[0];
-  EXPECT_TRUE(e.reversal);
-  EXPECT_EQ(e.wheel, 2);
-  EXPECT_TRUE(e.located);
-  EXPECT_LE(e.t_upper - e.t_lower, 1e-9);
   // s(t) . s(t_before) = 0: rate^2 (t - tc)(t_before - tc) + miss^2 = 0.
-  const double expected = tc - miss * miss / (rate * rate * (t_before - tc));
-  EXPECT_LE(e.t_lower, expected + 1e-12);
-  EXPECT_GE(e.t_upper, expected - 1e-12);
+  ExpectCreepReversalAt(out[0], 2,
+                        tc - miss * miss / (rate * rate * (t_before - tc)));
   // A wheel that slides at an end, or turns in the first interval already,
   // is no split turn.
   EXPECT_FALSE(IsSplitReversal(-end[1], start[1], end[1], kEps));
