@@ -1236,7 +1236,7 @@ def _slip_panel(ax, mine_ok, metrics, styles, split, log):
     creep = _creep_curves(ax, mine_ok, metrics, styles)
     slides = any(v > 0 for c in curves.values() for _, v in c)
     if mine_ok and not slides:
-        ax.text(0.5, 0.5, "no sliding at any μ\n(sliding_distance = 0):\n"
+        ax.text(0.5, 0.5, "no sliding at any μ that ran\n(sliding_distance = 0):\n"
                 "grey is creep only, ∝ ε", transform=ax.transAxes, ha="center",
                 va="center", fontsize=8, color="#333333",
                 bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.85})
@@ -1296,7 +1296,8 @@ def figure_total_slip_vs_mu(ctx):
         "The slip holds two regimes (docs/model.md §7.5), drawn apart: sliding "
         "on the friction cone (method colours: the physics) and creep below it "
         "(grey, thin: the friction regularisation, proportional to ε, not "
-        "physics); a pvc robot never slides, so its panel shows creep only and "
+        "physics); a scene whose successful runs never slide shows "
+        "creep only in its panel and "
         "is not compared with paper mode's sliding. Each point is the run's own "
         "integral (runs.csv sliding_distance and creep_distance, its switches "
         "located, independent of the output grid)." if split else
