@@ -1034,7 +1034,7 @@ class PaperFigureRefereeTest(unittest.TestCase):
         ax = fig.axes[0]
         marks = [line for line in ax.get_lines() if line.get_marker() == "^"]
         self.assertEqual([float(line.get_xdata()[0]) for line in marks], [1.03])
-        self.assertIn("passes through zero, at the located time", caption)
+        self.assertIn("turns through or near zero", caption)
         self.assertIn("output sample nearest to it", caption)
         plotting.plt.close(fig)
 

@@ -841,7 +841,8 @@ def _mark_creep_band(run, ax, slips, log):
 
 def _mark_reversals(ax, reversals):
     """A ▲ at the bottom edge, in the wheel's colour, at each located creep
-    reversal: its slip passes through zero there. The caption's sentence."""
+    reversal: its slip turns through or near zero there. The caption's
+    sentence."""
     if not reversals:
         return ""
     colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
@@ -849,14 +850,15 @@ def _mark_reversals(ax, reversals):
     for k, e in enumerate(reversals):
         ax.plot([e["t"]], [0.02], marker="^", markersize=7, linestyle="none",
                 color=colours.get(e["wheel"], "black"), transform=trans, zorder=5,
-                clip_on=False, label="located creep reversal (slip = 0)" if k == 0 else None)
+                clip_on=False, label="located creep reversal (slip turns near 0)" if k == 0 else None)
     return (" ▲ at the bottom: the located creep reversals, "
             + ", ".join(f"{fmt(e['t'], 5)} s (wheel {e['wheel']})" for e in reversals[:8])
-            + ": there the wheel's slip passes through zero, at the located time; the "
+            + ": there the wheel's slip turns through or near zero (its direction "
+            "turns by 90° at the located time, within a time ∝ ε); the "
             "depth of its dip on the log axis is that of the output sample nearest "
-            "to it (a finer grid dips deeper), not a minimum of the slip. A dip "
-            "between a wheel's slide→stick and stick→slide switches (dotted) is a "
-            "reversal inside its stick window, located only by those two switches.")
+            "to it (a finer grid dips deeper), not a minimum of the slip. A "
+            "wheel's stick window (between its slide→stick and stick→slide "
+            "switches, dotted) holds such a turn, marked where it was located.")
 
 
 def figure_slip(ctx):
