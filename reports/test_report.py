@@ -1108,6 +1108,31 @@ class PaperFigureRefereeTest(unittest.TestCase):
         plotting.plt.close(fig)
 
     # 9. Fig. 11: the lateral tractions get their net line too
+    def test_equal_curves_drawn_dashed_and_named(self):
+        """Fig. 13: a method whose curve lies on an earlier one (ceres on
+        newton) is drawn dashed over it and named, not hidden under it."""
+        from quasiroll_report import figures_paper as fp
+        runs, metrics = [], {}
+        for method, scale in (("ceres/rk-projection/zoh", 1.0),
+                              ("newton/rk-projection/zoh", 1.001),
+                              ("slsqp/rk-projection/zoh", 2.0)):
+            for mu in (0.2, 0.5, 0.8):
+                rid = f"{method}-{mu}"
+                runs.append(_base_row(run_id=rid, method=method, mu=mu))
+                metrics[rid] = {"mean_total_traction": scale * 10 * mu}
+        plotting.apply_style()
+        fig = plotting.new_figure(4, 3)
+        ax = fig.add_subplot()
+        hidden = []
+        fp._per_method_curve(ax, runs, metrics, "mean_total_traction", {}, hidden=hidden)
+        self.assertEqual(hidden, [("newton/rk-projection/zoh", "ceres/rk-projection/zoh")])
+        styles = {line.get_label(): line.get_linestyle() for line in ax.get_lines()}
+        self.assertEqual(styles["newton/rk-projection/zoh"], "--")
+        self.assertEqual(styles["slsqp/rk-projection/zoh"], "-")
+        self.assertIn("paper: newton/rk-projection/zoh on ceres/rk-projection/zoh",
+                      fp._hidden_text([{"scene": "paper", "hidden": hidden}]))
+        plotting.plt.close(fig)
+
     def test_lateral_traction_net_line(self):
         from quasiroll_report import figures_paper as fp
         plotting.apply_style()

@@ -15,7 +15,7 @@ from .plotting import (COMPONENT_STYLES, MissingData, WHEEL_STYLES, fmt, span_te
                        horizon_text,
                        new_figure, no_data, positive, save_figure,
                        spans_decades, vline_label)
-from .figures_methods import style_legend_handles
+from .figures_methods import coinciding, style_legend_handles
 from . import robot
 from .problems import (fixed_label, method_style, plot_style, reference_field,
                        robot_geometry, scene_mode)
@@ -962,14 +962,24 @@ def _method_medians(ok, metrics, key, styles):
         yield method, styles.get(method) or method_style(method), mus, vals
 
 
-def _per_method_curve(ax, ok, metrics, key, styles, positive=False):
+def _per_method_curve(ax, ok, metrics, key, styles, positive=False, hidden=None):
     """Each method's median of metrics[key] against μ; with positive (a log
     axis) values <= 0 are left out of the drawing (not of the returned
-    curves) instead of being dropped silently by the axis."""
+    curves) instead of being dropped silently by the axis. A curve lying on
+    an earlier one (figures_methods.coinciding) is drawn dashed over it and
+    (method, method it lies on) appended to `hidden`."""
     curves = {}
     for method, style, mus, vals in _method_medians(ok, metrics, key, styles):
         drawn = [v if v > 0 or not positive else math.nan for v in vals]
-        ax.plot(mus, drawn, label=method, **plot_style(style))
+        kwargs = plot_style(style)
+        under = next((m for m, c in curves.items()
+                      if coinciding(([x for x, _ in c], [v for _, v in c]), (mus, vals))),
+                     None)
+        if under is not None:
+            kwargs.update(linestyle=(0, (4, 3)), linewidth=1.8)
+            if hidden is not None:
+                hidden.append((method, under))
+        ax.plot(mus, drawn, label=method, **kwargs)
         curves[method] = list(zip(mus, vals))
     return curves
 
@@ -1128,8 +1138,9 @@ def figure_traction_vs_mu(ctx):
         ax_total = fig.add_subplot(gs[0, k], sharey=share_total)
         ax_wheel = fig.add_subplot(gs[1, k], sharey=share_wheel, sharex=ax_total)
         share_total, share_wheel = share_total or ax_total, share_wheel or ax_wheel
+        hidden = []
         curves = _per_method_curve(ax_total, mine_ok, metrics, "mean_total_traction",
-                                   ctx.styles)
+                                   ctx.styles, hidden=hidden)
         _mark_failures(ax_total, mine_failed)
         mu_min, horizon = _scene_mu_min(ctx, scene)
         _mu_min_line(ax_total, mu_min, horizon)
@@ -1156,7 +1167,8 @@ def figure_traction_vs_mu(ctx):
         ax_wheel.legend(loc="best", fontsize=7)
         panels.append({"scene": scene, "methods": sorted(curves), "mu_min": mu_min,
                        "mu_min_horizon": horizon, "main": main,
-                       "curves": {m: c for m, c in curves.items()}, "title": title})
+                       "curves": {m: c for m, c in curves.items()}, "title": title,
+                       "hidden": hidden})
     _room_for_failures(fig.axes)
     _sweep_legend(fig, gs[:, n], ok, failed, ctx.styles)
     mu, values = _common_mu_ratio(ctx, scenes, ok, metrics, "mean_total_traction")
@@ -1194,7 +1206,17 @@ def _traction_vs_mu_caption(panels, compare, failed):
            "reference trajectory of that horizon; over a shorter one, as the "
            "stability charts' runs, it can be smaller)" if needs else
            "; μ_min not drawn (these results carry no ref_mu_min column)")
+        + _hidden_text(panels)
         + f"; {_failed_text(failed)}.")
+
+
+def _hidden_text(panels):
+    """The caption's note on curves drawn dashed over an equal one."""
+    pairs = [f"{p['scene']}: {a} on {b}" for p in panels for a, b in p.get("hidden", [])]
+    if not pairs:
+        return ""
+    return ("; curves within 5 % of an earlier one at 95 % of their points, drawn "
+            "dashed over it: " + ", ".join(pairs))
 
 
 def _main_method(ctx, ok):
