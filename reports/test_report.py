@@ -1737,6 +1737,21 @@ class MethodFigureRefereeTest(unittest.TestCase):
     """The referee's defects of the method figures (work-precision, drift,
     Fig. 15, stability charts): each check failed before its fix."""
 
+    def test_step_drift_panel_draws_dots_not_bars(self):
+        """A bar on a log axis reads as its length, which the axis' start sets:
+        the representatives' two drift maxima are dots at their values."""
+        from quasiroll_report import figures_methods as fm
+        plotting.apply_style()
+        fig = plotting.new_figure(4, 3)
+        ax = fig.add_subplot()
+        fm._plot_step_drift_dots(ax, [("ida", 7.9e-13, 7.6e-12), ("rk-projection", 1.4e-13, 3.5e-7)])
+        self.assertEqual(len(ax.patches), 0)
+        dots = {line.get_label(): list(line.get_xdata()) for line in ax.get_lines()
+                if line.get_marker() in ("o", "D")}
+        self.assertEqual(dots["at the samples (returned states)"], [7.9e-13, 1.4e-13])
+        self.assertEqual(dots["within the steps, before projection"], [7.6e-12, 3.5e-7])
+        plotting.plt.close(fig)
+
     def test_rk4_limit_line_only_over_rk4_rows(self):
         """The RK4 limit says nothing about an IDA row: the line spans the
         fixed-step RK4 rows only."""

@@ -626,17 +626,24 @@ def _plot_drift_vs_time(ax, ctx):
     return summary, pairs
 
 
-def _plot_step_drift_bars(ax, summary):
+def _plot_step_drift_dots(ax, summary):
     """The same representatives: drift at the samples against drift within
-    the steps before any projection (docs/model.md §8.10)."""
+    the steps before any projection (docs/model.md §8.10), as dots joined
+    per integrator (a bar on a log axis has a length set by where the axis
+    starts, not by the value)."""
     rows = [(dae, sample, step) for dae, sample, step in summary if is_finite(step)]
     y = np.arange(len(rows))
-    # A zero has no bar on the log axis (positive: nan), rather than a made-up floor.
-    ax.barh(y - 0.2, positive([r[1] for r in rows]), height=0.4, color="#9ecae1",
-            label="at the samples (returned states)")
-    ax.barh(y + 0.2, positive([r[2] for r in rows]), height=0.4, color="#de2d26",
-            label="within the steps, before projection")
+    # A zero has no dot on the log axis (positive: nan), rather than a made-up floor.
+    samples, steps = positive([r[1] for r in rows]), positive([r[2] for r in rows])
+    for k in range(len(rows)):
+        ax.plot([samples[k], steps[k]], [y[k], y[k]], color="#bbbbbb", linewidth=1.2,
+                zorder=1)
+    ax.plot(samples, y, "o", color="#3182bd", markersize=6,
+            label="at the samples (returned states)", zorder=2)
+    ax.plot(steps, y, "D", color="#de2d26", markersize=6,
+            label="within the steps, before projection", zorder=2)
     ax.set_yticks(y, [r[0] for r in rows], fontsize=7)
+    ax.set_ylim(-0.6, len(rows) - 0.4)
     ax.set_xscale("log")
     ax.set_xlabel("max ‖H‖∞ over the run [m, rad]")
     ax.set_title("the same runs: where the drift is measured", fontsize=9)
@@ -703,7 +710,7 @@ def figure_drift(ctx):
     if not summary and not n_rows:
         raise MissingData("no successful run for figure 'drift'")
     if steps:
-        _plot_step_drift_bars(fig.add_subplot(gs[1, 0]), summary)
+        _plot_step_drift_dots(fig.add_subplot(gs[1, 0]), summary)
         for k, (top, p) in enumerate(zip(tops, problems)):
             bottom = fig.add_subplot(gs[1, k + 1], sharex=top, sharey=top)
             drawn.append(_plot_drift_vs_dt(bottom, ctx, p, STEP_DRIFT))
