@@ -1032,8 +1032,13 @@ class PaperFigureRefereeTest(unittest.TestCase):
                            [self.event(1.03, 3, "creep_reversal", "stick", "stick")])
         fig, caption = self.capture(fp.figure_slip, ctx)
         ax = fig.axes[0]
-        marks = [line for line in ax.get_lines() if line.get_marker() == "^"]
+        marks = [line for line in ax.get_lines()
+                 if line.get_marker() == "^" and len(line.get_xdata())]
         self.assertEqual([float(line.get_xdata()[0]) for line in marks], [1.03])
+        # The legend's entry is a grey proxy, not the first wheel's colour.
+        proxies = [line for line in ax.get_lines()
+                   if line.get_marker() == "^" and not len(line.get_xdata())]
+        self.assertEqual([line.get_color() for line in proxies], ["#777777"])
         self.assertIn("turns through or near zero", caption)
         self.assertIn("output sample nearest to it", caption)
         plotting.plt.close(fig)

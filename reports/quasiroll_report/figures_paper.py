@@ -847,10 +847,13 @@ def _mark_reversals(ax, reversals):
         return ""
     colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
     trans = blended_transform_factory(ax.transData, ax.transAxes)
-    for k, e in enumerate(reversals):
+    for e in reversals:
         ax.plot([e["t"]], [0.02], marker="^", markersize=7, linestyle="none",
                 color=colours.get(e["wheel"], "black"), transform=trans, zorder=5,
-                clip_on=False, label="located creep reversal (slip turns near 0)" if k == 0 else None)
+                clip_on=False)
+    # The legend's entry in grey: each mark has its wheel's colour.
+    ax.plot([], [], marker="^", markersize=7, linestyle="none", color="#777777",
+            label="located creep reversal (slip turns near 0; wheel's colour)")
     return (" ▲ at the bottom: the located creep reversals, "
             + ", ".join(f"{fmt(e['t'], 5)} s (wheel {e['wheel']})" for e in reversals[:8])
             + ": there the wheel's slip turns through or near zero (its direction "
