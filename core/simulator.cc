@@ -606,11 +606,13 @@ struct Simulator::Session {
   // The slips the class test reads at the last sample / at the one just
   // solved (ClassSlips): the sample's own unless its root is loose.
   std::array<Eigen::Vector2d, 3> class_prev, class_now;
-  // class_prev's predecessor (the sample before the last), valid when both
-  // samples were classified: a creeping wheel's turn that the grid splits
-  // over two intervals is located against it (IsSplitReversal).
-  std::array<Eigen::Vector2d, 3> class_before;
-  bool class_prev_classified = false, have_class_before = false;
+  // class_prev's predecessor (the sample before the last): a creeping
+  // wheel's turn that the grid splits over two intervals is located against
+  // it (IsSplitReversal). A wheel's entry is zero, which no turn is measured
+  // from, unless both samples were classified and the wheel had no event in
+  // the interval between them.
+  std::array<Eigen::Vector2d, 3> class_before{};
+  bool class_prev_classified = false;
   // Bit i: wheel i + 1 had an event located in the current interval (its
   // turn is then not searched again against class_before).
   unsigned wheel_events = 0;
@@ -732,7 +734,8 @@ void Simulator::Begin(const Configuration& theta0, SimulationResult* result) {
   s.ode_native_iterations_seen = s.ode.nlp_iterations_native();
   s.ode.ResetKkt();
   s.have_prev = false;
-  s.class_prev_classified = s.have_class_before = false;
+  s.class_prev_classified = false;
+  for (Eigen::Vector2d& r : s.class_before) r.setZero();
   s.t_stop = s.t_lower = s.t_upper = kNaN;
   s.pending_limit = "";
   s.pending_wheel = -1;
@@ -861,13 +864,10 @@ void Simulator::ApproachStop(SimulationResult* result) {
     double t = 0;
     double max_change = std::numeric_limits<double>::infinity();
     std::array<Eigen::Vector2d, 3> slip_now;
-  } a{StopSolver(),
-      {},
-      {},
-      s.theta_prev,
-      s.t_prev,
-      std::numeric_limits<double>::infinity(),
-      {}};
+  } a;
+  a.solver = StopSolver();
+  a.q = s.theta_prev;
+  a.t = s.t_prev;
   // The last sample's root (solved again by the stop solver from itself:
   // its slips, which the run no longer keeps).
   a.solver->SetWarmStart(s.z_prev);
@@ -995,8 +995,8 @@ bool Simulator::Interval(SimulationResult* result) {
   for (int i = 0; i < 3; ++i) s.slip_prev[i] = sol.contacts[i].slip;
   s.class_before = s.class_prev;
   for (int i = 0; i < 3; ++i)
-    if ((s.wheel_events >> i) & 1u) s.class_before[i].setZero();
-  s.have_class_before = s.class_prev_classified && classify;
+    if (!(s.class_prev_classified && classify) || ((s.wheel_events >> i) & 1u))
+      s.class_before[i].setZero();
   s.class_prev = classify ? s.class_now : s.slip_prev;
   s.class_prev_classified = classify;
   const bool check_contact =
@@ -1468,8 +1468,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
     // A wheel whose slip reverses while it slides or while it creeps
     // (LocateSwitchesAndReversals).
     change = change || IsReversal(slip0[i], slip1[i], eps) ||
-             (s.have_class_before &&
-              IsSplitReversal(s.class_before[i], slip0[i], slip1[i], eps));
+             IsSplitReversal(s.class_before[i], slip0[i], slip1[i], eps);
     band = band || InSwitchBand(s1, eps);
     // The sliding/creep split's level (below the switches') crossed.
     regime = regime || (std::isfinite(s0) && std::isfinite(s1) &&
@@ -1530,8 +1529,7 @@ void Simulator::RestartAtSwitches(double t, SimulationResult* result) {
   if (change)
     LocateSwitchesAndReversals(s.t_prev, t, slip0, slip1, eps,
                                options_.event_tolerance, evaluate,
-                               &result->switches, nullptr,
-                               s.have_class_before ? &s.class_before : nullptr);
+                               &result->switches, nullptr, &s.class_before);
   // After the switches, so that their probes start as before.
   const bool jumped = suspect && LocateSolutionJump(t, result);
   if (jumped) SortAppended(first, &result->switches);

@@ -207,8 +207,8 @@ using SlipVectorEvaluator =
 // s(t) . s(t0) to `tolerance`, and the class changes of every piece are
 // located as by LocateSwitches (slips at the split from `evaluate`; the
 // reversal's bracket narrowed as there). With `before` (the slips at the
-// sample before t0, when both samples were classified), a creeping wheel's
-// turn split over [t_before, t0] and [t0, t1] (IsSplitReversal) is a
+// sample before t0; a zero entry: no reference for that wheel), a creeping
+// wheel's turn split over [t_before, t0] and [t0, t1] (IsSplitReversal) is a
 // reversal too, located on the sign of s(t) . before. Without a reversal
 // this is LocateSwitches. Returns the number of events appended (in time
 // order); *reversed (if not null) receives whether a reversal was found.
