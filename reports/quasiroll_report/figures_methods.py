@@ -553,6 +553,10 @@ def _checkpoint_text(rows):
 STEP_DRIFT = "drift_step_max"
 
 
+# A curve lying on an earlier one (coinciding) is drawn so, over it.
+COINCIDING_STYLE = {"linestyle": (0, (4, 3)), "linewidth": 1.8}
+
+
 def coinciding(a, b, rel=0.05, share=0.95):
     """True when two curves (t, y) lie on top of each other on a log axis:
     the same sample times and, at >= `share` of the samples where both are
@@ -584,7 +588,7 @@ def plot_integrator_curves(ax, curves, styles):
         under = next((dae for dae, tt, yy in drawn if coinciding((t, y), (tt, yy))), None)
         if under is not None:
             pairs.append((run["dae"], under))
-            style.update(linestyle=(0, (4, 3)), linewidth=1.8)
+            style.update(COINCIDING_STYLE)
         ax.plot(t, y, markevery=(0.05, 0.1) if under else 0.1, label=label, **style)
         drawn.append((run["dae"], t, y))
     return pairs

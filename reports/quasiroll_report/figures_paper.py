@@ -15,13 +15,15 @@ from .plotting import (COMPONENT_STYLES, MissingData, WHEEL_STYLES, fmt, span_te
                        horizon_text,
                        new_figure, no_data, positive, save_figure,
                        spans_decades, vline_label)
-from .figures_methods import coinciding, style_legend_handles
+from .figures_methods import COINCIDING_STYLE, coinciding, style_legend_handles
 from . import robot
 from .problems import (fixed_label, method_style, plot_style, reference_field,
                        robot_geometry, scene_mode)
 from .terrain import describe_terrain, terrain_height
 
 WHEELS = (1, 2, 3)
+# Each wheel's line colour (WHEEL_STYLES), for its event marks.
+WHEEL_COLOURS = {i: colour for i, (colour, _) in zip(WHEELS, WHEEL_STYLES)}
 
 
 def _run_text(run):
@@ -166,12 +168,6 @@ _PAIR_SETTINGS = (("t_end", "t_end", " s"), ("dt", "Δt", " s"), ("mu", "μ", ""
                   ("tol", "rtol", ""), ("nlp_tol", "NLP tolerance", ""))
 
 
-def _same_setting(a, b):
-    if isinstance(a, float) and isinstance(b, float):
-        return (math.isnan(a) and math.isnan(b)) or math.isclose(a, b, rel_tol=1e-9)
-    return a == b
-
-
 def _setting_text(value, unit):
     if isinstance(value, float):
         return fmt(value) + unit if math.isfinite(value) else "none"
@@ -199,7 +195,7 @@ def pair_differences(ctx, paper, pvc):
             continue
         compared.append(name)
         a, b = paper.get(column, math.nan), pvc.get(column, math.nan)
-        if not _same_setting(a, b):
+        if not sel.same_value(a, b):
             diffs.append(f"{name} {_setting_text(a, unit)} vs {_setting_text(b, unit)}")
     compared.append("terrain")
     if ctx.terrain_of(paper) != ctx.terrain_of(pvc):
@@ -624,7 +620,6 @@ def _draw_events(ax, events):
     switches and creep reversals in the wheel's colour, a solution jump once
     in black; labelled along the top edge. Returns (legend handles, labels,
     {kind: drawn events}, the top labels)."""
-    colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
     drawn = {"switch": [e for e in events if e["kind"] == "switch"],
              "creep_reversal": [e for e in events if e["kind"] == "creep_reversal"],
              "solution_jump": _jump_lines([e for e in events
@@ -633,7 +628,7 @@ def _draw_events(ax, events):
     for kind, lines in drawn.items():
         label, style = _EVENT_LINES[kind]
         for e in lines:
-            ax.axvline(e["t"], color=colours.get(e["wheel"], "black"), linestyle=style,
+            ax.axvline(e["t"], color=WHEEL_COLOURS.get(e["wheel"], "black"), linestyle=style,
                        linewidth=0.8, alpha=0.8, zorder=2)
             items.append((e["t"], f"{fmt(e['t'], 5)} {_EVENT_CODES[kind]}{e['wheel'] or ''}"))
         if lines:
@@ -845,11 +840,10 @@ def _mark_reversals(ax, reversals):
     sentence."""
     if not reversals:
         return ""
-    colours = dict(zip(WHEELS, (c for c, _ in WHEEL_STYLES)))
     trans = blended_transform_factory(ax.transData, ax.transAxes)
     for e in reversals:
         ax.plot([e["t"]], [0.02], marker="^", markersize=7, linestyle="none",
-                color=colours.get(e["wheel"], "black"), transform=trans, zorder=5,
+                color=WHEEL_COLOURS.get(e["wheel"], "black"), transform=trans, zorder=5,
                 clip_on=False)
     # The legend's entry in grey: each mark has its wheel's colour.
     ax.plot([], [], marker="^", markersize=7, linestyle="none", color="#777777",
@@ -979,7 +973,7 @@ def _per_method_curve(ax, ok, metrics, key, styles, positive=False, hidden=None)
                       if coinciding(([x for x, _ in c], [v for _, v in c]), (mus, vals))),
                      None)
         if under is not None:
-            kwargs.update(linestyle=(0, (4, 3)), linewidth=1.8)
+            kwargs.update(COINCIDING_STYLE)
             if hidden is not None:
                 hidden.append((method, under))
         ax.plot(mus, drawn, label=method, **kwargs)

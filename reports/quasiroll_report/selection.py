@@ -659,7 +659,7 @@ def snapshot_pair(runs, has_trajectory, pvc, primary=None):
         return primary, paper_run(runs, has_trajectory, pvc)
 
     def differs(p, q, name):
-        return not _same(p.get(name, math.nan), q.get(name, math.nan))
+        return not same_value(p.get(name, math.nan), q.get(name, math.nan))
     settings = ("eps", "seed", "roughness", "tol", "nlp_tol")
 
     def own_order(r):
@@ -780,7 +780,9 @@ def _value_key(value):
         return (1, 0.0, str(value))
 
 
-def _same(a, b):
+def same_value(a, b):
+    """Equal run-setting values: floats within 1e-9 relative (two NaN are
+    equal), anything else by ==."""
     if isinstance(a, float) and isinstance(b, float):
         if math.isnan(a) and math.isnan(b):
             return True
@@ -789,7 +791,7 @@ def _same(a, b):
 
 
 def _varies(values):
-    return any(not _same(values[0], v) for v in values[1:])
+    return any(not same_value(values[0], v) for v in values[1:])
 
 
 def format_value(value):
@@ -975,7 +977,7 @@ def stability_charts(runs, references=None):
             for row_name in row_names:
                 for i, value in enumerate(values):
                     members = [r for r in mine if _row_label(r, extra, options) == row_name
-                               and _same(getter(r), value)]
+                               and same_value(getter(r), value)]
                     if members:
                         cells[(row_name, i)] = stability_cell(members)
             mu_min = scene_mu_min(mine) if name == "mu" else math.nan
